@@ -1,0 +1,349 @@
+// Simbody facade for leap (see leap_simbody.h).
+#include "leap/cpp/leap_simbody.h"
+#include "leap/src/simbody.rs.h"
+
+#include <Simbody.h>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+using namespace SimTK;
+
+namespace leap {
+
+namespace {
+
+// OpenSim's SimmSpline evaluated from coefficients computed on the Rust side
+// (Forsythe-Malcolm-Moler): y = y_k + dx (b_k + dx (c_k + dx d_k)), linear
+// extrapolation with the end slope outside the knots.
+class CoefficientSpline : public SimTK::Function {
+public:
+    std::vector<double> x, y, b, c, d;
+    CoefficientSpline(rust::Slice<const double> blocks) {
+        const std::size_t n = blocks.size() / 5;
+        const double* p = blocks.data();
+        x.assign(p, p + n);
+        y.assign(p + n, p + 2 * n);
+        b.assign(p + 2 * n, p + 3 * n);
+        c.assign(p + 3 * n, p + 4 * n);
+        d.assign(p + 4 * n, p + 5 * n);
+    }
+    std::size_t interval(double t) const {
+        const std::size_t n = x.size();
+        if (n == 2 || t <= x[1]) return 0;
+        if (t >= x[n - 2]) return n - 2;
+        std::size_t lo = 1, hi = n - 2;
+        while (hi - lo > 1) {
+            const std::size_t mid = (lo + hi) / 2;
+            if (t < x[mid]) hi = mid; else lo = mid;
+        }
+        return lo;
+    }
+    double eval(double t, int order) const {
+        const std::size_t n = x.size();
+        if (t < x[0]) {
+            if (order == 0) return y[0] + b[0] * (t - x[0]);
+            return order == 1 ? b[0] : 0.0;
+        }
+        if (t > x[n - 1]) {
+            if (order == 0) return y[n - 1] + b[n - 1] * (t - x[n - 1]);
+            return order == 1 ? b[n - 1] : 0.0;
+        }
+        const std::size_t k = interval(t);
+        const double dx = t - x[k];
+        switch (order) {
+            case 0: return y[k] + dx * (b[k] + dx * (c[k] + dx * d[k]));
+            case 1: return b[k] + dx * (2.0 * c[k] + dx * 3.0 * d[k]);
+            case 2: return 2.0 * c[k] + dx * 6.0 * d[k];
+            case 3: return 6.0 * d[k];
+            default: return 0.0;
+        }
+    }
+    Real calcValue(const Vector& v) const override { return eval(v[0], 0); }
+    Real calcDerivative(const Array_<int>& comps, const Vector& v) const override {
+        return eval(v[0], (int)comps.size());
+    }
+    int getArgumentSize() const override { return 1; }
+    int getMaxDerivativeOrder() const override { return 3; }
+    SimTK::Function* clone() const override { return new CoefficientSpline(*this); }
+};
+
+void check_len(const char* what, std::size_t got, std::size_t want) {
+    if (got != want)
+        throw std::invalid_argument(std::string(what) + ": wrong length " + std::to_string(got) +
+                                    " (expected " + std::to_string(want) + ")");
+}
+
+Vec3 vec3(rust::Slice<const double> s, std::size_t offset = 0) {
+    return Vec3(s[offset], s[offset + 1], s[offset + 2]);
+}
+
+}  // namespace
+
+struct SimbodySystem::Impl {
+    MultibodySystem system;
+    SimbodyMatterSubsystem matter;
+    GeneralForceSubsystem forces;
+    Force::DiscreteForces discrete;
+    State state;
+    bool finalized = false;
+    Vec3 gravity{0, 0, 0};
+    std::vector<MobilizedBody> bodies;  // index 0 is Ground
+    Impl() : matter(system), forces(system), discrete(forces, matter) {
+        bodies.push_back(matter.Ground());
+    }
+    void require_final(const char* what) const {
+        if (!finalized) throw std::logic_error(std::string(what) + ": the system is not finalized");
+    }
+    const MobilizedBody& body(std::int32_t i) const {
+        if (i < 0 || (std::size_t)i >= bodies.size())
+            throw std::out_of_range("body index " + std::to_string(i) + " out of range");
+        return bodies[(std::size_t)i];
+    }
+};
+
+SimbodySystem::SimbodySystem() : p(new Impl) {}
+SimbodySystem::~SimbodySystem() = default;
+
+std::unique_ptr<SimbodySystem> new_simbody_system() { return std::make_unique<SimbodySystem>(); }
+
+std::int32_t SimbodySystem::add_body(std::int32_t parent, std::int32_t kind,
+                                     rust::Slice<const double> location, double mass,
+                                     rust::Slice<const double> mass_center,
+                                     rust::Slice<const double> inertia,
+                                     rust::Slice<const double> spline_x,
+                                     rust::Slice<const double> spline_y) {
+    if (p->finalized) throw std::logic_error("add_body: the system is already finalized");
+    check_len("location", location.size(), 3);
+    check_len("mass_center", mass_center.size(), 3);
+    check_len("inertia", inertia.size(), 6);
+    if (!(mass > 0)) throw std::invalid_argument("add_body: mass must be positive");
+    const MobilizedBody& par = p->body(parent);
+    const Vec3 com = vec3(mass_center);
+    const Inertia about_com(Vec3(inertia[0], inertia[1], inertia[2]), Vec3(inertia[3], inertia[4], inertia[5]));
+    // MassProperties wants the inertia about the body origin.
+    Body::Rigid info(MassProperties(mass, com, about_com.shiftFromMassCenter(com, mass)));
+    const Transform X_PF(vec3(location));
+    switch (kind) {
+        case 0: p->bodies.push_back(MobilizedBody::Planar(p->bodies[(std::size_t)parent], X_PF, info, Transform())); break;
+        case 1: p->bodies.push_back(MobilizedBody::Pin(p->bodies[(std::size_t)parent], X_PF, info, Transform())); break;
+        case 2: {
+            if (spline_x.size() % 5 != 0 || spline_x.size() < 10 || spline_y.size() % 5 != 0 || spline_y.size() < 10)
+                throw std::invalid_argument("add_body: spline blocks must hold 5 arrays of at least 2 knots");
+            std::vector<const SimTK::Function*> fns(6);
+            std::vector<std::vector<int>> idx(6);
+            fns[0] = new SimTK::Function::Constant(0, 0);
+            fns[1] = new SimTK::Function::Constant(0, 0);
+            fns[2] = new SimTK::Function::Linear(Vector(Vec2(1, 0)));
+            idx[2] = {0};
+            fns[3] = new CoefficientSpline(spline_x);
+            idx[3] = {0};
+            fns[4] = new CoefficientSpline(spline_y);
+            idx[4] = {0};
+            fns[5] = new SimTK::Function::Constant(0, 0);
+            p->bodies.push_back(MobilizedBody::FunctionBased(p->bodies[(std::size_t)parent], X_PF, info, Transform(), 1, fns, idx));
+            break;
+        }
+        case 3: p->bodies.push_back(MobilizedBody::Weld(p->bodies[(std::size_t)parent], X_PF, info, Transform())); break;
+        default: throw std::invalid_argument("add_body: unknown mobilizer kind " + std::to_string(kind));
+    }
+    (void)par;
+    return (std::int32_t)(p->bodies.size() - 1);
+}
+
+void SimbodySystem::finalize(rust::Slice<const double> gravity) {
+    if (p->finalized) throw std::logic_error("finalize: already finalized");
+    check_len("gravity", gravity.size(), 3);
+    p->gravity = vec3(gravity);
+    Force::Gravity(p->forces, p->matter, p->gravity);
+    p->state = p->system.realizeTopology();
+    p->system.realizeModel(p->state);
+    p->system.realize(p->state, Stage::Instance);
+    p->finalized = true;
+}
+
+std::int32_t SimbodySystem::nq() const {
+    p->require_final("nq");
+    return p->state.getNQ();
+}
+
+std::int32_t SimbodySystem::first_q_index(std::int32_t body) const {
+    p->require_final("first_q_index");
+    const MobilizedBody& mb = p->body(body);
+    if (mb.getNumQ(p->state) == 0) return -1;
+    return (std::int32_t)mb.getFirstQIndex(p->state);
+}
+
+void SimbodySystem::set_state(double t, rust::Slice<const double> q, rust::Slice<const double> u) {
+    p->require_final("set_state");
+    check_len("set_state q", q.size(), (std::size_t)p->state.getNQ());
+    check_len("set_state u", u.size(), (std::size_t)p->state.getNU());
+    p->state.setTime(t);
+    Vector& sq = p->state.updQ();
+    for (int i = 0; i < sq.size(); ++i) sq[i] = q[(std::size_t)i];
+    Vector& su = p->state.updU();
+    for (int i = 0; i < su.size(); ++i) su[i] = u[(std::size_t)i];
+}
+
+void SimbodySystem::get_state(rust::Slice<double> q, rust::Slice<double> u) const {
+    p->require_final("get_state");
+    check_len("get_state q", q.size(), (std::size_t)p->state.getNQ());
+    check_len("get_state u", u.size(), (std::size_t)p->state.getNU());
+    for (int i = 0; i < p->state.getNQ(); ++i) q[(std::size_t)i] = p->state.getQ()[i];
+    for (int i = 0; i < p->state.getNU(); ++i) u[(std::size_t)i] = p->state.getU()[i];
+}
+
+double SimbodySystem::time() const { return p->state.getTime(); }
+
+void SimbodySystem::calc_mass_matrix(rust::Slice<double> m) {
+    p->require_final("calc_mass_matrix");
+    const int n = p->state.getNU();
+    check_len("mass matrix", m.size(), (std::size_t)(n * n));
+    p->system.realize(p->state, Stage::Position);
+    Matrix M;
+    p->matter.calcM(p->state, M);
+    for (int i = 0; i < n; ++i)
+        for (int j = 0; j < n; ++j) m[(std::size_t)(i * n + j)] = M(i, j);
+}
+
+void SimbodySystem::calc_bias(rust::Slice<double> bias) {
+    p->require_final("calc_bias");
+    const int n = p->state.getNU();
+    check_len("bias", bias.size(), (std::size_t)n);
+    // Residual of M*0 + C - g with only gravity applied: the bias forces.
+    p->system.realize(p->state, Stage::Velocity);
+    Vector_<SpatialVec> gravity_forces(p->matter.getNumBodies(), SpatialVec(Vec3(0), Vec3(0)));
+    const Vec3 g = p->gravity;
+    for (MobilizedBodyIndex i(1); i < p->matter.getNumBodies(); ++i) {
+        const MobilizedBody& mb = p->matter.getMobilizedBody(i);
+        const MassProperties& mp = mb.getBodyMassProperties(p->state);
+        const Vec3 com_G = mb.getBodyRotation(p->state) * mp.getMassCenter();
+        const Vec3 f = mp.getMass() * g;
+        gravity_forces[i] = SpatialVec(com_G % f, f);
+    }
+    Vector residual;
+    p->matter.calcResidualForceIgnoringConstraints(p->state, Vector(), gravity_forces, Vector(), residual);
+    for (int i = 0; i < n; ++i) bias[(std::size_t)i] = residual[i];
+}
+
+void SimbodySystem::set_applied_forces(rust::Slice<const double> tau,
+                                       rust::Slice<const std::int32_t> bodies,
+                                       rust::Slice<const double> points,
+                                       rust::Slice<const double> forces) {
+    p->require_final("set_applied_forces");
+    check_len("tau", tau.size(), (std::size_t)p->state.getNU());
+    check_len("points", points.size(), 3 * bodies.size());
+    check_len("forces", forces.size(), 3 * bodies.size());
+    for (std::size_t k = 0; k < bodies.size(); ++k) p->body(bodies[k]);  // validate first
+    p->discrete.clearAllForces(p->state);
+    Vector t(p->state.getNU());
+    for (int i = 0; i < t.size(); ++i) t[i] = tau[(std::size_t)i];
+    p->discrete.setAllMobilityForces(p->state, t);
+    // Shifting a point force to the body origin needs the body's orientation.
+    if (bodies.size() > 0) p->system.realize(p->state, Stage::Position);
+    for (std::size_t k = 0; k < bodies.size(); ++k)
+        p->discrete.addForceToBodyPoint(p->state, p->body(bodies[k]), vec3(points, 3 * k), vec3(forces, 3 * k));
+}
+
+void SimbodySystem::calc_udot(rust::Slice<double> udot) {
+    p->require_final("calc_udot");
+    check_len("udot", udot.size(), (std::size_t)p->state.getNU());
+    p->system.realize(p->state, Stage::Acceleration);
+    const Vector& ud = p->state.getUDot();
+    for (int i = 0; i < ud.size(); ++i) udot[(std::size_t)i] = ud[i];
+}
+
+void SimbodySystem::station_position(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) {
+    p->require_final("station_position");
+    check_len("point", point.size(), 3);
+    check_len("out", out.size(), 3);
+    const MobilizedBody& mb = p->body(body);
+    p->system.realize(p->state, Stage::Position);
+    const Vec3 r = mb.findStationLocationInGround(p->state, vec3(point));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = r[i];
+}
+
+void SimbodySystem::station_velocity(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) {
+    p->require_final("station_velocity");
+    check_len("point", point.size(), 3);
+    check_len("out", out.size(), 3);
+    const MobilizedBody& mb = p->body(body);
+    p->system.realize(p->state, Stage::Velocity);
+    const Vec3 v = mb.findStationVelocityInGround(p->state, vec3(point));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = v[i];
+}
+
+void SimbodySystem::com_position(rust::Slice<double> out) {
+    p->require_final("com_position");
+    check_len("out", out.size(), 3);
+    p->system.realize(p->state, Stage::Position);
+    const Vec3 r = p->matter.calcSystemMassCenterLocationInGround(p->state);
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = r[i];
+}
+
+void SimbodySystem::com_velocity(rust::Slice<double> out) {
+    p->require_final("com_velocity");
+    check_len("out", out.size(), 3);
+    p->system.realize(p->state, Stage::Velocity);
+    const Vec3 v = p->matter.calcSystemMassCenterVelocityInGround(p->state);
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = v[i];
+}
+
+void SimbodySystem::com_acceleration(rust::Slice<double> out) {
+    p->require_final("com_acceleration");
+    check_len("out", out.size(), 3);
+    p->system.realize(p->state, Stage::Acceleration);
+    const Vec3 a = p->matter.calcSystemMassCenterAccelerationInGround(p->state);
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = a[i];
+}
+
+double SimbodySystem::total_mass() {
+    p->require_final("total_mass");
+    return p->matter.calcSystemMass(p->state);
+}
+
+double SimbodySystem::energy() {
+    p->require_final("energy");
+    p->system.realize(p->state, Stage::Dynamics);
+    return p->system.calcEnergy(p->state);
+}
+
+IntegratorStats SimbodySystem::integrate(std::int32_t method, double accuracy, double t_final) {
+    p->require_final("integrate");
+    if (!(accuracy > 0)) throw std::invalid_argument("integrate: accuracy must be positive");
+    if (!(t_final >= p->state.getTime())) throw std::invalid_argument("integrate: t_final is before the current time");
+    std::unique_ptr<Integrator> integ;
+    switch (method) {
+        case 0: integ.reset(new RungeKuttaMersonIntegrator(p->system)); break;
+        case 1: integ.reset(new RungeKuttaFeldbergIntegrator(p->system)); break;
+        case 2: integ.reset(new RungeKutta3Integrator(p->system)); break;
+        case 3: integ.reset(new CPodesIntegrator(p->system, CPodes::BDF, CPodes::Newton)); break;
+        case 4: integ.reset(new ExplicitEulerIntegrator(p->system, accuracy)); break;
+        default: throw std::invalid_argument("integrate: unknown integrator " + std::to_string(method));
+    }
+    if (method != 4) integ->setAccuracy(accuracy);
+    TimeStepper ts(p->system, *integ);
+    ts.initialize(p->state);
+    ts.stepTo(t_final);
+    p->state = integ->getState();
+    IntegratorStats s;
+    s.steps_taken = integ->getNumStepsTaken();
+    s.steps_attempted = integ->getNumStepsAttempted();
+    s.realizations = integ->getNumRealizations();
+    s.error_test_failures = integ->getNumErrorTestFailures();
+    s.final_time = p->state.getTime();
+    return s;
+}
+
+void SimbodySystem::throw_for_test(std::int32_t kind) {
+    if (kind == 0) {
+        p->require_final("throw_for_test");
+        State s = p->system.getDefaultState();  // realized to Model only
+        Matrix M;
+        p->matter.calcM(s, M);
+    }
+    if (kind == 1) SimTK_THROW1(Exception::Cant, "thrown on purpose from the facade");
+    throw std::runtime_error("plain std::runtime_error");
+}
+
+}  // namespace leap

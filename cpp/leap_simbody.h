@@ -1,0 +1,74 @@
+// The C++ facade over Simbody that leap's Rust code drives through cxx.
+// No Simbody type appears here (pimpl); data cross as slices of doubles.
+// Every method that can reach Simbody is declared `-> Result` on the Rust
+// side, so a thrown exception becomes an `Err`.
+#pragma once
+#include "rust/cxx.h"
+#include <cstdint>
+#include <memory>
+
+namespace leap {
+
+struct IntegratorStats;
+
+class SimbodySystem {
+public:
+    SimbodySystem();
+    ~SimbodySystem();
+    SimbodySystem(const SimbodySystem&) = delete;
+    SimbodySystem& operator=(const SimbodySystem&) = delete;
+
+    // Building (before finalize). Body indices count from 1 (0 is ground) in
+    // the order of creation. kind: 0 planar, 1 pin, 2 translating hinge, 3 weld.
+    // inertia: about the centre of mass, [Ixx, Iyy, Izz, Ixy, Ixz, Iyz].
+    // For kind 2, spline_x/spline_y are (x, y, b, c, d) blocks of equal length.
+    std::int32_t add_body(std::int32_t parent, std::int32_t kind,
+                          rust::Slice<const double> location, double mass,
+                          rust::Slice<const double> mass_center,
+                          rust::Slice<const double> inertia,
+                          rust::Slice<const double> spline_x,
+                          rust::Slice<const double> spline_y);
+    void finalize(rust::Slice<const double> gravity);
+
+    std::int32_t nq() const;
+    std::int32_t first_q_index(std::int32_t body) const;
+
+    // State (Simbody's q and u order).
+    void set_state(double t, rust::Slice<const double> q, rust::Slice<const double> u);
+    void get_state(rust::Slice<double> q, rust::Slice<double> u) const;
+    double time() const;
+
+    // Dynamics quantities at the current state.
+    void calc_mass_matrix(rust::Slice<double> m_row_major);
+    void calc_bias(rust::Slice<double> bias);
+    // Applied forces stay in the State until changed: mobility forces tau and
+    // point forces (body index, point in body frame, force in ground; 3 per).
+    void set_applied_forces(rust::Slice<const double> tau,
+                            rust::Slice<const std::int32_t> bodies,
+                            rust::Slice<const double> points,
+                            rust::Slice<const double> forces);
+    void calc_udot(rust::Slice<double> udot);
+    void station_position(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out);
+    void station_velocity(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out);
+    void com_position(rust::Slice<double> out);
+    void com_velocity(rust::Slice<double> out);
+    void com_acceleration(rust::Slice<double> out);
+    double total_mass();
+    double energy();
+
+    // Integrate from the current state to t_final with the applied forces
+    // held constant. method: 0 RungeKuttaMerson, 1 RungeKuttaFeldberg,
+    // 2 RungeKutta3, 3 CPodes, 4 explicit Euler (fixed step = accuracy).
+    IntegratorStats integrate(std::int32_t method, double accuracy, double t_final);
+
+    // For tests of the bridge itself: throws a SimTK or std exception.
+    void throw_for_test(std::int32_t kind);
+
+    struct Impl;
+private:
+    std::unique_ptr<Impl> p;
+};
+
+std::unique_ptr<SimbodySystem> new_simbody_system();
+
+}  // namespace leap

@@ -1,0 +1,310 @@
+//! Cross-check of the Rust-native dynamics against Simbody.
+//!
+//! At random states inside the coordinate ranges, with random generalized
+//! forces and random forces at every station, both backends compute the mass
+//! matrix, bias forces, accelerations, whole-body centre of mass position,
+//! velocity and acceleration, and station positions and velocities. Each
+//! quantity's error is normwise relative, `‖rust − simbody‖∞ / ‖simbody‖∞`,
+//! maximised over the samples. For a model with symmetry pairs the symmetric
+//! system is also checked against the full one with equal left and right
+//! states (`M_s = Bᵀ M B`, `b_s = Bᵀ b`, `q̈ = B q̈_s`, same COM and stations),
+//! in both backends.
+
+use crate::model::{Model, ModelError, SystemSpec};
+use crate::multibody::{Multibody, SingularMassMatrix};
+use crate::simbody::{SimbodyError, SimbodyModel};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+/// The largest error the cross-check accepts.
+pub const TOLERANCE: f64 = 1e-10;
+
+/// A cross-check could not run.
+#[derive(Debug, thiserror::Error)]
+pub enum CrosscheckError {
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Simbody(#[from] SimbodyError),
+    #[error(transparent)]
+    Singular(#[from] SingularMassMatrix),
+}
+
+/// Largest normwise relative errors, per comparison and quantity.
+#[derive(Debug, Clone, Serialize)]
+pub struct CrosscheckReport {
+    pub model: String,
+    pub samples: usize,
+    pub seed: u64,
+    pub tolerance: f64,
+    pub max_rel_error: f64,
+    pub passed: bool,
+    /// comparison → quantity → max relative error
+    pub comparisons: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+fn rel_err(a: &[f64], b: &[f64]) -> f64 {
+    let mut num: f64 = 0.0;
+    let mut den: f64 = 0.0;
+    for (x, y) in a.iter().zip(b) {
+        num = num.max((x - y).abs());
+        den = den.max(y.abs());
+    }
+    if !num.is_finite() || !den.is_finite() {
+        return f64::INFINITY;
+    }
+    if den == 0.0 {
+        num
+    } else {
+        num / den
+    }
+}
+
+/// Everything one backend reports at one sample.
+#[derive(Debug, Clone, Default)]
+struct Sample {
+    mass_matrix: Vec<f64>,
+    bias: Vec<f64>,
+    qdd: Vec<f64>,
+    com_position: Vec<f64>,
+    com_velocity: Vec<f64>,
+    com_acceleration: Vec<f64>,
+    station_position: Vec<f64>,
+    station_velocity: Vec<f64>,
+}
+
+impl Sample {
+    fn quantities(&self) -> [(&'static str, &Vec<f64>); 8] {
+        [
+            ("mass_matrix", &self.mass_matrix),
+            ("bias", &self.bias),
+            ("qdd", &self.qdd),
+            ("com_position", &self.com_position),
+            ("com_velocity", &self.com_velocity),
+            ("com_acceleration", &self.com_acceleration),
+            ("station_position", &self.station_position),
+            ("station_velocity", &self.station_velocity),
+        ]
+    }
+}
+
+/// Inputs of one sample: q, q̇, generalized forces, one force per station.
+#[derive(Debug, Clone)]
+struct Inputs {
+    q: Vec<f64>,
+    u: Vec<f64>,
+    tau: Vec<f64>,
+    station_forces: Vec<[f64; 3]>,
+}
+
+fn eval_rust(model: &Model, mb: &Multibody, x: &Inputs) -> Result<Sample, SingularMassMatrix> {
+    let n = mb.nq();
+    let mut ws = mb.workspace::<f64>();
+    mb.set_state(&mut ws, &x.q, &x.u);
+    let mut tau = x.tau.clone();
+    let mut s = Sample::default();
+    for (st, f) in model.stations.iter().zip(&x.station_forces) {
+        let (b, p) = mb.body_point(st.body, st.location);
+        mb.add_point_force(&ws, b, p, *f, &mut tau);
+        s.station_position.extend(mb.point_position(&ws, b, p));
+        s.station_velocity.extend(mb.point_velocity(&ws, b, p));
+    }
+    let mut qdd = vec![0.0; n];
+    mb.forward_dynamics(&mut ws, &tau, &mut qdd)?;
+    s.mass_matrix = mb.mass_matrix(&ws).to_vec();
+    s.bias = mb.bias(&ws).to_vec();
+    s.com_position = mb.com_position(&ws).to_vec();
+    s.com_velocity = mb.com_velocity(&ws).to_vec();
+    s.com_acceleration = mb.com_acceleration(&ws, &qdd).to_vec();
+    s.qdd = qdd;
+    Ok(s)
+}
+
+fn eval_simbody(model: &Model, sb: &mut SimbodyModel, x: &Inputs) -> Result<Sample, SimbodyError> {
+    let n = sb.nq();
+    sb.set_state(0.0, &x.q, &x.u)?;
+    let forces: Vec<(usize, [f64; 3], [f64; 3])> =
+        model.stations.iter().zip(&x.station_forces).map(|(st, f)| (st.body, st.location, *f)).collect();
+    sb.set_applied_forces(&x.tau, &forces)?;
+    let mut s = Sample { mass_matrix: vec![0.0; n * n], bias: vec![0.0; n], qdd: vec![0.0; n], ..Default::default() };
+    sb.mass_matrix(&mut s.mass_matrix)?;
+    sb.bias(&mut s.bias)?;
+    sb.accelerations(&mut s.qdd)?;
+    s.com_position = sb.com_position()?.to_vec();
+    s.com_velocity = sb.com_velocity()?.to_vec();
+    s.com_acceleration = sb.com_acceleration()?.to_vec();
+    for st in &model.stations {
+        s.station_position.extend(sb.station_position(st.body, st.location)?);
+        s.station_velocity.extend(sb.station_velocity(st.body, st.location)?);
+    }
+    Ok(s)
+}
+
+/// Project a full-system sample onto the symmetric system: `Bᵀ M B`, `Bᵀ b`,
+/// and q̈ restricted to the independent coordinates.
+fn project(full: &Sample, full_sys: &SystemSpec, sym_sys: &SystemSpec) -> Sample {
+    let nf = full_sys.nq();
+    let ns = sym_sys.nq();
+    // B[i][k] = 1 when full coordinate i follows symmetric coordinate k.
+    let map: Vec<usize> = full_sys.coordinates.iter().map(|&c| sym_sys.q_of_model_coordinate[c]).collect();
+    let mut m = vec![0.0; ns * ns];
+    let mut b = vec![0.0; ns];
+    for i in 0..nf {
+        b[map[i]] += full.bias[i];
+        for j in 0..nf {
+            m[map[i] * ns + map[j]] += full.mass_matrix[i * nf + j];
+        }
+    }
+    let qdd = sym_sys
+        .coordinates
+        .iter()
+        .map(|&c| full.qdd[full_sys.q_of_model_coordinate[c]])
+        .collect();
+    Sample { mass_matrix: m, bias: b, qdd, ..full.clone() }
+}
+
+fn record(table: &mut BTreeMap<String, f64>, a: &Sample, b: &Sample) {
+    for ((name, x), (_, y)) in a.quantities().iter().zip(b.quantities().iter()) {
+        let e = rel_err(x, y);
+        let entry = table.entry(name.to_string()).or_insert(0.0);
+        if e > *entry || e.is_nan() {
+            *entry = e;
+        }
+    }
+}
+
+fn random_inputs(rng: &mut ChaCha8Rng, model: &Model, sys: &SystemSpec) -> Inputs {
+    let model_q: Vec<f64> = model
+        .coordinates
+        .iter()
+        .map(|c| {
+            // Translations of the base: keep the model near the origin.
+            let [lo, hi] = c.range;
+            let (lo, hi) = if hi - lo > 4.0 { (-1.0, 1.0) } else { (lo, hi) };
+            rng.random_range(lo..=hi)
+        })
+        .collect();
+    let model_u: Vec<f64> = model.coordinates.iter().map(|_| rng.random_range(-5.0..=5.0)).collect();
+    let model_tau: Vec<f64> = model.coordinates.iter().map(|_| rng.random_range(-100.0..=100.0)).collect();
+    let station_forces = model
+        .stations
+        .iter()
+        .map(|_| [rng.random_range(-500.0..=500.0), rng.random_range(-500.0..=1500.0), rng.random_range(-100.0..=100.0)])
+        .collect();
+    Inputs {
+        q: sys.q_from_model(&model_q),
+        u: sys.q_from_model(&model_u),
+        tau: sys.q_from_model(&model_tau),
+        station_forces,
+    }
+}
+
+/// Run the cross-check on `samples` random states drawn with `seed`.
+pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport, CrosscheckError> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let full = model.system(false)?;
+    let mb_full = Multibody::new(model, &full);
+    let mut sb_full = SimbodyModel::new(model, &full)?;
+    let sym = if model.symmetry.is_empty() { None } else { Some(model.system(true)?) };
+    let mut sym_backends = match &sym {
+        Some(s) => Some((Multibody::new(model, s), SimbodyModel::new(model, s)?)),
+        None => None,
+    };
+    let mut comparisons: BTreeMap<String, BTreeMap<String, f64>> = BTreeMap::new();
+    for _ in 0..samples {
+        let x = random_inputs(&mut rng, model, &full);
+        let r = eval_rust(model, &mb_full, &x)?;
+        let s = eval_simbody(model, &mut sb_full, &x)?;
+        record(comparisons.entry("rust_vs_simbody_full".into()).or_default(), &r, &s);
+        if let (Some(sym), Some((mb_sym, sb_sym))) = (&sym, sym_backends.as_mut()) {
+            // A symmetric state: left coordinates copy their right partners;
+            // generalized forces likewise, so the full solution stays symmetric.
+            let xs = random_inputs(&mut rng, model, sym);
+            let model_q = sym.model_from_q(&xs.q);
+            let model_u = sym.model_from_q(&xs.u);
+            let model_tau = sym.model_from_q(&xs.tau);
+            let xf = Inputs {
+                q: full.q_from_model(&model_q),
+                u: full.q_from_model(&model_u),
+                tau: full.q_from_model(&model_tau),
+                station_forces: mirror_station_forces(model, &xs.station_forces),
+            };
+            // The symmetric system carries both legs' forces: sum of generalized forces.
+            let xs = Inputs { station_forces: xf.station_forces.clone(), tau: sym_tau(&full, sym, &xf.tau), ..xs };
+            let rs = eval_rust(model, mb_sym, &xs)?;
+            let ss = eval_simbody(model, sb_sym, &xs)?;
+            record(comparisons.entry("rust_vs_simbody_symmetric".into()).or_default(), &rs, &ss);
+            let rf = eval_rust(model, &mb_full, &xf)?;
+            let sf = eval_simbody(model, &mut sb_full, &xf)?;
+            record(comparisons.entry("symmetric_vs_full_rust".into()).or_default(), &rs, &project(&rf, &full, sym));
+            record(comparisons.entry("symmetric_vs_full_simbody".into()).or_default(), &ss, &project(&sf, &full, sym));
+        }
+    }
+    let max_rel_error = comparisons.values().flat_map(|t| t.values()).fold(0.0f64, |a, &b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+    Ok(CrosscheckReport {
+        model: model.file.display().to_string(),
+        samples,
+        seed,
+        tolerance: TOLERANCE,
+        max_rel_error,
+        passed: max_rel_error <= TOLERANCE,
+        comparisons,
+    })
+}
+
+/// Station forces on the left side equal to those on the right partner
+/// station (matched by name, `_r` ↔ `_l`, z mirrored), so both legs stay
+/// mirror images.
+fn mirror_station_forces(model: &Model, forces: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let mut out = forces.to_vec();
+    for (i, st) in model.stations.iter().enumerate() {
+        if let Some(stem) = st.name.strip_suffix("_l") {
+            let right = format!("{stem}_r");
+            if let Some(j) = model.stations.iter().position(|s| s.name == right) {
+                let f = forces[j];
+                out[i] = [f[0], f[1], -f[2]];
+            }
+        }
+    }
+    out
+}
+
+/// Generalized forces of the symmetric system for full-system forces `tau`
+/// (`Bᵀ τ`).
+fn sym_tau(full: &SystemSpec, sym: &SystemSpec, tau: &[f64]) -> Vec<f64> {
+    let mut out = vec![0.0; sym.nq()];
+    for (i, &c) in full.coordinates.iter().enumerate() {
+        out[sym.q_of_model_coordinate[c]] += tau[i];
+    }
+    out
+}
+
+impl CrosscheckReport {
+    /// A table a person can read.
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        let cols: Vec<&String> = self.comparisons.keys().collect();
+        let mut header = vec!["quantity".to_string()];
+        header.extend(cols.iter().map(|s| s.to_string()));
+        t.set_header(header);
+        let names = ["mass_matrix", "bias", "qdd", "com_position", "com_velocity", "com_acceleration", "station_position", "station_velocity"];
+        for q in names {
+            let mut row = vec![q.to_string()];
+            for c in &cols {
+                row.push(self.comparisons[*c].get(q).map(|e| format!("{e:.2e}")).unwrap_or_else(|| "-".into()));
+            }
+            t.add_row(row);
+        }
+        format!(
+            "{t}\nmodel {}: {} samples (seed {}), largest relative error {:.2e}, tolerance {:.0e}: {}",
+            self.model,
+            self.samples,
+            self.seed,
+            self.max_rel_error,
+            self.tolerance,
+            if self.passed { "PASS" } else { "FAIL" }
+        )
+    }
+}

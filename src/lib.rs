@@ -1,0 +1,19 @@
+//! leap: predicting human movement by optimal control.
+//!
+//! Data flows one way: [`model`] (files and validation) → [`multibody`]
+//! (Rust-native dynamics) and [`simbody`] (the Simbody bridge) → force
+//! elements ([`muscle`], [`contact`], [`ligament`]) → the optimizer
+//! ([`nlp`], [`sqp`]) → output ([`io`]).
+
+pub mod scalar;
+pub mod spline;
+pub mod model;
+pub mod multibody;
+pub mod simbody;
+pub mod crosscheck;
+pub mod bench;
+pub mod muscle;
+pub mod contact;
+pub mod ligament;
+pub mod nlp;
+pub mod sqp;

@@ -1,0 +1,647 @@
+//! Model files: the skeleton of a planar musculoskeletal model, read from JSON
+//! and validated once.
+//!
+//! A model file describes bodies, joints, coordinates and named stations the
+//! way OpenSim does (both legs, every segment; SI units, radians, OpenSim's
+//! frame conventions: x anterior, y superior, z to the right). Every error
+//! names the file, the JSON path of the offending field and the reason.
+//!
+//! The engine does not use the file's joints directly: [`Model::system`]
+//! turns them into a [`SystemSpec`], the list of mobilized bodies that both
+//! backends (Simbody and the Rust-native [`crate::multibody`]) build. With
+//! `symmetric = true` each left-side coordinate follows its right-side partner
+//! and the left leg's bodies are welded onto the right leg's (they overlap in
+//! the sagittal plane, offset along z only), which gives the paper's
+//! 7-coordinate system.
+
+use crate::spline::{SimmSpline, SplineData};
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+/// Standard gravity (m/s²), as Simbody and OpenSim use it.
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// A model file as written (serde's view; see [`Model`] for the validated form).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    pub name: String,
+    /// Where the data come from and under which licence.
+    #[serde(default)]
+    pub credits: Vec<String>,
+    /// Gravity in ground (m/s²).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    pub bodies: Vec<BodySpec>,
+    pub joints: Vec<JointSpec>,
+    pub coordinates: Vec<CoordinateSpec>,
+    #[serde(default)]
+    pub stations: Vec<StationSpec>,
+    /// Right/left coordinate pairs that the symmetric system couples.
+    #[serde(default)]
+    pub symmetry: Vec<[String; 2]>,
+    /// Named poses: coordinate values (rad or m); missing coordinates take
+    /// their `default_value`.
+    #[serde(default)]
+    pub poses: BTreeMap<String, BTreeMap<String, f64>>,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, -STANDARD_GRAVITY, 0.0]
+}
+
+/// A rigid body: mass (kg), centre of mass in the body frame (m) and the
+/// inertia about the centre of mass in body axes (kg·m²), in OpenSim's order
+/// `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BodySpec {
+    pub name: String,
+    pub mass: f64,
+    pub mass_center: [f64; 3],
+    pub inertia: [f64; 6],
+}
+
+/// A joint between a parent body (or `ground`) and a child body. The child
+/// frame's origin sits at `location_in_parent` (plus the joint's
+/// translations) in the parent frame; frames carry no fixed rotation.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum JointSpec {
+    /// Planar base: rotation about z, then translation along ground x and y.
+    /// `coordinates` = [rotation, x translation, y translation].
+    Planar { name: String, parent: String, child: String, location_in_parent: [f64; 3], coordinates: [String; 3] },
+    /// Hinge about z.
+    Pin { name: String, parent: String, child: String, location_in_parent: [f64; 3], coordinate: String },
+    /// Hinge about z whose child origin translates along the parent's x and y
+    /// as `SimmSpline` functions of the hinge angle (OpenSim's knee
+    /// CustomJoint: translation1, translation2).
+    TranslatingHinge {
+        name: String,
+        parent: String,
+        child: String,
+        location_in_parent: [f64; 3],
+        coordinate: String,
+        translation_x: SplineData,
+        translation_y: SplineData,
+    },
+    /// No relative motion (OpenSim WeldJoint, or a locked joint at 0).
+    Weld { name: String, parent: String, child: String, location_in_parent: [f64; 3] },
+}
+
+impl JointSpec {
+    fn common(&self) -> (&str, &str, &str, &[f64; 3]) {
+        match self {
+            JointSpec::Planar { name, parent, child, location_in_parent, .. }
+            | JointSpec::Pin { name, parent, child, location_in_parent, .. }
+            | JointSpec::TranslatingHinge { name, parent, child, location_in_parent, .. }
+            | JointSpec::Weld { name, parent, child, location_in_parent } => (name, parent, child, location_in_parent),
+        }
+    }
+}
+
+/// A generalized coordinate: `range` = [min, max] and `default_value`, in rad
+/// for rotations and m for translations.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CoordinateSpec {
+    pub name: String,
+    pub range: [f64; 2],
+    #[serde(default)]
+    pub default_value: f64,
+}
+
+/// A named point fixed on a body (m, body frame).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StationSpec {
+    pub name: String,
+    pub body: String,
+    pub location: [f64; 3],
+}
+
+/// A model file could not be used. `path` is the JSON path of the field.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    #[error("{file}: cannot read: {source}")]
+    Io { file: PathBuf, source: std::io::Error },
+    #[error("{file}: {path}: {reason}")]
+    Parse { file: PathBuf, path: String, reason: String },
+    #[error("{file}: {path}: {reason}")]
+    Invalid { file: PathBuf, path: String, reason: String },
+}
+
+impl ModelError {
+    /// The JSON path of the field at fault (empty for I/O errors).
+    pub fn field(&self) -> &str {
+        match self {
+            ModelError::Io { .. } => "",
+            ModelError::Parse { path, .. } | ModelError::Invalid { path, .. } => path,
+        }
+    }
+}
+
+/// A validated body.
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub name: String,
+    pub mass: f64,
+    pub mass_center: [f64; 3],
+    pub inertia: [f64; 6],
+}
+
+/// What a validated joint does.
+#[derive(Debug, Clone)]
+pub enum JointKind {
+    Planar { coordinates: [usize; 3] },
+    Pin { coordinate: usize },
+    TranslatingHinge { coordinate: usize, translation_x: SimmSpline, translation_y: SimmSpline },
+    Weld,
+}
+
+/// A validated joint; `parent == None` is ground.
+#[derive(Debug, Clone)]
+pub struct Joint {
+    pub name: String,
+    pub parent: Option<usize>,
+    pub child: usize,
+    pub location_in_parent: [f64; 3],
+    pub kind: JointKind,
+}
+
+/// A validated coordinate.
+#[derive(Debug, Clone)]
+pub struct Coordinate {
+    pub name: String,
+    pub range: [f64; 2],
+    pub default_value: f64,
+}
+
+/// A validated station.
+#[derive(Debug, Clone)]
+pub struct Station {
+    pub name: String,
+    pub body: usize,
+    pub location: [f64; 3],
+}
+
+/// A validated model: the immutable description every backend builds from.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub file: PathBuf,
+    pub name: String,
+    pub credits: Vec<String>,
+    pub gravity: [f64; 3],
+    pub bodies: Vec<Body>,
+    pub joints: Vec<Joint>,
+    pub coordinates: Vec<Coordinate>,
+    pub stations: Vec<Station>,
+    /// (right, left) coordinate index pairs.
+    pub symmetry: Vec<(usize, usize)>,
+    pub poses: BTreeMap<String, Vec<f64>>,
+}
+
+fn finite3(v: &[f64; 3]) -> bool {
+    v.iter().all(|x| x.is_finite())
+}
+
+impl Model {
+    /// Read and validate a model file.
+    pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
+        let path = path.as_ref();
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { file: path.into(), source })?;
+        Self::from_json_str(&text, path)
+    }
+
+    /// Parse and validate JSON text; `file` names it in errors.
+    pub fn from_json_str(text: &str, file: impl AsRef<Path>) -> Result<Self, ModelError> {
+        let file = file.as_ref().to_path_buf();
+        let de = &mut serde_json::Deserializer::from_str(text);
+        let spec: ModelFile = serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            let inner = e.into_inner();
+            ModelError::Parse {
+                file: file.clone(),
+                path: if path == "." { "(document)".into() } else { path },
+                reason: inner.to_string(),
+            }
+        })?;
+        Self::from_spec(spec, file)
+    }
+
+    /// Validate a deserialized model file.
+    pub fn from_spec(spec: ModelFile, file: PathBuf) -> Result<Self, ModelError> {
+        let err = |path: String, reason: String| ModelError::Invalid { file: file.clone(), path, reason };
+
+        if !finite3(&spec.gravity) {
+            return Err(err("gravity".into(), "must be finite".into()));
+        }
+        // Bodies.
+        let mut body_index = HashMap::new();
+        let mut bodies = Vec::with_capacity(spec.bodies.len());
+        for (i, b) in spec.bodies.iter().enumerate() {
+            let p = |f: &str| format!("bodies[{i}].{f}");
+            if b.name.is_empty() || b.name == "ground" {
+                return Err(err(p("name"), format!("'{}' is not a valid body name", b.name)));
+            }
+            if body_index.insert(b.name.clone(), i).is_some() {
+                return Err(err(p("name"), format!("body '{}' is defined twice", b.name)));
+            }
+            if !(b.mass.is_finite() && b.mass > 0.0) {
+                return Err(err(p("mass"), format!("mass must be positive and finite, got {}", b.mass)));
+            }
+            if !finite3(&b.mass_center) {
+                return Err(err(p("mass_center"), "must be finite".into()));
+            }
+            if let Some(reason) = inertia_problem(&b.inertia) {
+                return Err(err(p("inertia"), reason));
+            }
+            bodies.push(Body { name: b.name.clone(), mass: b.mass, mass_center: b.mass_center, inertia: b.inertia });
+        }
+        // Coordinates.
+        let mut coord_index = HashMap::new();
+        let mut coordinates = Vec::with_capacity(spec.coordinates.len());
+        for (i, c) in spec.coordinates.iter().enumerate() {
+            let p = |f: &str| format!("coordinates[{i}].{f}");
+            if c.name.is_empty() {
+                return Err(err(p("name"), "empty coordinate name".into()));
+            }
+            if coord_index.insert(c.name.clone(), i).is_some() {
+                return Err(err(p("name"), format!("coordinate '{}' is defined twice", c.name)));
+            }
+            let [lo, hi] = c.range;
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(err(p("range"), format!("range must be finite with min < max, got [{lo}, {hi}]")));
+            }
+            if !(c.default_value.is_finite() && lo <= c.default_value && c.default_value <= hi) {
+                return Err(err(
+                    p("default_value"),
+                    format!("default_value {} is outside the range [{lo}, {hi}]", c.default_value),
+                ));
+            }
+            coordinates.push(Coordinate { name: c.name.clone(), range: c.range, default_value: c.default_value });
+        }
+        // Joints.
+        let mut coord_used: Vec<Option<usize>> = vec![None; coordinates.len()];
+        let mut child_of: Vec<Option<usize>> = vec![None; bodies.len()];
+        let mut joints = Vec::with_capacity(spec.joints.len());
+        let mut joint_names = HashMap::new();
+        for (j, js) in spec.joints.iter().enumerate() {
+            let (name, parent, child, loc) = js.common();
+            let p = |f: &str| format!("joints[{j}].{f}");
+            if joint_names.insert(name.to_string(), j).is_some() {
+                return Err(err(p("name"), format!("joint '{name}' is defined twice")));
+            }
+            let parent_idx = if parent == "ground" {
+                None
+            } else {
+                Some(*body_index.get(parent).ok_or_else(|| err(p("parent"), format!("unknown body '{parent}'")))?)
+            };
+            let child_idx =
+                *body_index.get(child).ok_or_else(|| err(p("child"), format!("unknown body '{child}'")))?;
+            if parent_idx == Some(child_idx) {
+                return Err(err(p("child"), format!("body '{child}' cannot be its own parent")));
+            }
+            if let Some(other) = child_of[child_idx] {
+                return Err(err(p("child"), format!("body '{child}' is already the child of joint '{}'", spec.joints[other].common().0)));
+            }
+            child_of[child_idx] = Some(j);
+            if !finite3(loc) {
+                return Err(err(p("location_in_parent"), "must be finite".into()));
+            }
+            let mut use_coord = |field: String, cname: &str| -> Result<usize, ModelError> {
+                let ci = *coord_index
+                    .get(cname)
+                    .ok_or_else(|| err(field.clone(), format!("unknown coordinate '{cname}'")))?;
+                if let Some(other) = coord_used[ci] {
+                    return Err(err(field, format!("coordinate '{cname}' is already used by joint '{}'", spec.joints[other].common().0)));
+                }
+                coord_used[ci] = Some(j);
+                Ok(ci)
+            };
+            let kind = match js {
+                JointSpec::Planar { coordinates: cs, .. } => {
+                    if parent_idx.is_some() {
+                        return Err(err(p("parent"), "a planar joint must have ground as its parent".into()));
+                    }
+                    let mut idx = [0; 3];
+                    for (k, cname) in cs.iter().enumerate() {
+                        idx[k] = use_coord(p(&format!("coordinates[{k}]")), cname)?;
+                    }
+                    JointKind::Planar { coordinates: idx }
+                }
+                JointSpec::Pin { coordinate, .. } => JointKind::Pin { coordinate: use_coord(p("coordinate"), coordinate)? },
+                JointSpec::TranslatingHinge { coordinate, translation_x, translation_y, .. } => {
+                    let coordinate = use_coord(p("coordinate"), coordinate)?;
+                    let tx = SimmSpline::new(translation_x).map_err(|e| err(p("translation_x"), e.to_string()))?;
+                    let ty = SimmSpline::new(translation_y).map_err(|e| err(p("translation_y"), e.to_string()))?;
+                    JointKind::TranslatingHinge { coordinate, translation_x: tx, translation_y: ty }
+                }
+                JointSpec::Weld { .. } => JointKind::Weld,
+            };
+            joints.push(Joint { name: name.to_string(), parent: parent_idx, child: child_idx, location_in_parent: *loc, kind });
+        }
+        for (i, used) in coord_used.iter().enumerate() {
+            if used.is_none() {
+                return Err(err(format!("coordinates[{i}]"), format!("coordinate '{}' is not used by any joint", coordinates[i].name)));
+            }
+        }
+        for (i, c) in child_of.iter().enumerate() {
+            if c.is_none() {
+                return Err(err(format!("bodies[{i}]"), format!("body '{}' is not the child of any joint", bodies[i].name)));
+            }
+        }
+        // Every body must reach ground (no cycles).
+        for start in 0..bodies.len() {
+            let mut b = start;
+            let mut steps = 0;
+            while let Some(parent) = joints[child_of[b].unwrap_or(0)].parent {
+                b = parent;
+                steps += 1;
+                if steps > bodies.len() {
+                    return Err(err(format!("bodies[{start}]"), format!("body '{}' is in a kinematic loop that never reaches ground", bodies[start].name)));
+                }
+            }
+        }
+        // Stations.
+        let mut stations = Vec::with_capacity(spec.stations.len());
+        let mut station_names = HashMap::new();
+        for (i, s) in spec.stations.iter().enumerate() {
+            let p = |f: &str| format!("stations[{i}].{f}");
+            if station_names.insert(s.name.clone(), i).is_some() {
+                return Err(err(p("name"), format!("station '{}' is defined twice", s.name)));
+            }
+            let body = *body_index.get(&s.body).ok_or_else(|| err(p("body"), format!("unknown body '{}'", s.body)))?;
+            if !finite3(&s.location) {
+                return Err(err(p("location"), "must be finite".into()));
+            }
+            stations.push(Station { name: s.name.clone(), body, location: s.location });
+        }
+        // Symmetry pairs.
+        let mut symmetry = Vec::new();
+        let mut in_pair = vec![false; coordinates.len()];
+        for (i, [r, l]) in spec.symmetry.iter().enumerate() {
+            let ri = *coord_index.get(r).ok_or_else(|| err(format!("symmetry[{i}][0]"), format!("unknown coordinate '{r}'")))?;
+            let li = *coord_index.get(l).ok_or_else(|| err(format!("symmetry[{i}][1]"), format!("unknown coordinate '{l}'")))?;
+            if ri == li || in_pair[ri] || in_pair[li] {
+                return Err(err(format!("symmetry[{i}]"), format!("coordinates '{r}' and '{l}' cannot form a new pair")));
+            }
+            in_pair[ri] = true;
+            in_pair[li] = true;
+            symmetry.push((ri, li));
+        }
+        // Poses.
+        let mut poses = BTreeMap::new();
+        for (pname, values) in &spec.poses {
+            let mut q: Vec<f64> = coordinates.iter().map(|c| c.default_value).collect();
+            for (cname, &v) in values {
+                let path = format!("poses.{pname}.{cname}");
+                let ci = *coord_index.get(cname).ok_or_else(|| err(path.clone(), format!("unknown coordinate '{cname}'")))?;
+                let [lo, hi] = coordinates[ci].range;
+                if !(v.is_finite() && lo <= v && v <= hi) {
+                    return Err(err(path, format!("value {v} is outside the range [{lo}, {hi}]")));
+                }
+                q[ci] = v;
+            }
+            poses.insert(pname.clone(), q);
+        }
+        let model = Model {
+            file: file.clone(),
+            name: spec.name,
+            credits: spec.credits,
+            gravity: spec.gravity,
+            bodies,
+            joints,
+            coordinates,
+            stations,
+            symmetry,
+            poses,
+        };
+        if !model.symmetry.is_empty() {
+            model.system(true)?; // reports asymmetric geometry at load time
+        }
+        Ok(model)
+    }
+
+    /// Index of the named coordinate.
+    pub fn coordinate_index(&self, name: &str) -> Option<usize> {
+        self.coordinates.iter().position(|c| c.name == name)
+    }
+
+    /// Index of the named body.
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&self) -> f64 {
+        self.bodies.iter().map(|b| b.mass).sum()
+    }
+
+    /// The mobilized-body system both backends build. With `symmetric`, the
+    /// left coordinate of each symmetry pair follows its right partner.
+    pub fn system(&self, symmetric: bool) -> Result<SystemSpec, ModelError> {
+        SystemSpec::build(self, symmetric)
+    }
+}
+
+/// Why an inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` is not physical, if it is not.
+fn inertia_problem(i: &[f64; 6]) -> Option<String> {
+    if i.iter().any(|v| !v.is_finite()) {
+        return Some("inertia must be finite".into());
+    }
+    let [xx, yy, zz, xy, xz, yz] = *i;
+    // Positive definite (Sylvester's criterion) and the triangle inequality
+    // that every rigid body's principal moments satisfy (Simbody checks it too).
+    let d1 = xx;
+    let d2 = xx * yy - xy * xy;
+    let d3 = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
+    if !(d1 > 0.0 && d2 > 0.0 && d3 > 0.0) {
+        return Some(format!("inertia {i:?} is not positive definite"));
+    }
+    let tol = 1e-12 * (xx + yy + zz);
+    if xx + yy + tol < zz || yy + zz + tol < xx || xx + zz + tol < yy {
+        return Some(format!("inertia {i:?} violates the triangle inequality (Ixx + Iyy >= Izz, ...)"));
+    }
+    None
+}
+
+/// How a mobilized body moves relative to its parent in a [`SystemSpec`].
+#[derive(Debug, Clone)]
+pub enum Mobilizer {
+    /// q = [rotation about z, x, y] (indices into the system's q).
+    Planar { q: [usize; 3] },
+    /// Rotation about z by q.
+    Pin { q: usize },
+    /// Rotation about z by q, origin at `location + (tx(q), ty(q), 0)`.
+    TranslatingHinge { q: usize, translation_x: SimmSpline, translation_y: SimmSpline },
+    /// Rigidly attached.
+    Weld,
+}
+
+/// One body of the system: the model's body `body`, attached to system body
+/// `parent` (`None` = ground) at `location` in the parent frame.
+#[derive(Debug, Clone)]
+pub struct SystemBody {
+    pub body: usize,
+    pub parent: Option<usize>,
+    pub location: [f64; 3],
+    pub mobilizer: Mobilizer,
+}
+
+/// The multibody system built from a model: bodies in topological order
+/// (parents first), and the generalized coordinates q.
+#[derive(Debug, Clone)]
+pub struct SystemSpec {
+    pub symmetric: bool,
+    pub bodies: Vec<SystemBody>,
+    /// The model coordinate behind each system coordinate, in the model's order.
+    pub coordinates: Vec<usize>,
+    /// For each model coordinate, the system coordinate that drives it.
+    pub q_of_model_coordinate: Vec<usize>,
+    /// For each model body, its index in `bodies`.
+    pub system_body_of: Vec<usize>,
+}
+
+impl SystemSpec {
+    fn build(model: &Model, symmetric: bool) -> Result<Self, ModelError> {
+        let err = |path: String, reason: String| ModelError::Invalid { file: model.file.clone(), path, reason };
+        let nc = model.coordinates.len();
+        // Which coordinates follow another.
+        let mut follows: Vec<Option<usize>> = vec![None; nc];
+        if symmetric {
+            for &(r, l) in &model.symmetry {
+                follows[l] = Some(r);
+            }
+        }
+        let mut coordinates = Vec::new();
+        let mut q_of: Vec<usize> = vec![usize::MAX; nc];
+        for c in 0..nc {
+            if follows[c].is_none() {
+                q_of[c] = coordinates.len();
+                coordinates.push(c);
+            }
+        }
+        for c in 0..nc {
+            if let Some(r) = follows[c] {
+                q_of[c] = q_of[r];
+            }
+        }
+        let joint_of_coord = |c: usize| -> usize {
+            model
+                .joints
+                .iter()
+                .position(|j| match &j.kind {
+                    JointKind::Planar { coordinates } => coordinates.contains(&c),
+                    JointKind::Pin { coordinate } | JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
+                    JointKind::Weld => false,
+                })
+                .unwrap_or(usize::MAX)
+        };
+        let nb = model.bodies.len();
+        let mut sys_of: Vec<usize> = vec![usize::MAX; nb];
+        // z offset of a body welded onto its mirror partner.
+        let mut mirror_of: Vec<Option<(usize, f64)>> = vec![None; nb];
+        let mut bodies: Vec<SystemBody> = Vec::with_capacity(nb);
+        let mut done = vec![false; model.joints.len()];
+        loop {
+            let mut progressed = false;
+            for (j, joint) in model.joints.iter().enumerate() {
+                if done[j] {
+                    continue;
+                }
+                let parent_sys = match joint.parent {
+                    None => None,
+                    Some(p) if sys_of[p] != usize::MAX => Some(sys_of[p]),
+                    Some(_) => continue,
+                };
+                let jpath = format!("joints[{j}]");
+                let follow = match &joint.kind {
+                    JointKind::Pin { coordinate } | JointKind::TranslatingHinge { coordinate, .. } => follows[*coordinate],
+                    JointKind::Planar { coordinates } => {
+                        if coordinates.iter().any(|c| follows[*c].is_some()) {
+                            return Err(err(jpath, "a planar joint's coordinates cannot follow symmetry partners".into()));
+                        }
+                        None
+                    }
+                    JointKind::Weld => None,
+                };
+                let sb = if let Some(rc) = follow {
+                    // Left joint: weld the child onto the right partner's child.
+                    let pj = joint_of_coord(rc);
+                    let partner = &model.joints[pj];
+                    if sys_of[partner.child] == usize::MAX {
+                        continue;
+                    }
+                    let same_kind = match (&joint.kind, &partner.kind) {
+                        (JointKind::Pin { .. }, JointKind::Pin { .. }) => true,
+                        (
+                            JointKind::TranslatingHinge { translation_x: ax, translation_y: ay, .. },
+                            JointKind::TranslatingHinge { translation_x: bx, translation_y: by, .. },
+                        ) => ax == bx && ay == by,
+                        _ => false,
+                    };
+                    if !same_kind {
+                        return Err(err(jpath, format!("joint '{}' and its symmetry partner '{}' differ in type or translation splines", joint.name, partner.name)));
+                    }
+                    // The parents must coincide or be mirror partners.
+                    let parent_dz = match (joint.parent, partner.parent) {
+                        (a, b) if a == b => 0.0,
+                        (Some(a), Some(b)) => match mirror_of[a] {
+                            Some((m, dz)) if m == b => dz,
+                            _ => return Err(err(jpath, format!("the parents of joint '{}' and its symmetry partner '{}' are not mirror images", joint.name, partner.name))),
+                        },
+                        _ => return Err(err(jpath, format!("the parents of joint '{}' and its symmetry partner '{}' are not mirror images", joint.name, partner.name))),
+                    };
+                    let (a, b) = (joint.location_in_parent, partner.location_in_parent);
+                    if (a[0] - b[0]).abs() > 1e-12 || (a[1] - b[1]).abs() > 1e-12 {
+                        return Err(err(format!("{jpath}.location_in_parent"), format!("x and y must equal those of the symmetry partner '{}' ({:?} vs {:?})", partner.name, a, b)));
+                    }
+                    let dz = parent_dz + a[2] - b[2];
+                    mirror_of[joint.child] = Some((partner.child, dz));
+                    SystemBody { body: joint.child, parent: Some(sys_of[partner.child]), location: [0.0, 0.0, dz], mobilizer: Mobilizer::Weld }
+                } else {
+                    let mobilizer = match &joint.kind {
+                        JointKind::Planar { coordinates: c } => Mobilizer::Planar { q: [q_of[c[0]], q_of[c[1]], q_of[c[2]]] },
+                        JointKind::Pin { coordinate } => Mobilizer::Pin { q: q_of[*coordinate] },
+                        JointKind::TranslatingHinge { coordinate, translation_x, translation_y } => Mobilizer::TranslatingHinge {
+                            q: q_of[*coordinate],
+                            translation_x: translation_x.clone(),
+                            translation_y: translation_y.clone(),
+                        },
+                        JointKind::Weld => Mobilizer::Weld,
+                    };
+                    SystemBody { body: joint.child, parent: parent_sys, location: joint.location_in_parent, mobilizer }
+                };
+                sys_of[joint.child] = bodies.len();
+                bodies.push(sb);
+                done[j] = true;
+                progressed = true;
+            }
+            if done.iter().all(|&d| d) {
+                break;
+            }
+            if !progressed {
+                let j = done.iter().position(|&d| !d).unwrap_or(0);
+                return Err(err(format!("joints[{j}]"), format!("joint '{}' cannot be placed in the symmetric system (its symmetry partner is not reachable)", model.joints[j].name)));
+            }
+        }
+        Ok(SystemSpec { symmetric, bodies, coordinates, q_of_model_coordinate: q_of, system_body_of: sys_of })
+    }
+
+    /// Number of generalized coordinates.
+    pub fn nq(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// The system's q for a full model-coordinate vector (right side wins).
+    pub fn q_from_model(&self, model_q: &[f64]) -> Vec<f64> {
+        self.coordinates.iter().map(|&c| model_q[c]).collect()
+    }
+
+    /// Expand a system vector (q or u) to all model coordinates.
+    pub fn model_from_q(&self, q: &[f64]) -> Vec<f64> {
+        self.q_of_model_coordinate.iter().map(|&k| q[k]).collect()
+    }
+}

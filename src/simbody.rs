@@ -1,0 +1,349 @@
+//! The Simbody backend: the only module that touches the C++ bridge.
+//!
+//! [`SimbodyModel`] builds a Simbody `MultibodySystem` from a
+//! [`SystemSpec`] (Planar, Pin, FunctionBased and Weld mobilizers; the
+//! translating knee as `MobilizedBody::FunctionBased` with OpenSim's
+//! `SimmSpline`) and answers the same questions as [`crate::multibody`]. All
+//! vectors are in leap's coordinate order; the permutation to Simbody's q
+//! order happens here. Every C++ exception becomes a [`SimbodyError`].
+//!
+//! Simbody's `System` is not safe to share between threads (see
+//! `shared/reference/simbody-bridge-notes.md` §7): a `SimbodyModel` is `Send`
+//! but not `Sync`; build one per thread.
+
+use crate::model::{Mobilizer, Model, SystemSpec};
+
+#[cxx::bridge(namespace = "leap")]
+mod ffi {
+    /// Counters of one integration.
+    #[derive(Debug, Clone, Copy, Default)]
+    struct IntegratorStats {
+        steps_taken: i32,
+        steps_attempted: i32,
+        realizations: i32,
+        error_test_failures: i32,
+        final_time: f64,
+    }
+
+    unsafe extern "C++" {
+        include!("leap/cpp/leap_simbody.h");
+
+        type SimbodySystem;
+
+        fn new_simbody_system() -> UniquePtr<SimbodySystem>;
+        #[allow(clippy::too_many_arguments)]
+        fn add_body(
+            self: Pin<&mut SimbodySystem>,
+            parent: i32,
+            kind: i32,
+            location: &[f64],
+            mass: f64,
+            mass_center: &[f64],
+            inertia: &[f64],
+            spline_x: &[f64],
+            spline_y: &[f64],
+        ) -> Result<i32>;
+        fn finalize(self: Pin<&mut SimbodySystem>, gravity: &[f64]) -> Result<()>;
+        fn nq(self: &SimbodySystem) -> Result<i32>;
+        fn first_q_index(self: &SimbodySystem, body: i32) -> Result<i32>;
+        fn set_state(self: Pin<&mut SimbodySystem>, t: f64, q: &[f64], u: &[f64]) -> Result<()>;
+        fn get_state(self: &SimbodySystem, q: &mut [f64], u: &mut [f64]) -> Result<()>;
+        fn time(self: &SimbodySystem) -> f64;
+        fn calc_mass_matrix(self: Pin<&mut SimbodySystem>, m: &mut [f64]) -> Result<()>;
+        fn calc_bias(self: Pin<&mut SimbodySystem>, bias: &mut [f64]) -> Result<()>;
+        fn set_applied_forces(
+            self: Pin<&mut SimbodySystem>,
+            tau: &[f64],
+            bodies: &[i32],
+            points: &[f64],
+            forces: &[f64],
+        ) -> Result<()>;
+        fn calc_udot(self: Pin<&mut SimbodySystem>, udot: &mut [f64]) -> Result<()>;
+        fn station_position(self: Pin<&mut SimbodySystem>, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn station_velocity(self: Pin<&mut SimbodySystem>, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn com_position(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
+        fn com_velocity(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
+        fn com_acceleration(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
+        fn total_mass(self: Pin<&mut SimbodySystem>) -> Result<f64>;
+        fn energy(self: Pin<&mut SimbodySystem>) -> Result<f64>;
+        fn integrate(self: Pin<&mut SimbodySystem>, method: i32, accuracy: f64, t_final: f64) -> Result<IntegratorStats>;
+        fn throw_for_test(self: Pin<&mut SimbodySystem>, kind: i32) -> Result<()>;
+    }
+}
+
+pub use ffi::IntegratorStats;
+
+// SAFETY: a SimbodySystem owns its Simbody objects and is used from one
+// thread at a time (`&mut` for every mutating call); it is not `Sync`.
+unsafe impl Send for ffi::SimbodySystem {}
+
+/// A failure inside Simbody or the facade, with Simbody's own message.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum SimbodyError {
+    #[error("Simbody: {0}")]
+    Simbody(String),
+    #[error("{0}")]
+    Input(String),
+}
+
+impl From<cxx::Exception> for SimbodyError {
+    fn from(e: cxx::Exception) -> Self {
+        SimbodyError::Simbody(e.what().to_string())
+    }
+}
+
+/// Simbody's integrators, as OpenSim offers them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SimbodyIntegrator {
+    RungeKuttaMerson,
+    RungeKuttaFeldberg,
+    RungeKutta3,
+    CPodes,
+    /// Fixed step; the step is the `accuracy` argument.
+    ExplicitEuler,
+}
+
+impl SimbodyIntegrator {
+    fn code(self) -> i32 {
+        match self {
+            SimbodyIntegrator::RungeKuttaMerson => 0,
+            SimbodyIntegrator::RungeKuttaFeldberg => 1,
+            SimbodyIntegrator::RungeKutta3 => 2,
+            SimbodyIntegrator::CPodes => 3,
+            SimbodyIntegrator::ExplicitEuler => 4,
+        }
+    }
+}
+
+/// A model built in Simbody.
+pub struct SimbodyModel {
+    sys: cxx::UniquePtr<ffi::SimbodySystem>,
+    n: usize,
+    /// Simbody q index of each leap coordinate.
+    perm: Vec<usize>,
+    /// Simbody mobilized-body index of each model body.
+    mobod_of_model_body: Vec<i32>,
+    q_sb: Vec<f64>,
+    u_sb: Vec<f64>,
+    tmp: Vec<f64>,
+    bodies_buf: Vec<i32>,
+    points_buf: Vec<f64>,
+    forces_buf: Vec<f64>,
+}
+
+impl std::fmt::Debug for SimbodyModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SimbodyModel").field("nq", &self.n).finish()
+    }
+}
+
+impl SimbodyModel {
+    /// Build the Simbody system of `system` (from `model`).
+    pub fn new(model: &Model, system: &SystemSpec) -> Result<Self, SimbodyError> {
+        let mut sys = ffi::new_simbody_system();
+        let mut q_slots: Vec<(i32, Vec<usize>)> = Vec::new();
+        for (k, sb) in system.bodies.iter().enumerate() {
+            let b = &model.bodies[sb.body];
+            let parent = sb.parent.map(|p| p as i32 + 1).unwrap_or(0);
+            let (kind, sx, sy, qs) = match &sb.mobilizer {
+                Mobilizer::Planar { q } => (0, Vec::new(), Vec::new(), q.to_vec()),
+                Mobilizer::Pin { q } => (1, Vec::new(), Vec::new(), vec![*q]),
+                Mobilizer::TranslatingHinge { q, translation_x, translation_y } => {
+                    (2, translation_x.coefficient_blocks(), translation_y.coefficient_blocks(), vec![*q])
+                }
+                Mobilizer::Weld => (3, Vec::new(), Vec::new(), Vec::new()),
+            };
+            let idx = sys.pin_mut().add_body(parent, kind, &sb.location, b.mass, &b.mass_center, &b.inertia, &sx, &sy)?;
+            debug_assert_eq!(idx as usize, k + 1);
+            if !qs.is_empty() {
+                q_slots.push((idx, qs));
+            }
+        }
+        sys.pin_mut().finalize(&model.gravity)?;
+        let n = system.nq();
+        let nq_sb = sys.nq()? as usize;
+        if nq_sb != n {
+            return Err(SimbodyError::Input(format!("Simbody built {nq_sb} coordinates, leap expects {n}")));
+        }
+        let mut perm = vec![usize::MAX; n];
+        for (body, qs) in &q_slots {
+            let first = sys.first_q_index(*body)?;
+            for (j, &q) in qs.iter().enumerate() {
+                perm[q] = first as usize + j;
+            }
+        }
+        if perm.iter().any(|&p| p == usize::MAX) {
+            return Err(SimbodyError::Input("a coordinate has no Simbody mobility".into()));
+        }
+        let mobod_of_model_body = system.system_body_of.iter().map(|&s| s as i32 + 1).collect();
+        Ok(SimbodyModel {
+            sys,
+            n,
+            perm,
+            mobod_of_model_body,
+            q_sb: vec![0.0; n],
+            u_sb: vec![0.0; n],
+            tmp: vec![0.0; n * n],
+            bodies_buf: Vec::new(),
+            points_buf: Vec::new(),
+            forces_buf: Vec::new(),
+        })
+    }
+
+    /// Number of generalized coordinates.
+    pub fn nq(&self) -> usize {
+        self.n
+    }
+
+    fn check(&self, what: &str, len: usize, want: usize) -> Result<(), SimbodyError> {
+        if len != want {
+            return Err(SimbodyError::Input(format!("{what}: wrong length {len} (expected {want})")));
+        }
+        Ok(())
+    }
+
+    /// Set time, q and q̇ (leap order).
+    pub fn set_state(&mut self, t: f64, q: &[f64], u: &[f64]) -> Result<(), SimbodyError> {
+        self.check("q", q.len(), self.n)?;
+        self.check("u", u.len(), self.n)?;
+        for k in 0..self.n {
+            self.q_sb[self.perm[k]] = q[k];
+            self.u_sb[self.perm[k]] = u[k];
+        }
+        self.sys.pin_mut().set_state(t, &self.q_sb, &self.u_sb)?;
+        Ok(())
+    }
+
+    /// Current time, q and q̇ (leap order).
+    pub fn state(&mut self, q: &mut [f64], u: &mut [f64]) -> Result<f64, SimbodyError> {
+        self.check("q", q.len(), self.n)?;
+        self.check("u", u.len(), self.n)?;
+        self.sys.get_state(&mut self.q_sb, &mut self.u_sb)?;
+        for k in 0..self.n {
+            q[k] = self.q_sb[self.perm[k]];
+            u[k] = self.u_sb[self.perm[k]];
+        }
+        Ok(self.sys.time())
+    }
+
+    /// Mass matrix (row-major, leap order).
+    pub fn mass_matrix(&mut self, out: &mut [f64]) -> Result<(), SimbodyError> {
+        let n = self.n;
+        self.check("mass matrix", out.len(), n * n)?;
+        self.sys.pin_mut().calc_mass_matrix(&mut self.tmp)?;
+        for i in 0..n {
+            for j in 0..n {
+                out[i * n + j] = self.tmp[self.perm[i] * n + self.perm[j]];
+            }
+        }
+        Ok(())
+    }
+
+    /// Bias forces C(q, q̇)q̇ − g(q) (leap order).
+    pub fn bias(&mut self, out: &mut [f64]) -> Result<(), SimbodyError> {
+        self.check("bias", out.len(), self.n)?;
+        self.sys.pin_mut().calc_bias(&mut self.tmp[..self.n])?;
+        for k in 0..self.n {
+            out[k] = self.tmp[self.perm[k]];
+        }
+        Ok(())
+    }
+
+    /// Apply generalized forces `tau` (leap order) and point forces
+    /// `(model body, point in body frame, force in ground)`; they stay applied
+    /// for later evaluations and integration.
+    pub fn set_applied_forces(&mut self, tau: &[f64], point_forces: &[(usize, [f64; 3], [f64; 3])]) -> Result<(), SimbodyError> {
+        self.check("tau", tau.len(), self.n)?;
+        for k in 0..self.n {
+            self.u_sb[self.perm[k]] = tau[k];
+        }
+        self.bodies_buf.clear();
+        self.points_buf.clear();
+        self.forces_buf.clear();
+        for (body, p, f) in point_forces {
+            let mobod = *self
+                .mobod_of_model_body
+                .get(*body)
+                .ok_or_else(|| SimbodyError::Input(format!("no model body {body}")))?;
+            self.bodies_buf.push(mobod);
+            self.points_buf.extend_from_slice(p);
+            self.forces_buf.extend_from_slice(f);
+        }
+        let r = self.sys.pin_mut().set_applied_forces(&self.u_sb, &self.bodies_buf, &self.points_buf, &self.forces_buf);
+        // u_sb was borrowed as scratch: restore the state's speeds.
+        self.sys.get_state(&mut self.q_sb, &mut self.u_sb)?;
+        r.map_err(Into::into)
+    }
+
+    /// Accelerations q̈ under the applied forces (leap order).
+    pub fn accelerations(&mut self, qdd: &mut [f64]) -> Result<(), SimbodyError> {
+        self.check("qdd", qdd.len(), self.n)?;
+        self.sys.pin_mut().calc_udot(&mut self.tmp[..self.n])?;
+        for k in 0..self.n {
+            qdd[k] = self.tmp[self.perm[k]];
+        }
+        Ok(())
+    }
+
+    /// Position in ground of a point fixed on a model body.
+    pub fn station_position(&mut self, body: usize, point: [f64; 3]) -> Result<[f64; 3], SimbodyError> {
+        let mobod = self.mobod(body)?;
+        let mut out = [0.0; 3];
+        self.sys.pin_mut().station_position(mobod, &point, &mut out)?;
+        Ok(out)
+    }
+
+    /// Velocity in ground of a point fixed on a model body.
+    pub fn station_velocity(&mut self, body: usize, point: [f64; 3]) -> Result<[f64; 3], SimbodyError> {
+        let mobod = self.mobod(body)?;
+        let mut out = [0.0; 3];
+        self.sys.pin_mut().station_velocity(mobod, &point, &mut out)?;
+        Ok(out)
+    }
+
+    fn mobod(&self, body: usize) -> Result<i32, SimbodyError> {
+        self.mobod_of_model_body.get(body).copied().ok_or_else(|| SimbodyError::Input(format!("no model body {body}")))
+    }
+
+    /// Whole-body centre of mass position.
+    pub fn com_position(&mut self) -> Result<[f64; 3], SimbodyError> {
+        let mut out = [0.0; 3];
+        self.sys.pin_mut().com_position(&mut out)?;
+        Ok(out)
+    }
+
+    /// Whole-body centre of mass velocity.
+    pub fn com_velocity(&mut self) -> Result<[f64; 3], SimbodyError> {
+        let mut out = [0.0; 3];
+        self.sys.pin_mut().com_velocity(&mut out)?;
+        Ok(out)
+    }
+
+    /// Whole-body centre of mass acceleration under the applied forces.
+    pub fn com_acceleration(&mut self) -> Result<[f64; 3], SimbodyError> {
+        let mut out = [0.0; 3];
+        self.sys.pin_mut().com_acceleration(&mut out)?;
+        Ok(out)
+    }
+
+    /// Total mass (kg).
+    pub fn total_mass(&mut self) -> Result<f64, SimbodyError> {
+        Ok(self.sys.pin_mut().total_mass()?)
+    }
+
+    /// Kinetic plus potential energy (J).
+    pub fn energy(&mut self) -> Result<f64, SimbodyError> {
+        Ok(self.sys.pin_mut().energy()?)
+    }
+
+    /// Integrate to `t_final` with the applied forces held constant.
+    pub fn integrate(&mut self, integrator: SimbodyIntegrator, accuracy: f64, t_final: f64) -> Result<IntegratorStats, SimbodyError> {
+        Ok(self.sys.pin_mut().integrate(integrator.code(), accuracy, t_final)?)
+    }
+
+    /// Make the facade throw (kind 0: a Simbody stage error; 1: a SimTK
+    /// exception; other: `std::runtime_error`), to test error propagation.
+    pub fn throw_for_test(&mut self, kind: i32) -> Result<(), SimbodyError> {
+        Ok(self.sys.pin_mut().throw_for_test(kind)?)
+    }
+}
