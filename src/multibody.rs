@@ -47,12 +47,20 @@ struct CompositeBody {
     /// z of the frame origin in ground, and of the centre of mass.
     z_origin: f64,
     z_com: f64,
+    /// Coordinates that move this body: the parent's, then the joint's own.
+    dofs: Vec<usize>,
+    /// Whether each of `dofs` rotates the body (θ = Σ of those q).
+    rot: Vec<bool>,
+    /// Index in `dofs` of the joint's own first coordinate.
+    own_start: usize,
 }
 
 /// Immutable planar multibody model built from a [`SystemSpec`].
 #[derive(Debug, Clone)]
 pub struct Multibody {
     nq: usize,
+    /// Largest number of coordinates that move one body.
+    dmax: usize,
     gravity: [f64; 2],
     bodies: Vec<CompositeBody>,
     total_mass: f64,
@@ -77,12 +85,10 @@ pub struct Workspace<S: Scalar> {
     v: Vec<V2<S>>,
     /// Origin acceleration at q̈ = 0.
     a0: Vec<V2<S>>,
-    /// ∂p/∂q per body: 2 rows × n, row-major.
-    jp: Vec<S>,
-    /// ∂θ/∂q per body (0 or 1).
-    jt: Vec<f64>,
-    /// Centre-of-mass Jacobian and bias acceleration per body.
-    jc: Vec<S>,
+    /// ∂p/∂q per body, for the body's columns `dofs` (stride `dmax`).
+    jp: Vec<V2<S>>,
+    /// Centre-of-mass Jacobian per body (same layout) and bias acceleration.
+    jc: Vec<V2<S>>,
     a0c: Vec<V2<S>>,
     c: Vec<V2<S>>,
     vc: Vec<V2<S>>,
@@ -140,8 +146,26 @@ impl Multibody {
                     Joint::TranslatingHinge { q: *q, tx: translation_x.clone(), ty: translation_y.clone() }
                 }
             };
+            let (mut dofs, mut rots) = match parent_comp {
+                Some(p) => (bodies[p].dofs.clone(), bodies[p].rot.clone()),
+                None => (Vec::new(), Vec::new()),
+            };
+            let own_start = dofs.len();
+            match &joint {
+                Joint::Planar { q } => {
+                    dofs.extend_from_slice(q);
+                    rots.extend_from_slice(&[true, false, false]);
+                }
+                Joint::Pin { q } | Joint::TranslatingHinge { q, .. } => {
+                    dofs.push(*q);
+                    rots.push(true);
+                }
+            }
             frame_of.push((bodies.len(), [0.0; 3]));
             bodies.push(CompositeBody {
+                dofs,
+                rot: rots,
+                own_start,
                 parent: parent_comp,
                 location: [loc[0], loc[1]],
                 joint,
@@ -182,8 +206,10 @@ impl Multibody {
             })
             .collect();
         let total_mass = bodies.iter().map(|b| b.mass).sum();
+        let dmax = bodies.iter().map(|b| b.dofs.len()).max().unwrap_or(0);
         Multibody {
             nq: system.nq(),
+            dmax,
             gravity: [model.gravity[0], model.gravity[1]],
             bodies,
             total_mass,
@@ -232,9 +258,8 @@ impl Multibody {
             p: vec![[z; 2]; nb],
             v: vec![[z; 2]; nb],
             a0: vec![[z; 2]; nb],
-            jp: vec![z; nb * 2 * n],
-            jt: vec![0.0; nb * n],
-            jc: vec![z; nb * 2 * n],
+            jp: vec![[z; 2]; nb * self.dmax],
+            jc: vec![[z; 2]; nb * self.dmax],
             a0c: vec![[z; 2]; nb],
             c: vec![[z; 2]; nb],
             vc: vec![[z; 2]; nb],
@@ -251,63 +276,32 @@ impl Multibody {
     /// Jacobians, the mass matrix and the bias forces.
     pub fn set_state<S: Scalar>(&self, ws: &mut Workspace<S>, q: &[S], u: &[S]) {
         let n = self.nq;
+        let dmax = self.dmax;
         debug_assert!(q.len() == n && u.len() == n);
         ws.q.copy_from_slice(q);
         ws.u.copy_from_slice(u);
         let z = S::zero();
         for (i, b) in self.bodies.iter().enumerate() {
-            let jp_i = i * 2 * n;
+            let o = i * dmax;
             // Parent quantities (ground: identity, at rest).
             let (th_p, om_p, cs_p, sn_p, p_p, v_p, a_p) = match b.parent {
                 None => (z, z, S::one(), z, [z; 2], [z; 2], [z; 2]),
                 Some(pi) => (ws.theta[pi], ws.omega[pi], ws.cos[pi], ws.sin[pi], ws.p[pi], ws.v[pi], ws.a0[pi]),
             };
-            // Copy parent Jacobians.
-            match b.parent {
-                None => {
-                    for k in 0..2 * n {
-                        ws.jp[jp_i + k] = z;
-                    }
-                    for k in 0..n {
-                        ws.jt[i * n + k] = 0.0;
-                    }
-                }
-                Some(pi) => {
-                    ws.jp.copy_within(pi * 2 * n..(pi + 1) * 2 * n, jp_i);
-                    ws.jt.copy_within(pi * n..(pi + 1) * n, i * n);
-                }
-            }
             let loc: [S; 2] = [c(b.location[0]), c(b.location[1])];
-            match &b.joint {
+            // Joint: origin offset d (ground axes), its rate and the own Jacobian columns.
+            let (d, vrel, arel, qr, qd) = match &b.joint {
                 Joint::Planar { q: [qr, qx, qy] } => {
                     // Translation along the parent (ground) axes, rotation about z.
                     let d = rot(cs_p, sn_p, [loc[0] + q[*qx], loc[1] + q[*qy]]);
                     let ex = rot(cs_p, sn_p, [S::one(), z]);
                     let ey = rot(cs_p, sn_p, [z, S::one()]);
-                    let pd = perp(d);
-                    for k in 0..n {
-                        let jt = ws.jt[i * n + k];
-                        if jt != 0.0 {
-                            ws.jp[jp_i + k] += pd[0] * jt;
-                            ws.jp[jp_i + n + k] += pd[1] * jt;
-                        }
-                    }
-                    ws.jp[jp_i + *qx] += ex[0];
-                    ws.jp[jp_i + n + *qx] += ex[1];
-                    ws.jp[jp_i + *qy] += ey[0];
-                    ws.jp[jp_i + n + *qy] += ey[1];
-                    ws.jt[i * n + *qr] += 1.0;
+                    let s0 = b.own_start;
+                    ws.jp[o + s0] = [z; 2];
+                    ws.jp[o + s0 + 1] = ex;
+                    ws.jp[o + s0 + 2] = ey;
                     let vrel = [ex[0] * u[*qx] + ey[0] * u[*qy], ex[1] * u[*qx] + ey[1] * u[*qy]];
-                    ws.p[i] = [p_p[0] + d[0], p_p[1] + d[1]];
-                    ws.v[i] = [v_p[0] + pd[0] * om_p + vrel[0], v_p[1] + pd[1] * om_p + vrel[1]];
-                    let pv = perp(vrel);
-                    let om2 = om_p * om_p;
-                    ws.a0[i] = [
-                        a_p[0] - d[0] * om2 + pv[0] * om_p * 2.0,
-                        a_p[1] - d[1] * om2 + pv[1] * om_p * 2.0,
-                    ];
-                    ws.theta[i] = th_p + q[*qr];
-                    ws.omega[i] = om_p + u[*qr];
+                    (d, vrel, [z; 2], q[*qr], u[*qr])
                 }
                 Joint::Pin { q: qi } | Joint::TranslatingHinge { q: qi, .. } => {
                     let (t, dt, ddt) = match &b.joint {
@@ -321,46 +315,49 @@ impl Multibody {
                     let d = rot(cs_p, sn_p, [loc[0] + t[0], loc[1] + t[1]]);
                     let rdt = rot(cs_p, sn_p, dt);
                     let rddt = rot(cs_p, sn_p, ddt);
-                    let pd = perp(d);
-                    for k in 0..n {
-                        let jt = ws.jt[i * n + k];
-                        if jt != 0.0 {
-                            ws.jp[jp_i + k] += pd[0] * jt;
-                            ws.jp[jp_i + n + k] += pd[1] * jt;
-                        }
-                    }
-                    ws.jp[jp_i + *qi] += rdt[0];
-                    ws.jp[jp_i + n + *qi] += rdt[1];
-                    ws.jt[i * n + *qi] += 1.0;
+                    ws.jp[o + b.own_start] = rdt;
                     let qd = u[*qi];
-                    let vrel = [rdt[0] * qd, rdt[1] * qd];
-                    ws.p[i] = [p_p[0] + d[0], p_p[1] + d[1]];
-                    ws.v[i] = [v_p[0] + pd[0] * om_p + vrel[0], v_p[1] + pd[1] * om_p + vrel[1]];
-                    let pv = perp(vrel);
-                    let om2 = om_p * om_p;
-                    let qd2 = qd * qd;
-                    ws.a0[i] = [
-                        a_p[0] - d[0] * om2 + pv[0] * om_p * 2.0 + rddt[0] * qd2,
-                        a_p[1] - d[1] * om2 + pv[1] * om_p * 2.0 + rddt[1] * qd2,
-                    ];
-                    ws.theta[i] = th_p + q[*qi];
-                    ws.omega[i] = om_p + qd;
+                    ([d[0], d[1]], [rdt[0] * qd, rdt[1] * qd], [rddt[0] * qd * qd, rddt[1] * qd * qd], q[*qi], qd)
+                }
+            };
+            let pd = perp(d);
+            // Inherited Jacobian columns: the parent's, plus the lever arm for
+            // columns that rotate the parent.
+            if let Some(pi) = b.parent {
+                let po = pi * dmax;
+                for k in 0..b.own_start {
+                    let mut j = ws.jp[po + k];
+                    if b.rot[k] {
+                        j[0] += pd[0];
+                        j[1] += pd[1];
+                    }
+                    ws.jp[o + k] = j;
                 }
             }
-            let th = ws.theta[i];
-            ws.cos[i] = th.cos();
-            ws.sin[i] = th.sin();
+            ws.p[i] = [p_p[0] + d[0], p_p[1] + d[1]];
+            ws.v[i] = [v_p[0] + pd[0] * om_p + vrel[0], v_p[1] + pd[1] * om_p + vrel[1]];
+            let pv = perp(vrel);
+            let om2 = om_p * om_p;
+            ws.a0[i] = [
+                a_p[0] - d[0] * om2 + pv[0] * om_p * 2.0 + arel[0],
+                a_p[1] - d[1] * om2 + pv[1] * om_p * 2.0 + arel[1],
+            ];
+            let th = th_p + qr;
+            ws.theta[i] = th;
+            ws.omega[i] = om_p + qd;
+            let (sn, cs) = (th.sin(), th.cos());
+            ws.cos[i] = cs;
+            ws.sin[i] = sn;
             // Centre of mass.
-            let s = rot(ws.cos[i], ws.sin[i], [c::<S>(b.com[0]), c::<S>(b.com[1])]);
+            let s = rot(cs, sn, [c::<S>(b.com[0]), c::<S>(b.com[1])]);
             let ps = perp(s);
             let om = ws.omega[i];
             ws.c[i] = [ws.p[i][0] + s[0], ws.p[i][1] + s[1]];
             ws.vc[i] = [ws.v[i][0] + ps[0] * om, ws.v[i][1] + ps[1] * om];
             ws.a0c[i] = [ws.a0[i][0] - s[0] * om * om, ws.a0[i][1] - s[1] * om * om];
-            for k in 0..n {
-                let jt = ws.jt[i * n + k];
-                ws.jc[jp_i + k] = ws.jp[jp_i + k] + ps[0] * jt;
-                ws.jc[jp_i + n + k] = ws.jp[jp_i + n + k] + ps[1] * jt;
+            for k in 0..b.dofs.len() {
+                let j = ws.jp[o + k];
+                ws.jc[o + k] = if b.rot[k] { [j[0] + ps[0], j[1] + ps[1]] } else { j };
             }
         }
         // Mass matrix and bias forces.
@@ -372,27 +369,27 @@ impl Multibody {
         }
         let g = self.gravity;
         for (i, b) in self.bodies.iter().enumerate() {
-            let o = i * 2 * n;
-            let jt = &ws.jt[i * n..(i + 1) * n];
+            let o = i * dmax;
             let fx = (ws.a0c[i][0] - g[0]) * b.mass;
             let fy = (ws.a0c[i][1] - g[1]) * b.mass;
-            for j in 0..n {
-                let (jxj, jyj) = (ws.jc[o + j], ws.jc[o + n + j]);
-                ws.bias[j] += jxj * fx + jyj * fy;
-                let (mxj, myj) = (jxj * b.mass, jyj * b.mass);
-                let ij = jt[j] * b.izz;
-                for k in j..n {
-                    let mut add = mxj * ws.jc[o + k] + myj * ws.jc[o + n + k];
-                    if ij != 0.0 && jt[k] != 0.0 {
-                        add += ij * jt[k];
+            let len = b.dofs.len();
+            for a in 0..len {
+                let ja = ws.jc[o + a];
+                let da = b.dofs[a];
+                ws.bias[da] += ja[0] * fx + ja[1] * fy;
+                let (mx, my) = (ja[0] * b.mass, ja[1] * b.mass);
+                for bb in a..len {
+                    let jb = ws.jc[o + bb];
+                    let mut add = mx * jb[0] + my * jb[1];
+                    if b.rot[a] && b.rot[bb] {
+                        add += b.izz;
                     }
-                    ws.mass_matrix[j * n + k] += add;
+                    let db = b.dofs[bb];
+                    ws.mass_matrix[da * n + db] += add;
+                    if da != db {
+                        ws.mass_matrix[db * n + da] += add;
+                    }
                 }
-            }
-        }
-        for j in 0..n {
-            for k in 0..j {
-                ws.mass_matrix[j * n + k] = ws.mass_matrix[k * n + j];
             }
         }
     }
@@ -424,19 +421,19 @@ impl Multibody {
     /// Add the generalized force `J_pᵀ F` of a force `F` (ground frame; only
     /// x and y act on planar motion) applied at a point fixed on `body`.
     pub fn add_point_force<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3], force: [S; 3], tau: &mut [S]) {
-        let n = self.nq;
         let s = rot(ws.cos[body], ws.sin[body], [c::<S>(loc[0]), c::<S>(loc[1])]);
         let ps = perp(s);
-        let o = body * 2 * n;
-        // Moment of the force about the body origin, carried by θ.
+        let b = &self.bodies[body];
+        let o = body * self.dmax;
+        // Moment of the force about the body origin, carried by rotations.
         let moment = ps[0] * force[0] + ps[1] * force[1];
-        for k in 0..n {
-            let mut g = ws.jp[o + k] * force[0] + ws.jp[o + n + k] * force[1];
-            let jt = ws.jt[body * n + k];
-            if jt != 0.0 {
-                g += moment * jt;
+        for k in 0..b.dofs.len() {
+            let j = ws.jp[o + k];
+            let mut g = j[0] * force[0] + j[1] * force[1];
+            if b.rot[k] {
+                g += moment;
             }
-            tau[k] += g;
+            tau[b.dofs[k]] += g;
         }
     }
 
@@ -470,14 +467,14 @@ impl Multibody {
 
     /// Whole-body centre of mass acceleration for accelerations `qdd`.
     pub fn com_acceleration<S: Scalar>(&self, ws: &Workspace<S>, qdd: &[S]) -> [S; 3] {
-        let n = self.nq;
         let mut r = [S::zero(); 2];
         for (i, b) in self.bodies.iter().enumerate() {
-            let o = i * 2 * n;
+            let o = i * self.dmax;
             let mut a = ws.a0c[i];
-            for k in 0..n {
-                a[0] += ws.jc[o + k] * qdd[k];
-                a[1] += ws.jc[o + n + k] * qdd[k];
+            for (k, &d) in b.dofs.iter().enumerate() {
+                let j = ws.jc[o + k];
+                a[0] += j[0] * qdd[d];
+                a[1] += j[1] * qdd[d];
             }
             r[0] += a[0] * b.mass;
             r[1] += a[1] * b.mass;
