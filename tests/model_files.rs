@@ -1,0 +1,94 @@
+//! Model files: the jumper loads, SimmSpline reproduces model-data.md's knee
+//! check values, and every broken file gives an error naming file and field.
+
+use leap::model::{Model, ModelError};
+use leap::spline::{SimmSpline, SplineData};
+
+#[test]
+fn jumper_loads_with_gait2392_masses_and_credits() {
+    let m = Model::from_file("models/jumper.json").unwrap();
+    // 12 gait2392 bodies (8 segments with the foot as talus+calcn+toes).
+    assert_eq!(m.bodies.len(), 12);
+    // gait2392 total mass, model-data.md §2 item 5: 75.1646 kg.
+    assert!((m.total_mass() - 75.1646).abs() < 1e-9);
+    assert!(m.credits.iter().any(|c| c.contains("gait2392") && c.contains("CC BY 3.0")));
+    assert_eq!(m.system(false).unwrap().nq(), 10);
+    let sym = m.system(true).unwrap();
+    assert_eq!(sym.nq(), 7);
+    let names: Vec<&str> = sym.coordinates.iter().map(|&c| m.coordinates[c].name.as_str()).collect();
+    assert_eq!(names, ["pelvis_tilt", "pelvis_tx", "pelvis_ty", "hip_flexion_r", "knee_angle_r", "ankle_angle_r", "lumbar_extension"]);
+    assert_eq!(m.stations.len(), 16);
+}
+
+/// model-data.md §6: at knee_angle = −1.3962634 the FMM SimmSpline gives
+/// tx = 0.00410999 and ty = −0.41105525 (and the OpenSim Jumper file stores
+/// tib_ty_r = −0.41105524), quoted to 8 decimals.
+#[test]
+fn knee_splines_match_model_data_check_values() {
+    let m = Model::from_file("models/jumper.json").unwrap();
+    let knee = m.joints.iter().find(|j| j.name == "knee_r").unwrap();
+    let leap::model::JointKind::TranslatingHinge { translation_x, translation_y, .. } = &knee.kind else {
+        panic!("knee_r is not a translating hinge")
+    };
+    let q = -1.3962634;
+    let tx: f64 = translation_x.value(q);
+    let ty: f64 = translation_y.value(q);
+    assert!((tx - 0.00410999).abs() < 5e-9, "tx = {tx}");
+    assert!((ty - -0.41105525).abs() < 5e-9, "ty = {ty}");
+}
+
+#[test]
+fn spline_extrapolates_linearly_with_end_slope() {
+    let s = SimmSpline::new(&SplineData { x: vec![0.0, 1.0, 2.0, 3.0, 4.0], y: vec![0.0, 1.0, 0.0, 2.0, 1.0] }).unwrap();
+    let (_, slope_hi, _) = s.eval(4.0 - 1e-13);
+    let (v, d1, d2) = s.eval(5.5f64);
+    assert!((v - (1.0 + 1.5 * slope_hi)).abs() < 1e-9);
+    assert!((d1 - slope_hi).abs() < 1e-9 && d2 == 0.0);
+}
+
+fn broken(name: &str) -> ModelError {
+    let path = format!("tests/data/broken/{name}.json");
+    match Model::from_file(&path) {
+        Ok(_) => panic!("{path} was accepted"),
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(msg.starts_with(&path), "error does not name the file: {msg}");
+            e
+        }
+    }
+}
+
+#[test]
+fn broken_model_files_name_file_field_and_reason() {
+    let cases: &[(&str, &str, &str)] = &[
+        ("negative_mass", "bodies[0].mass", "positive"),
+        ("unknown_body", "joints[1].parent", "unknown body 'linkX'"),
+        ("broken_json", "", "EOF while parsing"),
+        ("unknown_field", "bodies[1].colour", "unknown field `colour`"),
+        ("inertia_not_pd", "bodies[1].inertia", "not positive definite"),
+        ("default_outside_range", "coordinates[1].default_value", "outside the range"),
+        ("unknown_coordinate", "joints[0].coordinate", "unknown coordinate 'q9'"),
+        ("duplicate_body", "bodies[2].name", "defined twice"),
+        ("kinematic_loop", "bodies[0]", "kinematic loop"),
+        ("unknown_station_body", "stations[0].body", "unknown body 'hand'"),
+        ("unknown_joint_type", "joints[0].type", "unknown variant `ball`"),
+        ("range_reversed", "coordinates[0].range", "min < max"),
+        ("spline_not_increasing", "joints[2].translation_y", "not strictly increasing"),
+        ("asymmetric_hip", "joints[6].location_in_parent", "symmetry partner 'hip_r'"),
+        ("pose_outside_range", "poses.squat.knee_angle_r", "outside the range"),
+    ];
+    for (name, field, reason) in cases {
+        let e = broken(name);
+        if !field.is_empty() {
+            assert_eq!(e.field(), *field, "{name}: {e}");
+        }
+        assert!(e.to_string().contains(reason), "{name}: {e}");
+    }
+}
+
+#[test]
+fn missing_file_is_an_io_error_naming_it() {
+    let e = Model::from_file("models/no_such_model.json").unwrap_err();
+    assert!(matches!(e, ModelError::Io { .. }));
+    assert!(e.to_string().contains("models/no_such_model.json"));
+}
