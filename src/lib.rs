@@ -7,6 +7,7 @@
 
 pub mod scalar;
 pub mod spline;
+pub mod path;
 pub mod model;
 pub mod multibody;
 pub mod simbody;

@@ -406,22 +406,58 @@ impl Multibody {
 
     /// Position of a point fixed on composite body `body` (3D, ground).
     pub fn point_position<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3]) -> [S; 3] {
-        let s = rot(ws.cos[body], ws.sin[body], [c::<S>(loc[0]), c::<S>(loc[1])]);
-        [ws.p[body][0] + s[0], ws.p[body][1] + s[1], c(self.bodies[body].z_origin + loc[2])]
+        self.point_position_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])])
     }
 
     /// Velocity of a point fixed on composite body `body` (3D, ground).
     pub fn point_velocity<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3]) -> [S; 3] {
-        let s = rot(ws.cos[body], ws.sin[body], [c::<S>(loc[0]), c::<S>(loc[1])]);
+        self.point_velocity_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])])
+    }
+
+    /// [`Self::point_position`] for a location of scalar type.
+    #[inline]
+    pub fn point_position_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3]) -> [S; 3] {
+        let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
+        [ws.p[body][0] + s[0], ws.p[body][1] + s[1], loc[2] + self.bodies[body].z_origin]
+    }
+
+    /// [`Self::point_velocity`] for a location of scalar type.
+    #[inline]
+    pub fn point_velocity_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3]) -> [S; 3] {
+        let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
         let ps = perp(s);
         let om = ws.omega[body];
         [ws.v[body][0] + ps[0] * om, ws.v[body][1] + ps[1] * om, S::zero()]
     }
 
+    /// A vector fixed in composite body `body`, expressed in ground.
+    #[inline]
+    pub fn to_ground<S: Scalar>(&self, ws: &Workspace<S>, body: usize, v: [S; 3]) -> [S; 3] {
+        let r = rot(ws.cos[body], ws.sin[body], [v[0], v[1]]);
+        [r[0], r[1], v[2]]
+    }
+
+    /// The composite body and frame offset of a model body.
+    #[inline]
+    pub fn frame_of_model_body(&self, model_body: usize) -> (usize, [f64; 3]) {
+        self.frame_of[self.system_body_of[model_body]]
+    }
+
+    /// The generalized coordinates q and speeds q̇ of the current state.
+    pub fn state<'a, S: Scalar>(&self, ws: &'a Workspace<S>) -> (&'a [S], &'a [S]) {
+        (&ws.q, &ws.u)
+    }
+
     /// Add the generalized force `J_pᵀ F` of a force `F` (ground frame; only
     /// x and y act on planar motion) applied at a point fixed on `body`.
     pub fn add_point_force<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3], force: [S; 3], tau: &mut [S]) {
-        let s = rot(ws.cos[body], ws.sin[body], [c::<S>(loc[0]), c::<S>(loc[1])]);
+        self.add_point_force_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])], force, tau)
+    }
+
+    /// [`Self::add_point_force`] for a location of scalar type.
+    #[inline]
+    pub fn add_point_force_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3], force: [S; 3], tau: &mut [S]) {
+        let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
         let ps = perp(s);
         let b = &self.bodies[body];
         let o = body * self.dmax;

@@ -1,0 +1,367 @@
+//! Muscle paths: OpenSim's `GeometryPath` of fixed, conditional and moving
+//! path points, on any skeleton that can report point kinematics.
+//!
+//! The path length is the sum of the straight 3D segments between the active
+//! points (gait2392 has no wrapping surfaces); the lengthening speed is its
+//! time derivative; a tension `T` along the path produces the generalized
+//! forces `τ = −T·∂L/∂q`, so the moment arm is `r = −∂L/∂q` (OpenSim's sign,
+//! `MomentArmSolver`, model-equations.md §7.3). Forces are applied as point
+//! forces at the path points (plus, for a moving point, the work its sliding
+//! does on its coordinate), exactly as OpenSim's `PointForceDirection`s do.
+//!
+//! A conditional point is active iff its coordinate lies in `range`; at the
+//! range ends the length jumps. For gradient-based solvers the
+//! [`PathSmoothing::Smooth`] option blends the path with and without each
+//! conditional point by a smooth step of the coordinate,
+//! `L = Σ_S Π_i w_i^{[i∈S]}(1 − w_i)^{[i∉S]} L(S)`, with
+//! `w(q) = ½(1 + tanh((q − lo)/δ))·½(1 + tanh((hi − q)/δ))`.
+
+use crate::scalar::{c, Scalar};
+use crate::spline::{SimmSpline, SplineData};
+use serde::{Deserialize, Serialize};
+
+/// A path point as written in a model file (body and coordinate by name).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum PathPointSpec {
+    /// OpenSim `PathPoint`: fixed in `body` at `location` (m).
+    Fixed { body: String, location: [f64; 3] },
+    /// OpenSim `ConditionalPathPoint`: active iff `range[0] ≤ coordinate ≤ range[1]`.
+    Conditional { body: String, location: [f64; 3], coordinate: String, range: [f64; 2] },
+    /// OpenSim `MovingPathPoint`: location components are SimmSplines of `coordinate`.
+    Moving { body: String, coordinate: String, x_location: SplineData, y_location: SplineData, z_location: SplineData },
+}
+
+/// What makes a validated path point move.
+#[derive(Debug, Clone)]
+pub enum PointKind {
+    Fixed,
+    Conditional { coordinate: usize, range: [f64; 2] },
+    Moving { coordinate: usize, x: SimmSpline, y: SimmSpline, z: SimmSpline },
+}
+
+/// A validated path point on model body `body`.
+#[derive(Debug, Clone)]
+pub struct PathPoint {
+    pub body: usize,
+    pub location: [f64; 3],
+    pub kind: PointKind,
+}
+
+/// A validated muscle path.
+#[derive(Debug, Clone)]
+pub struct GeometryPath {
+    pub points: Vec<PathPoint>,
+    /// Indices (into `points`) of the conditional points.
+    conditional: Vec<usize>,
+}
+
+/// How conditional path points switch.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "mode")]
+pub enum PathSmoothing {
+    /// Exactly as OpenSim: on or off.
+    Exact,
+    /// Blended over a width `delta` (rad) at each range end.
+    Smooth { delta: f64 },
+}
+
+/// Point kinematics of a skeleton at its current state, by model body and
+/// model coordinate.
+pub trait BodyKinematics<S: Scalar> {
+    /// Position in ground of the point at `loc` in the body frame.
+    fn position(&self, body: usize, loc: [S; 3]) -> [S; 3];
+    /// Velocity in ground of the body's material point at `loc`.
+    fn velocity(&self, body: usize, loc: [S; 3]) -> [S; 3];
+    /// A body-frame vector expressed in ground.
+    fn to_ground(&self, body: usize, v: [S; 3]) -> [S; 3];
+    /// Value and speed of a model coordinate.
+    fn coordinate(&self, coordinate: usize) -> (S, S);
+}
+
+/// Where forces go: point forces on bodies and generalized forces on
+/// model coordinates.
+pub trait ForceSink<S: Scalar> {
+    fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]);
+    fn add_generalized_force(&mut self, coordinate: usize, force: S);
+}
+
+/// The path's configuration-level results at one state.
+#[derive(Debug, Clone, Copy)]
+pub struct PathValue<S> {
+    pub length: S,
+    pub lengthening_speed: S,
+}
+
+/// Why a path cannot be built.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum PathError {
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl GeometryPath {
+    /// Build a path; `body` and `coordinate` resolve names (None: unknown).
+    pub fn new(
+        points: &[PathPointSpec],
+        body: impl Fn(&str) -> Option<usize>,
+        coordinate: impl Fn(&str) -> Option<usize>,
+    ) -> Result<Self, (usize, String, String)> {
+        if points.len() < 2 {
+            return Err((0, String::new(), format!("a path needs at least 2 points, got {}", points.len())));
+        }
+        let mut out = Vec::with_capacity(points.len());
+        for (i, p) in points.iter().enumerate() {
+            let b = |name: &str| body(name).ok_or_else(|| (i, "body".to_string(), format!("unknown body '{name}'")));
+            let cd = |name: &str| coordinate(name).ok_or_else(|| (i, "coordinate".to_string(), format!("unknown coordinate '{name}'")));
+            let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+            let pp = match p {
+                PathPointSpec::Fixed { body, location } => {
+                    if !finite(location) {
+                        return Err((i, "location".into(), "must be finite".into()));
+                    }
+                    PathPoint { body: b(body)?, location: *location, kind: PointKind::Fixed }
+                }
+                PathPointSpec::Conditional { body, location, coordinate, range } => {
+                    if !finite(location) {
+                        return Err((i, "location".into(), "must be finite".into()));
+                    }
+                    if !(range[0].is_finite() && range[1].is_finite() && range[0] < range[1]) {
+                        return Err((i, "range".into(), format!("range must be finite with min < max, got {range:?}")));
+                    }
+                    PathPoint { body: b(body)?, location: *location, kind: PointKind::Conditional { coordinate: cd(coordinate)?, range: *range } }
+                }
+                PathPointSpec::Moving { body, coordinate, x_location, y_location, z_location } => {
+                    let s = |d: &SplineData, f: &str| SimmSpline::new(d).map_err(|e| (i, f.to_string(), e.to_string()));
+                    PathPoint {
+                        body: b(body)?,
+                        location: [0.0; 3],
+                        kind: PointKind::Moving {
+                            coordinate: cd(coordinate)?,
+                            x: s(x_location, "x_location")?,
+                            y: s(y_location, "y_location")?,
+                            z: s(z_location, "z_location")?,
+                        },
+                    }
+                }
+            };
+            out.push(pp);
+        }
+        let conditional = out.iter().enumerate().filter(|(_, p)| matches!(p.kind, PointKind::Conditional { .. })).map(|(i, _)| i).collect();
+        Ok(GeometryPath { points: out, conditional })
+    }
+
+    /// Number of conditional points.
+    pub fn num_conditional(&self) -> usize {
+        self.conditional.len()
+    }
+
+    /// Location in the body frame and its derivative with respect to the
+    /// point's coordinate (zero unless moving).
+    #[inline]
+    fn local<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, i: usize) -> ([S; 3], [S; 3], Option<usize>) {
+        let p = &self.points[i];
+        match &p.kind {
+            PointKind::Moving { coordinate, x, y, z } => {
+                let (q, _) = k.coordinate(*coordinate);
+                let (x0, x1, _) = x.eval(q);
+                let (y0, y1, _) = y.eval(q);
+                let (z0, z1, _) = z.eval(q);
+                ([x0, y0, z0], [x1, y1, z1], Some(*coordinate))
+            }
+            _ => ([c(p.location[0]), c(p.location[1]), c(p.location[2])], [S::zero(); 3], None),
+        }
+    }
+
+    /// Position and velocity in ground of point `i`.
+    #[inline]
+    fn point<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, i: usize) -> ([S; 3], [S; 3]) {
+        let (loc, dloc, coord) = self.local(k, i);
+        let body = self.points[i].body;
+        let p = k.position(body, loc);
+        let mut v = k.velocity(body, loc);
+        if let Some(cd) = coord {
+            let (_, qd) = k.coordinate(cd);
+            let g = k.to_ground(body, dloc);
+            for d in 0..3 {
+                v[d] += g[d] * qd;
+            }
+        }
+        (p, v)
+    }
+
+    /// Weight of each conditional point (1 = active) under `smoothing`,
+    /// written into `w` (length [`Self::num_conditional`]).
+    fn weights<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, smoothing: PathSmoothing, w: &mut [S], dw: &mut [S]) {
+        for (j, &i) in self.conditional.iter().enumerate() {
+            let PointKind::Conditional { coordinate, range } = &self.points[i].kind else { continue };
+            let (q, _) = k.coordinate(*coordinate);
+            match smoothing {
+                PathSmoothing::Exact => {
+                    let on = q.re() >= range[0] && q.re() <= range[1];
+                    w[j] = if on { S::one() } else { S::zero() };
+                    dw[j] = S::zero();
+                }
+                PathSmoothing::Smooth { delta } => {
+                    let a = ((q - range[0]) / delta).tanh();
+                    let b = ((q * -1.0 + range[1]) / delta).tanh();
+                    let (sa, sb) = ((a + 1.0) * 0.5, (b + 1.0) * 0.5);
+                    w[j] = sa * sb;
+                    // d/dq: ½(1 − a²)/δ·sb − sa·½(1 − b²)/δ
+                    dw[j] = (a * a * -1.0 + 1.0) * (0.5 / delta) * sb - sa * (b * b * -1.0 + 1.0) * (0.5 / delta);
+                }
+            }
+        }
+    }
+
+    /// Length and speed of the path with conditional points on where bit j of
+    /// `mask` is set; optionally applies `tension` along it.
+    fn subpath<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(&self, k: &K, mask: u32, tension: Option<(S, &mut F)>) -> PathValue<S> {
+        let mut length = S::zero();
+        let mut speed = S::zero();
+        let active = |i: usize| -> bool {
+            match self.conditional.iter().position(|&ci| ci == i) {
+                Some(j) => mask & (1 << j) != 0,
+                None => true,
+            }
+        };
+        let mut prev: Option<(usize, [S; 3], [S; 3])> = None;
+        let mut sink = tension;
+        let mut prev_dir: Option<[S; 3]> = None;
+        let n = self.points.len();
+        for i in 0..n {
+            if !active(i) {
+                continue;
+            }
+            let (p, v) = self.point(k, i);
+            let mut dir_out = None;
+            if let Some((_, pp, pv)) = prev {
+                let d = [p[0] - pp[0], p[1] - pp[1], p[2] - pp[2]];
+                let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+                let e = [d[0] / len, d[1] / len, d[2] / len];
+                length += len;
+                speed += e[0] * (v[0] - pv[0]) + e[1] * (v[1] - pv[1]) + e[2] * (v[2] - pv[2]);
+                dir_out = Some(e);
+            }
+            // Force on the previous point: tension toward this one.
+            if let (Some((t, sink)), Some(e), Some((pi, _, _))) = (sink.as_mut(), dir_out, prev) {
+                let pull_prev = [e[0] * *t, e[1] * *t, e[2] * *t];
+                self.apply(k, pi, pull_prev, prev_dir, *sink, *t);
+            }
+            prev_dir = dir_out;
+            prev = Some((i, p, v));
+        }
+        // Last point: pulled back toward its predecessor.
+        if let (Some((t, sink)), Some((li, _, _)), Some(e)) = (sink.as_mut(), prev, prev_dir) {
+            let pull = [e[0] * -*t, e[1] * -*t, e[2] * -*t];
+            self.apply(k, li, pull, None, *sink, *t);
+        }
+        PathValue { length, lengthening_speed: speed }
+    }
+
+    /// Apply the force on point `i`: `pull` toward its successor plus, if
+    /// `incoming` (unit vector from its predecessor) is given, `−T·incoming`.
+    fn apply<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(&self, k: &K, i: usize, pull: [S; 3], incoming: Option<[S; 3]>, sink: &mut F, t: S) {
+        let mut f = pull;
+        if let Some(e) = incoming {
+            for d in 0..3 {
+                f[d] -= e[d] * t;
+            }
+        }
+        let (loc, dloc, coord) = self.local(k, i);
+        let body = self.points[i].body;
+        sink.add_point_force(body, loc, f);
+        if let Some(cd) = coord {
+            // The moving point slides in its body as its coordinate changes.
+            let g = k.to_ground(body, dloc);
+            sink.add_generalized_force(cd, f[0] * g[0] + f[1] * g[1] + f[2] * g[2]);
+        }
+    }
+
+    /// Length and lengthening speed; if `tension` is given, also applies it
+    /// along the path (generalized forces `−T ∂L/∂q`).
+    pub fn calc<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(
+        &self,
+        k: &K,
+        smoothing: PathSmoothing,
+        tension: Option<(S, &mut F)>,
+    ) -> PathValue<S> {
+        let nc = self.conditional.len();
+        if nc == 0 {
+            return self.subpath(k, 0, tension);
+        }
+        assert!(nc <= 8, "validated: at most 8 conditional points per path");
+        let mut w = [S::zero(); 8];
+        let mut dw = [S::zero(); 8];
+        self.weights(k, smoothing, &mut w[..nc], &mut dw[..nc]);
+        let mut total = PathValue { length: S::zero(), lengthening_speed: S::zero() };
+        let mut sink = tension;
+        // Σ over subsets S of Π weights · L(S); the weights' rates add
+        // Σ_i ∂Π/∂w_i · ẇ_i · L(S) to the speed and −T Σ ∂Π/∂w_i w_i' L(S)
+        // to the generalized force of coordinate i.
+        for mask in 0u32..(1 << nc) {
+            let mut prod = S::one();
+            for j in 0..nc {
+                prod *= if mask & (1 << j) != 0 { w[j] } else { S::one() - w[j] };
+            }
+            if prod.re() == 0.0 && smoothing == PathSmoothing::Exact {
+                continue;
+            }
+            let sub = match sink.as_mut() {
+                Some((t, s)) => self.subpath(k, mask, Some((*t * prod, &mut **s))),
+                None => self.subpath::<S, K, F>(k, mask, None),
+            };
+            total.length += prod * sub.length;
+            total.lengthening_speed += prod * sub.lengthening_speed;
+            if let PathSmoothing::Smooth { .. } = smoothing {
+                for j in 0..nc {
+                    // ∂prod/∂w_j
+                    let mut dp = S::one();
+                    for m in 0..nc {
+                        if m == j {
+                            dp *= if mask & (1 << m) != 0 { S::one() } else { -S::one() };
+                        } else {
+                            dp *= if mask & (1 << m) != 0 { w[m] } else { S::one() - w[m] };
+                        }
+                    }
+                    let PointKind::Conditional { coordinate, .. } = &self.points[self.conditional[j]].kind else { continue };
+                    let (_, qd) = k.coordinate(*coordinate);
+                    let dl_dq = dp * dw[j] * sub.length;
+                    total.lengthening_speed += dl_dq * qd;
+                    if let Some((t, s)) = sink.as_mut() {
+                        s.add_generalized_force(*coordinate, -(*t * dl_dq));
+                    }
+                }
+            }
+        }
+        total
+    }
+
+    /// The largest length jump (m) of the exact path when each conditional
+    /// point switches at its range ends, with the other coordinates as `k`
+    /// has them and the switching coordinate set by `at(coordinate, value)`.
+    pub fn largest_switch_jump<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(
+        &self,
+        kinematics_at: &mut dyn FnMut(usize, f64) -> K,
+    ) -> f64 {
+        let mut worst: f64 = 0.0;
+        for &ci in &self.conditional {
+            let PointKind::Conditional { coordinate, range } = &self.points[ci].kind else { continue };
+            for &edge in range {
+                let k = kinematics_at(*coordinate, edge);
+                let j = self.conditional.iter().position(|&x| x == ci).unwrap_or(0);
+                let base: u32 = {
+                    let mut w = [S::zero(); 8];
+                    let mut dw = [S::zero(); 8];
+                    let nc = self.conditional.len();
+                    self.weights(&k, PathSmoothing::Exact, &mut w[..nc], &mut dw[..nc]);
+                    (0..nc).fold(0u32, |m, i| if w[i].re() > 0.5 { m | (1 << i) } else { m })
+                };
+                let on = self.subpath::<S, K, F>(&k, base | (1 << j), None).length.re();
+                let off = self.subpath::<S, K, F>(&k, base & !(1 << j), None).length.re();
+                worst = worst.max((on - off).abs());
+            }
+        }
+        worst
+    }
+}
