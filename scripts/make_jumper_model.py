@@ -6,9 +6,16 @@ Data: gait2392 (opensim-org/opensim-models, Models/Gait2392_Simbody/
 gait2392_thelen2003muscle.osim, CC BY 3.0, Delp et al. 1990; Anderson & Pandy
 1999; Yamaguchi & Zajac 1989) and its planar version gait10dof18musc.
 Run from the repository root:  python3 scripts/make_jumper_model.py
+
+Muscles (24 per side, §7), passive joint torques (§9) and the 8 contact
+spheres per foot (§8.2) are read from the tables of model-data.md, so the
+numbers are the published ones, not a re-typing. Pass another path to
+model-data.md as the first argument if it is not at ../shared/reference/.
 """
 import json
 import pathlib
+import re
+import sys
 
 CREDITS = [
     "Skeleton from OpenSim's gait2392 model (opensim-org/opensim-models, "
@@ -95,6 +102,117 @@ def stations():
     return out
 
 
+def parse_model_data(path):
+    text = pathlib.Path(path).read_text()
+    sec72 = text[text.index("### 7.2 Parameters"):text.index("### 7.3 Path points")]
+    sec73 = text[text.index("### 7.3 Path points"):text.index("### 7.4 Moving path points")]
+    sec74 = text[text.index("### 7.4 Moving path points"):text.index("### 7.5 Check table")]
+    params = []
+    for line in sec72.splitlines():
+        m = re.match(r"\|\s*(\d+)\s*\|\s*(\w+)\s*\|\s*([\d.]+)\s*\|\s*([\d.]+)\s*\|\s*([\d.]+)\s*\|\s*([\d.]+)\s*\|", line)
+        if m:
+            params.append((m.group(2), float(m.group(3)), float(m.group(4)), float(m.group(5)), float(m.group(6))))
+    assert len(params) == 24, len(params)
+    points = {}
+    for line in sec73.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) != 7 or not re.match(r"P\d+$", cells[1]):
+            continue
+        name, _, body, x, y, z, kind = cells
+        if kind.startswith("moving"):
+            pt = {"type": "moving", "body": body, "moving": name}
+        elif kind.startswith("conditional"):
+            m = re.search(r"iff (\w+) in \[([-\d.]+), ([-\d.]+)\]", kind)
+            pt = {"type": "conditional", "body": body, "location": [float(x), float(y), float(z)],
+                  "coordinate": m.group(1), "range": [float(m.group(2)), float(m.group(3))]}
+        else:
+            pt = {"type": "fixed", "body": body, "location": [float(x), float(y), float(z)]}
+        points.setdefault(name, []).append(pt)
+    moving = {}
+    blocks = re.split(r"\*\*M-(\w+)\*\*", sec74)
+    for name, body in zip(blocks[1::2], blocks[2::2]):
+        splines = {}
+        for axis in ("x", "y", "z"):
+            m = re.search(axis + r"_location: x = \[([^\]]*)\]\s*y = \[([^\]]*)\]", body)
+            splines[axis] = {"x": [float(v) for v in m.group(1).split(",")], "y": [float(v) for v in m.group(2).split(",")]}
+        moving[name] = splines
+    return params, points, moving
+
+
+def side_name(value, s):
+    """Map a right-side body or coordinate name to side s."""
+    return re.sub(r"_r$", "_" + s, value)
+
+
+def muscles(model_data):
+    params, points, moving = parse_model_data(model_data)
+    out = []
+    for s in ("r", "l"):
+        z = 1.0 if s == "r" else -1.0
+        for name, fmax, lopt, lts, phi in params:
+            path = []
+            for pt in points[name]:
+                q = {"type": pt["type"], "body": side_name(pt["body"], s)}
+                if pt["type"] == "moving":
+                    sp = moving[pt["moving"]]
+                    q["coordinate"] = f"knee_angle_{s}"
+                    q["x_location"] = sp["x"]
+                    q["y_location"] = sp["y"]
+                    q["z_location"] = {"x": sp["z"]["x"], "y": [v * z for v in sp["z"]["y"]]}
+                else:
+                    q["location"] = [pt["location"][0], pt["location"][1], pt["location"][2] * z]
+                    if pt["type"] == "conditional":
+                        q["coordinate"] = side_name(pt["coordinate"], s)
+                        q["range"] = pt["range"]
+                path.append(q)
+            out.append({
+                "name": f"{name}_{s}", "max_isometric_force": fmax, "optimal_fiber_length": lopt,
+                "tendon_slack_length": lts, "pennation_angle_at_optimal": phi,
+                "max_contraction_velocity": 10.0, "activation_time_constant": 0.01,
+                "deactivation_time_constant": 0.04, "FmaxTendonStrain": 0.033, "FmaxMuscleStrain": 0.6,
+                "KshapeActive": 0.5, "KshapePassive": 4.0, "Af": 0.3, "Flen": 1.8, "path": path,
+            })
+    return out
+
+
+# Anderson & Pandy (1999) passive torques as given in Falisse et al.'s
+# 3dpredictsim (MIT), model-data.md §9; damping 0.1 N·m·s/rad (PredSim_all_v2.m).
+LIGAMENTS = {
+    "hip_flexion": (-2.44, 5.05, 1.51, -21.88, -0.6981, 1.81),
+    "knee_angle": (-6.09, 33.94, 11.03, -11.33, -2.4, 0.13),
+    "ankle_angle": (-2.03, 38.11, 0.18, -12.12, -0.74, 0.52),
+    "lumbar_extension": (-0.35, 30.72, 0.25, -20.36, -0.5235987755982988, 0.17),
+}
+
+
+def ligaments():
+    out = []
+    for coord, k in LIGAMENTS.items():
+        names = [coord] if coord == "lumbar_extension" else [f"{coord}_r", f"{coord}_l"]
+        for n in names:
+            out.append({"coordinate": n, "k1": k[0], "k2": k[1], "k3": k[2], "k4": k[3],
+                        "theta1": k[4], "theta2": k[5], "damping": 0.1})
+    return out
+
+
+# Contact (model-data.md §8): Falisse et al. subject 1 HuntCrossleyForce set
+# (radius 0.032 m, E = 3777162 Pa, c = 2 s/m, mu = 0.8, viscous 0.5,
+# v_t = 0.1 m/s), the collocation-friendly set §8.2 recommends; each sphere
+# centre sits one radius above the sole site.
+RADIUS = 0.032
+
+
+def contact():
+    spheres = []
+    for s in ("r", "l"):
+        z = 1.0 if s == "r" else -1.0
+        for name, b, x, y, zz in SITES:
+            spheres.append({"name": f"{name}_{s}", "body": f"{b}_{s}", "location": [x, y + RADIUS, zz * z],
+                            "radius": RADIUS})
+    return {"law": "HuntCrossleyForce", "stiffness": 3777162.0, "dissipation": 2.0, "static_friction": 0.8,
+            "dynamic_friction": 0.8, "viscous_friction": 0.5, "transition_velocity": 0.1, "spheres": spheres}
+
+
 def main():
     model = {
         "name": "jumper",
@@ -135,6 +253,14 @@ def main():
         },
     }
     root = pathlib.Path(__file__).resolve().parent.parent
+    model_data = sys.argv[1] if len(sys.argv) > 1 else root.parent / "shared" / "reference" / "model-data.md"
+    model["forces"] = {"muscle_model": "Thelen2003Muscle", "muscles": muscles(model_data),
+                       "ligaments": ligaments(), "contact": contact()}
+    model["credits"].append(
+        "Muscles: the 24 gait2392 Thelen2003Muscle units per side chosen in model-data.md §7 "
+        "(parameters and paths of gait2392, CC BY 3.0). Passive joint torques: Anderson & Pandy 1999 "
+        "coefficients from Falisse et al. 3dpredictsim (MIT). Contact: 8 spheres per foot, "
+        "model-data.md §8.2, with the Falisse et al. subject-1 HuntCrossleyForce parameters.")
     path = root / "models" / "jumper.json"
     path.write_text(json.dumps(model, indent=1) + "\n")
     print(f"wrote {path}")

@@ -45,6 +45,140 @@ pub struct ModelFile {
     /// their `default_value`.
     #[serde(default)]
     pub poses: BTreeMap<String, BTreeMap<String, f64>>,
+    /// Muscles, passive joint torques and foot-ground contact.
+    #[serde(default)]
+    pub forces: ForcesSpec,
+}
+
+/// The force elements of a model file.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForcesSpec {
+    /// Muscle law for every muscle: `Thelen2003Muscle` (default) or
+    /// `DeGrooteFregly2016Muscle`.
+    #[serde(default)]
+    pub muscle_model: MuscleModel,
+    #[serde(default)]
+    pub muscles: Vec<MuscleSpec>,
+    #[serde(default)]
+    pub ligaments: Vec<LigamentSpec>,
+    #[serde(default)]
+    pub contact: Option<ContactSpec>,
+}
+
+/// The muscle law.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub enum MuscleModel {
+    #[default]
+    Thelen2003Muscle,
+    DeGrooteFregly2016Muscle,
+}
+
+/// A Hill-type muscle-tendon unit with OpenSim's property names and units
+/// (N, m, s, rad; `max_contraction_velocity` in optimal fibre lengths per
+/// second). Thelen 2003 curve constants keep OpenSim's capitalisation.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(non_snake_case)]
+pub struct MuscleSpec {
+    pub name: String,
+    pub max_isometric_force: f64,
+    pub optimal_fiber_length: f64,
+    pub tendon_slack_length: f64,
+    pub pennation_angle_at_optimal: f64,
+    #[serde(default = "d_vmax")]
+    pub max_contraction_velocity: f64,
+    #[serde(default = "d_tau_act")]
+    pub activation_time_constant: f64,
+    #[serde(default = "d_tau_deact")]
+    pub deactivation_time_constant: f64,
+    #[serde(default = "d_tendon_strain")]
+    pub FmaxTendonStrain: f64,
+    #[serde(default = "d_muscle_strain")]
+    pub FmaxMuscleStrain: f64,
+    #[serde(default = "d_kshape_active")]
+    pub KshapeActive: f64,
+    #[serde(default = "d_kshape_passive")]
+    pub KshapePassive: f64,
+    #[serde(default = "d_af")]
+    pub Af: f64,
+    #[serde(default = "d_flen")]
+    pub Flen: f64,
+    pub path: Vec<crate::path::PathPointSpec>,
+}
+
+// The legacy OpenSim 3.x values every gait2392 muscle carries (model-data.md §7.2).
+fn d_vmax() -> f64 { 10.0 }
+fn d_tau_act() -> f64 { 0.01 }
+fn d_tau_deact() -> f64 { 0.04 }
+fn d_tendon_strain() -> f64 { 0.033 }
+fn d_muscle_strain() -> f64 { 0.6 }
+fn d_kshape_active() -> f64 { 0.5 }
+fn d_kshape_passive() -> f64 { 4.0 }
+fn d_af() -> f64 { 0.3 }
+fn d_flen() -> f64 { 1.8 }
+
+/// A passive joint torque on one coordinate, the Anderson & Pandy (1999)
+/// exponential form with linear damping (model-equations.md §5.3):
+/// `T = k1·exp(k2·(q − θ2)) + k3·exp(k4·(q − θ1)) − damping·q̇` (N·m).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LigamentSpec {
+    pub coordinate: String,
+    pub k1: f64,
+    pub k2: f64,
+    pub k3: f64,
+    pub k4: f64,
+    pub theta1: f64,
+    pub theta2: f64,
+    pub damping: f64,
+}
+
+/// The contact law between spheres and the ground half-space (normal +y).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum ContactLaw {
+    /// OpenSim `HuntCrossleyForce` (Simbody's Hertz + Hunt-Crossley with
+    /// Stribeck-like friction).
+    HuntCrossleyForce,
+    /// OpenSim `SmoothSphereHalfSpaceForce` (smooth approximation).
+    SmoothSphereHalfSpaceForce,
+}
+
+/// Foot-ground contact: one law and parameter set for every sphere.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContactSpec {
+    pub law: ContactLaw,
+    /// Stiffness E (Pa = N/m²) of both surfaces.
+    pub stiffness: f64,
+    /// Hunt-Crossley dissipation c (s/m).
+    pub dissipation: f64,
+    pub static_friction: f64,
+    pub dynamic_friction: f64,
+    /// Viscous friction coefficient (s/m).
+    pub viscous_friction: f64,
+    /// Transition velocity (m/s).
+    pub transition_velocity: f64,
+    /// Smoothing constants of the smooth law (OpenSim defaults when absent).
+    #[serde(default)]
+    pub hertz_smoothing: Option<f64>,
+    #[serde(default)]
+    pub hunt_crossley_smoothing: Option<f64>,
+    #[serde(default)]
+    pub derivative_smoothing: Option<f64>,
+    pub spheres: Vec<SphereSpec>,
+}
+
+/// A contact sphere fixed on a body.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    pub name: String,
+    pub body: String,
+    /// Centre in the body frame (m).
+    pub location: [f64; 3],
+    /// Radius (m).
+    pub radius: f64,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -200,6 +334,40 @@ pub struct Model {
     /// (right, left) coordinate index pairs.
     pub symmetry: Vec<(usize, usize)>,
     pub poses: BTreeMap<String, Vec<f64>>,
+    pub muscle_model: MuscleModel,
+    pub muscles: Vec<Muscle>,
+    pub ligaments: Vec<Ligament>,
+    pub contact: Option<Contact>,
+}
+
+/// A validated muscle: its parameters as written and its path.
+#[derive(Debug, Clone)]
+pub struct Muscle {
+    pub spec: MuscleSpec,
+    pub path: crate::path::GeometryPath,
+}
+
+/// A validated passive joint torque.
+#[derive(Debug, Clone)]
+pub struct Ligament {
+    pub coordinate: usize,
+    pub spec: LigamentSpec,
+}
+
+/// A validated contact sphere.
+#[derive(Debug, Clone)]
+pub struct Sphere {
+    pub name: String,
+    pub body: usize,
+    pub location: [f64; 3],
+    pub radius: f64,
+}
+
+/// Validated foot-ground contact.
+#[derive(Debug, Clone)]
+pub struct Contact {
+    pub spec: ContactSpec,
+    pub spheres: Vec<Sphere>,
 }
 
 fn finite3(v: &[f64; 3]) -> bool {
@@ -406,7 +574,109 @@ impl Model {
             }
             poses.insert(pname.clone(), q);
         }
+        // Force elements.
+        let body_of = |n: &str| body_index.get(n).copied();
+        let coord_of = |n: &str| coord_index.get(n).copied();
+        let mut muscles = Vec::with_capacity(spec.forces.muscles.len());
+        let mut muscle_names = HashMap::new();
+        for (i, m) in spec.forces.muscles.iter().enumerate() {
+            let p = |f: &str| format!("forces.muscles[{i}].{f}");
+            if m.name.is_empty() || muscle_names.insert(m.name.clone(), i).is_some() {
+                return Err(err(p("name"), format!("muscle name '{}' is empty or defined twice", m.name)));
+            }
+            let positive = [
+                ("max_isometric_force", m.max_isometric_force),
+                ("optimal_fiber_length", m.optimal_fiber_length),
+                ("tendon_slack_length", m.tendon_slack_length),
+                ("max_contraction_velocity", m.max_contraction_velocity),
+                ("activation_time_constant", m.activation_time_constant),
+                ("deactivation_time_constant", m.deactivation_time_constant),
+                ("FmaxTendonStrain", m.FmaxTendonStrain),
+                ("FmaxMuscleStrain", m.FmaxMuscleStrain),
+                ("KshapeActive", m.KshapeActive),
+                ("KshapePassive", m.KshapePassive),
+                ("Af", m.Af),
+                ("Flen", m.Flen),
+            ];
+            for (name, v) in positive {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(err(p(name), format!("{name} must be positive and finite, got {v}")));
+                }
+            }
+            let phi = m.pennation_angle_at_optimal;
+            if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
+                return Err(err(p("pennation_angle_at_optimal"), format!("must be in [0, π/2) rad, got {phi}")));
+            }
+            let path = crate::path::GeometryPath::new(&m.path, body_of, coord_of)
+                .map_err(|(k, f, reason)| err(if f.is_empty() { p("path") } else { format!("forces.muscles[{i}].path[{k}].{f}") }, reason))?;
+            if path.num_conditional() > 8 {
+                return Err(err(p("path"), "at most 8 conditional path points per muscle".into()));
+            }
+            muscles.push(Muscle { spec: m.clone(), path });
+        }
+        let mut ligaments = Vec::new();
+        for (i, l) in spec.forces.ligaments.iter().enumerate() {
+            let p = |f: &str| format!("forces.ligaments[{i}].{f}");
+            let c = coord_of(&l.coordinate).ok_or_else(|| err(p("coordinate"), format!("unknown coordinate '{}'", l.coordinate)))?;
+            for (name, v) in [("k1", l.k1), ("k2", l.k2), ("k3", l.k3), ("k4", l.k4), ("theta1", l.theta1), ("theta2", l.theta2)] {
+                if !v.is_finite() {
+                    return Err(err(p(name), format!("{name} must be finite")));
+                }
+            }
+            if !(l.damping.is_finite() && l.damping >= 0.0) {
+                return Err(err(p("damping"), format!("damping must be non-negative, got {}", l.damping)));
+            }
+            ligaments.push(Ligament { coordinate: c, spec: l.clone() });
+        }
+        let contact = match &spec.forces.contact {
+            None => None,
+            Some(cs) => {
+                let p = |f: &str| format!("forces.contact.{f}");
+                for (name, v) in [("stiffness", cs.stiffness), ("transition_velocity", cs.transition_velocity)] {
+                    if !(v.is_finite() && v > 0.0) {
+                        return Err(err(p(name), format!("{name} must be positive, got {v}")));
+                    }
+                }
+                for (name, v) in [
+                    ("dissipation", cs.dissipation),
+                    ("static_friction", cs.static_friction),
+                    ("dynamic_friction", cs.dynamic_friction),
+                    ("viscous_friction", cs.viscous_friction),
+                ] {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(err(p(name), format!("{name} must be non-negative, got {v}")));
+                    }
+                }
+                if cs.dynamic_friction > cs.static_friction {
+                    return Err(err(p("dynamic_friction"), "dynamic_friction must not exceed static_friction".into()));
+                }
+                for (name, v) in [("hertz_smoothing", cs.hertz_smoothing), ("hunt_crossley_smoothing", cs.hunt_crossley_smoothing), ("derivative_smoothing", cs.derivative_smoothing)] {
+                    if let Some(v) = v {
+                        if !(v.is_finite() && v > 0.0) {
+                            return Err(err(p(name), format!("{name} must be positive, got {v}")));
+                        }
+                    }
+                }
+                let mut spheres = Vec::new();
+                for (i, sp) in cs.spheres.iter().enumerate() {
+                    let q = |f: &str| format!("forces.contact.spheres[{i}].{f}");
+                    let body = body_of(&sp.body).ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
+                    if !finite3(&sp.location) {
+                        return Err(err(q("location"), "must be finite".into()));
+                    }
+                    if !(sp.radius.is_finite() && sp.radius > 0.0) {
+                        return Err(err(q("radius"), format!("radius must be positive, got {}", sp.radius)));
+                    }
+                    spheres.push(Sphere { name: sp.name.clone(), body, location: sp.location, radius: sp.radius });
+                }
+                Some(Contact { spec: cs.clone(), spheres })
+            }
+        };
         let model = Model {
+            muscle_model: spec.forces.muscle_model,
+            muscles,
+            ligaments,
+            contact,
             file: file.clone(),
             name: spec.name,
             credits: spec.credits,

@@ -580,3 +580,58 @@ impl Multibody {
         e
     }
 }
+
+/// A [`Multibody`] at its current state, seen through model bodies and
+/// model coordinates (for paths, contact and other force elements).
+pub struct ModelView<'a, S: Scalar> {
+    pub mb: &'a Multibody,
+    pub ws: &'a Workspace<S>,
+    /// System coordinate of each model coordinate.
+    pub q_of: &'a [usize],
+}
+
+impl<'a, S: Scalar> ModelView<'a, S> {
+    #[inline]
+    fn frame(&self, body: usize, loc: [S; 3]) -> (usize, [S; 3]) {
+        let (ci, off) = self.mb.frame_of_model_body(body);
+        (ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]])
+    }
+}
+
+impl<'a, S: Scalar> crate::path::BodyKinematics<S> for ModelView<'a, S> {
+    fn position(&self, body: usize, loc: [S; 3]) -> [S; 3] {
+        let (ci, l) = self.frame(body, loc);
+        self.mb.point_position_s(self.ws, ci, l)
+    }
+    fn velocity(&self, body: usize, loc: [S; 3]) -> [S; 3] {
+        let (ci, l) = self.frame(body, loc);
+        self.mb.point_velocity_s(self.ws, ci, l)
+    }
+    fn to_ground(&self, body: usize, v: [S; 3]) -> [S; 3] {
+        let (ci, _) = self.mb.frame_of_model_body(body);
+        self.mb.to_ground(self.ws, ci, v)
+    }
+    fn coordinate(&self, coordinate: usize) -> (S, S) {
+        let k = self.q_of[coordinate];
+        (self.ws.q[k], self.ws.u[k])
+    }
+}
+
+/// Generalized forces of a [`Multibody`] collected from point forces and
+/// model-coordinate forces.
+pub struct GeneralizedForces<'a, S: Scalar> {
+    pub mb: &'a Multibody,
+    pub ws: &'a Workspace<S>,
+    pub q_of: &'a [usize],
+    pub tau: &'a mut [S],
+}
+
+impl<'a, S: Scalar> crate::path::ForceSink<S> for GeneralizedForces<'a, S> {
+    fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
+        let (ci, off) = self.mb.frame_of_model_body(body);
+        self.mb.add_point_force_s(self.ws, ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]], force, self.tau);
+    }
+    fn add_generalized_force(&mut self, coordinate: usize, force: S) {
+        self.tau[self.q_of[coordinate]] += force;
+    }
+}

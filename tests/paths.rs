@@ -1,0 +1,106 @@
+//! Muscle paths of the jumper against model-data.md's length and moment-arm
+//! check table, moment arms against finite differences of the length, and
+//! the smooth switching option.
+
+use leap::model::Model;
+use leap::multibody::{GeneralizedForces, ModelView, Multibody};
+use leap::path::PathSmoothing;
+use leap::scalar::{Dual64, DualStruct};
+
+fn eval(model: &Model, model_q: &[f64], muscle: usize, smoothing: PathSmoothing) -> (f64, Vec<f64>) {
+    let sys = model.system(false).unwrap();
+    let mb = Multibody::new(model, &sys);
+    let mut ws = mb.workspace::<f64>();
+    let q = sys.q_from_model(model_q);
+    mb.set_state(&mut ws, &q, &vec![0.0; q.len()]);
+    let mut tau = vec![0.0; q.len()];
+    let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
+    let mut sink = GeneralizedForces { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate, tau: &mut tau };
+    let v = model.muscles[muscle].path.calc(&view, smoothing, Some((1.0, &mut sink)));
+    // Moment arms r = generalized force of a unit tension, per model coordinate.
+    (v.length, sys.model_from_q(&tau))
+}
+
+#[test]
+fn lengths_and_moment_arms_match_the_check_table() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string("tests/data/path_check_values.json").unwrap()).unwrap();
+    let mut checked = 0;
+    for (pose_name, pose) in data["poses"].as_object().unwrap() {
+        let mut q: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
+        for (c, v) in pose.as_object().unwrap() {
+            q[model.coordinate_index(c).unwrap()] = v.as_f64().unwrap();
+        }
+        for (name, rows) in data["muscles"].as_object().unwrap() {
+            let m = model.muscles.iter().position(|m| m.spec.name == *name).unwrap();
+            let (len, r) = eval(&model, &q, m, PathSmoothing::Exact);
+            let row = &rows[pose_name];
+            // Values are quoted to 4 decimals: half a unit of the last digit.
+            let tol = 0.5e-4 + 1e-9;
+            assert!((len - row["length"].as_f64().unwrap()).abs() <= tol, "{name} {pose_name} length {len} vs {}", row["length"]);
+            for (coord, key) in [("hip_flexion_r", "hip"), ("knee_angle_r", "knee"), ("ankle_angle_r", "ankle"), ("lumbar_extension", "lumbar")] {
+                let want = row[key].as_f64().unwrap();
+                let got = r[model.coordinate_index(coord).unwrap()];
+                assert!((got - want).abs() <= tol, "{name} {pose_name} r_{key} = {got} vs {want}");
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 2 * 24 * 4);
+}
+
+/// r = −∂L/∂q: the applied-tension moment arms equal dual-number derivatives
+/// of the length and central differences, in both switching modes.
+#[test]
+fn moment_arms_are_minus_length_derivatives() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let sys = model.system(false).unwrap();
+    let mb = Multibody::new(&model, &sys);
+    let mut qm: Vec<f64> = model.poses["squat"].clone();
+    // Near the rect_fem and vas_int switches, inside the smooth blend.
+    qm[model.coordinate_index("knee_angle_r").unwrap()] = -1.43;
+    for smoothing in [PathSmoothing::Exact, PathSmoothing::Smooth { delta: 0.02 }] {
+        for (mi, m) in model.muscles.iter().enumerate().filter(|(_, m)| m.spec.name.ends_with("_r")) {
+            let (_, r) = eval(&model, &qm, mi, smoothing);
+            let q = sys.q_from_model(&qm);
+            for k in 0..q.len() {
+                let mut ws = mb.workspace::<Dual64>();
+                let qd: Vec<Dual64> = q.iter().enumerate().map(|(i, &x)| if i == k { Dual64::from_re(x).derivative() } else { Dual64::from_re(x) }).collect();
+                mb.set_state(&mut ws, &qd, &vec![Dual64::from_re(0.0); q.len()]);
+                let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
+                let v = m.path.calc::<_, _, GeneralizedForces<Dual64>>(&view, smoothing, None);
+                let c = sys.coordinates[k];
+                let dl = v.length.eps;
+                assert!((r[c] + dl).abs() < 1e-12, "{} d/d{}: r {} vs -dL/dq {}", m.spec.name, model.coordinates[c].name, r[c], -dl);
+            }
+        }
+    }
+}
+
+/// The lengthening speed is dL/dt = Σ ∂L/∂q q̇.
+#[test]
+fn lengthening_speed_is_the_time_derivative_of_length() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let sys = model.system(true).unwrap();
+    let mb = Multibody::new(&model, &sys);
+    let q0 = sys.q_from_model(&model.poses["squat"]);
+    let u: Vec<f64> = (0..q0.len()).map(|i| 0.7 * (i as f64 - 2.5)).collect();
+    let smoothing = PathSmoothing::Smooth { delta: 0.02 };
+    let length_at = |t: f64| -> Vec<f64> {
+        let q: Vec<f64> = q0.iter().zip(&u).map(|(q, u)| q + t * u).collect();
+        let mut ws = mb.workspace::<f64>();
+        mb.set_state(&mut ws, &q, &u);
+        let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
+        model.muscles.iter().map(|m| m.path.calc::<_, _, GeneralizedForces<f64>>(&view, smoothing, None).length).collect()
+    };
+    let mut ws = mb.workspace::<f64>();
+    mb.set_state(&mut ws, &q0, &u);
+    let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
+    let h = 1e-6;
+    let (lp, lm) = (length_at(h), length_at(-h));
+    for (i, m) in model.muscles.iter().enumerate() {
+        let v = m.path.calc::<_, _, GeneralizedForces<f64>>(&view, smoothing, None);
+        let fd = (lp[i] - lm[i]) / (2.0 * h);
+        assert!((v.lengthening_speed - fd).abs() < 1e-7, "{}: {} vs {}", m.spec.name, v.lengthening_speed, fd);
+    }
+}
