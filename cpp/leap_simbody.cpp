@@ -80,6 +80,95 @@ Vec3 vec3(rust::Slice<const double> s, std::size_t offset = 0) {
 
 }  // namespace
 
+struct ForceCtx::Inner {
+    const SimbodyMatterSubsystem& matter;
+    const State& s;
+    Vector_<SpatialVec>& body_forces;
+    Vector& mobility_forces;
+};
+
+namespace {
+const MobilizedBody& ctx_body(const ForceCtx::Inner* in, std::int32_t body) {
+    if (body < 0 || body >= in->matter.getNumBodies())
+        throw std::out_of_range("force callback: body index " + std::to_string(body) + " out of range");
+    return in->matter.getMobilizedBody(MobilizedBodyIndex(body));
+}
+}  // namespace
+
+void ForceCtx::station_position(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const {
+    check_len("point", point.size(), 3);
+    check_len("out", out.size(), 3);
+    const Vec3 r = ctx_body(in, body).findStationLocationInGround(in->s, vec3(point));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = r[i];
+}
+
+void ForceCtx::station_velocity(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const {
+    check_len("point", point.size(), 3);
+    check_len("out", out.size(), 3);
+    const Vec3 v = ctx_body(in, body).findStationVelocityInGround(in->s, vec3(point));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = v[i];
+}
+
+void ForceCtx::express_in_ground(std::int32_t body, rust::Slice<const double> v, rust::Slice<double> out) const {
+    check_len("vector", v.size(), 3);
+    check_len("out", out.size(), 3);
+    const Vec3 g = ctx_body(in, body).expressVectorInGroundFrame(in->s, vec3(v));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = g[i];
+}
+
+void ForceCtx::add_station_force(std::int32_t body, rust::Slice<const double> point, rust::Slice<const double> force) {
+    check_len("point", point.size(), 3);
+    check_len("force", force.size(), 3);
+    ctx_body(in, body).applyForceToBodyPoint(in->s, vec3(point), vec3(force), in->body_forces);
+}
+
+void ForceCtx::add_mobility_force(std::int32_t u_index, double force) {
+    if (u_index < 0 || u_index >= in->mobility_forces.size())
+        throw std::out_of_range("force callback: mobility index " + std::to_string(u_index) + " out of range");
+    in->mobility_forces[u_index] += force;
+}
+
+namespace {
+// A Simbody force element whose forces (and auxiliary-state derivatives) a
+// Rust callback computes. calcForce must be a pure function of (t, q, u, z):
+// integrators call it at trial states.
+class RustForceImpl : public Force::Custom::Implementation {
+public:
+    RustForceImpl(GeneralForceSubsystem& forces, rust::Box<ForceCallback> cb, int nz)
+        : forces(forces), cb(std::move(cb)), nz(nz) {}
+    void realizeTopology(State& s) const override {
+        if (nz > 0) zstart = forces.allocateZ(s, Vector(nz, 0.0));
+    }
+    void calcForce(const State& s, Vector_<SpatialVec>& body_forces, Vector_<Vec3>&, Vector& mobility_forces) const override {
+        zdot.resize(nz);
+        zdot = 0;
+        ForceCtx::Inner inner{matter(), s, body_forces, mobility_forces};
+        ForceCtx ctx(&inner);
+        const Vector& q = s.getQ();
+        const Vector& u = s.getU();
+        rust::Slice<const double> qs(q.size() ? &q[0] : nullptr, (std::size_t)q.size());
+        rust::Slice<const double> us(u.size() ? &u[0] : nullptr, (std::size_t)u.size());
+        const Vector& zall = forces.getZ(s);
+        rust::Slice<const double> zs(nz ? &zall[zstart] : nullptr, (std::size_t)nz);
+        rust::Slice<double> zds(nz ? &zdot[0] : nullptr, (std::size_t)nz);
+        cb->calc_forces(ctx, s.getTime(), qs, us, zs, zds);  // throws rust::Error on Err
+    }
+    void realizeAcceleration(const State& s) const override {
+        if (nz > 0) forces.updZDot(s)(zstart, nz) = zdot;
+    }
+    Real calcPotentialEnergy(const State&) const override { return 0; }
+    bool dependsOnlyOnPositions() const override { return false; }
+    const SimbodyMatterSubsystem& matter() const { return *matter_ptr; }
+    const SimbodyMatterSubsystem* matter_ptr = nullptr;
+    GeneralForceSubsystem& forces;
+    mutable rust::Box<ForceCallback> cb;
+    int nz;
+    mutable ZIndex zstart;
+    // One System per thread (see simbody-bridge-notes.md §7).
+    mutable Vector zdot;
+};
+}  // namespace
+
 struct SimbodySystem::Impl {
     MultibodySystem system;
     SimbodyMatterSubsystem matter;
@@ -88,6 +177,7 @@ struct SimbodySystem::Impl {
     State state;
     bool finalized = false;
     Vec3 gravity{0, 0, 0};
+    RustForceImpl* rust_force = nullptr;  // owned by its Force::Custom
     std::vector<MobilizedBody> bodies;  // index 0 is Ground
     Impl() : matter(system), forces(system), discrete(forces, matter) {
         bodies.push_back(matter.Ground());
@@ -149,6 +239,44 @@ std::int32_t SimbodySystem::add_body(std::int32_t parent, std::int32_t kind,
     }
     (void)par;
     return (std::int32_t)(p->bodies.size() - 1);
+}
+
+void SimbodySystem::add_rust_force(rust::Box<ForceCallback> callback, std::int32_t nz) {
+    if (p->finalized) throw std::logic_error("add_rust_force: the system is already finalized");
+    if (p->rust_force) throw std::logic_error("add_rust_force: a Rust force element is already installed");
+    if (nz < 0) throw std::invalid_argument("add_rust_force: negative number of states");
+    auto* impl = new RustForceImpl(p->forces, std::move(callback), nz);
+    impl->matter_ptr = &p->matter;
+    Force::Custom(p->forces, impl);  // takes ownership
+    p->rust_force = impl;
+}
+
+void SimbodySystem::set_z(rust::Slice<const double> z) {
+    p->require_final("set_z");
+    const int nz = p->rust_force ? p->rust_force->nz : 0;
+    check_len("z", z.size(), (std::size_t)nz);
+    if (nz == 0) return;
+    Vector& zall = p->forces.updZ(p->state);
+    for (int i = 0; i < nz; ++i) zall[p->rust_force->zstart + i] = z[(std::size_t)i];
+}
+
+void SimbodySystem::get_z(rust::Slice<double> z) const {
+    p->require_final("get_z");
+    const int nz = p->rust_force ? p->rust_force->nz : 0;
+    check_len("z", z.size(), (std::size_t)nz);
+    if (nz == 0) return;
+    const Vector& zall = p->forces.getZ(p->state);
+    for (int i = 0; i < nz; ++i) z[(std::size_t)i] = zall[p->rust_force->zstart + i];
+}
+
+void SimbodySystem::calc_zdot(rust::Slice<double> zdot) {
+    p->require_final("calc_zdot");
+    const int nz = p->rust_force ? p->rust_force->nz : 0;
+    check_len("zdot", zdot.size(), (std::size_t)nz);
+    p->system.realize(p->state, Stage::Acceleration);
+    if (nz == 0) return;
+    const Vector& zd = p->forces.getZDot(p->state);
+    for (int i = 0; i < nz; ++i) zdot[(std::size_t)i] = zd[p->rust_force->zstart + i];
 }
 
 void SimbodySystem::finalize(rust::Slice<const double> gravity) {

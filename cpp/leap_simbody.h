@@ -10,6 +10,23 @@
 namespace leap {
 
 struct IntegratorStats;
+struct ForceCallback;
+
+// What the Rust force callback sees while Simbody computes forces: point
+// kinematics at the state being realized (Velocity stage) and places to put
+// forces. Only valid during the callback.
+class ForceCtx {
+public:
+    struct Inner;
+    explicit ForceCtx(Inner* in) : in(in) {}
+    void station_position(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const;
+    void station_velocity(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const;
+    void express_in_ground(std::int32_t body, rust::Slice<const double> v, rust::Slice<double> out) const;
+    void add_station_force(std::int32_t body, rust::Slice<const double> point, rust::Slice<const double> force);
+    void add_mobility_force(std::int32_t u_index, double force);
+private:
+    Inner* in;
+};
 
 class SimbodySystem {
 public:
@@ -28,6 +45,9 @@ public:
                           rust::Slice<const double> inertia,
                           rust::Slice<const double> spline_x,
                           rust::Slice<const double> spline_y);
+    // Install the Rust force element with nz auxiliary (z) states that
+    // Simbody integrates along with q and u. Before finalize.
+    void add_rust_force(rust::Box<ForceCallback> callback, std::int32_t nz);
     void finalize(rust::Slice<const double> gravity);
 
     std::int32_t nq() const;
@@ -37,6 +57,10 @@ public:
     void set_state(double t, rust::Slice<const double> q, rust::Slice<const double> u);
     void get_state(rust::Slice<double> q, rust::Slice<double> u) const;
     double time() const;
+    // Auxiliary states of the Rust force element and their derivatives.
+    void set_z(rust::Slice<const double> z);
+    void get_z(rust::Slice<double> z) const;
+    void calc_zdot(rust::Slice<double> zdot);
 
     // Dynamics quantities at the current state.
     void calc_mass_matrix(rust::Slice<double> m_row_major);

@@ -25,10 +25,35 @@ mod ffi {
         final_time: f64,
     }
 
+    extern "Rust" {
+        type ForceCallback;
+        fn calc_forces(
+            self: &mut ForceCallback,
+            ctx: Pin<&mut ForceCtx>,
+            t: f64,
+            q: &[f64],
+            u: &[f64],
+            z: &[f64],
+            zdot: &mut [f64],
+        ) -> Result<()>;
+    }
+
     unsafe extern "C++" {
         include!("leap/cpp/leap_simbody.h");
 
         type SimbodySystem;
+        type ForceCtx;
+
+        fn station_position(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn station_velocity(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn express_in_ground(self: &ForceCtx, body: i32, v: &[f64], out: &mut [f64]) -> Result<()>;
+        fn add_station_force(self: Pin<&mut ForceCtx>, body: i32, point: &[f64], force: &[f64]) -> Result<()>;
+        fn add_mobility_force(self: Pin<&mut ForceCtx>, u_index: i32, force: f64) -> Result<()>;
+
+        fn add_rust_force(self: Pin<&mut SimbodySystem>, callback: Box<ForceCallback>, nz: i32) -> Result<()>;
+        fn set_z(self: Pin<&mut SimbodySystem>, z: &[f64]) -> Result<()>;
+        fn get_z(self: &SimbodySystem, z: &mut [f64]) -> Result<()>;
+        fn calc_zdot(self: Pin<&mut SimbodySystem>, zdot: &mut [f64]) -> Result<()>;
 
         fn new_simbody_system() -> UniquePtr<SimbodySystem>;
         #[allow(clippy::too_many_arguments)]
@@ -115,6 +140,83 @@ impl SimbodyIntegrator {
     }
 }
 
+/// The Rust side of Simbody's custom force element: a closure computing
+/// forces and auxiliary-state derivatives from (t, q, u, z). Errors and
+/// panics become C++ exceptions (never unwinding through C++); the last
+/// message is kept, since Simbody's integrators swallow exceptions.
+pub struct ForceCallback {
+    f: Box<ForceFn>,
+    last_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    calls: std::sync::Arc<std::sync::atomic::AtomicU64>,
+}
+
+/// The signature of a Rust force element: context, t, q, u, z (Simbody's
+/// order) and the z derivatives to write.
+pub type ForceFn = dyn FnMut(&mut ForceContext<'_>, f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), String> + Send;
+
+impl ForceCallback {
+    fn calc_forces(
+        &mut self,
+        ctx: std::pin::Pin<&mut ffi::ForceCtx>,
+        t: f64,
+        q: &[f64],
+        u: &[f64],
+        z: &[f64],
+        zdot: &mut [f64],
+    ) -> Result<(), String> {
+        self.calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let mut context = ForceContext { ctx };
+        let f = &mut self.f;
+        let r = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut context, t, q, u, z, zdot))) {
+            Ok(r) => r,
+            Err(p) => {
+                let what = p
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "unknown panic".into());
+                Err(format!("panic in Rust force element: {what}"))
+            }
+        };
+        if let Err(e) = &r {
+            if let Ok(mut g) = self.last_error.lock() {
+                *g = Some(format!("t = {t}: {e}"));
+            }
+        }
+        r
+    }
+}
+
+/// Point kinematics and force application inside a force callback (Simbody
+/// body indices: 0 is ground, 1.. in creation order).
+pub struct ForceContext<'a> {
+    ctx: std::pin::Pin<&'a mut ffi::ForceCtx>,
+}
+
+impl ForceContext<'_> {
+    pub fn station_position(&self, body: i32, point: [f64; 3]) -> Result<[f64; 3], String> {
+        let mut out = [0.0; 3];
+        self.ctx.station_position(body, &point, &mut out).map_err(|e| e.what().to_string())?;
+        Ok(out)
+    }
+    pub fn station_velocity(&self, body: i32, point: [f64; 3]) -> Result<[f64; 3], String> {
+        let mut out = [0.0; 3];
+        self.ctx.station_velocity(body, &point, &mut out).map_err(|e| e.what().to_string())?;
+        Ok(out)
+    }
+    pub fn express_in_ground(&self, body: i32, v: [f64; 3]) -> Result<[f64; 3], String> {
+        let mut out = [0.0; 3];
+        self.ctx.express_in_ground(body, &v, &mut out).map_err(|e| e.what().to_string())?;
+        Ok(out)
+    }
+    pub fn add_station_force(&mut self, body: i32, point: [f64; 3], force: [f64; 3]) -> Result<(), String> {
+        self.ctx.as_mut().add_station_force(body, &point, &force).map_err(|e| e.what().to_string())
+    }
+    pub fn add_mobility_force(&mut self, u_index: i32, force: f64) -> Result<(), String> {
+        self.ctx.as_mut().add_mobility_force(u_index, force).map_err(|e| e.what().to_string())
+    }
+}
+
 /// A model built in Simbody.
 pub struct SimbodyModel {
     sys: cxx::UniquePtr<ffi::SimbodySystem>,
@@ -129,6 +231,9 @@ pub struct SimbodyModel {
     bodies_buf: Vec<i32>,
     points_buf: Vec<f64>,
     forces_buf: Vec<f64>,
+    nz: usize,
+    last_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    callback_calls: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
 impl std::fmt::Debug for SimbodyModel {
@@ -140,6 +245,13 @@ impl std::fmt::Debug for SimbodyModel {
 impl SimbodyModel {
     /// Build the Simbody system of `system` (from `model`).
     pub fn new(model: &Model, system: &SystemSpec) -> Result<Self, SimbodyError> {
+        Self::with_force(model, system, None)
+    }
+
+    /// Build the system with a Rust force element with `nz` auxiliary states.
+    /// The closure sees q and u in Simbody's order: use [`Self::simbody_q_index`]
+    /// (computed by [`simbody_q_order`] before building) to map.
+    pub fn with_force(model: &Model, system: &SystemSpec, force: Option<(Box<ForceFn>, usize)>) -> Result<Self, SimbodyError> {
         let mut sys = ffi::new_simbody_system();
         let mut q_slots: Vec<(i32, Vec<usize>)> = Vec::new();
         for (k, sb) in system.bodies.iter().enumerate() {
@@ -159,6 +271,14 @@ impl SimbodyModel {
                 q_slots.push((idx, qs));
             }
         }
+        let last_error = std::sync::Arc::new(std::sync::Mutex::new(None));
+        let callback_calls = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+        let mut nz = 0;
+        if let Some((f, n)) = force {
+            nz = n;
+            let cb = Box::new(ForceCallback { f, last_error: last_error.clone(), calls: callback_calls.clone() });
+            sys.pin_mut().add_rust_force(cb, n as i32)?;
+        }
         sys.pin_mut().finalize(&model.gravity)?;
         let n = system.nq();
         let nq_sb = sys.nq()? as usize;
@@ -175,6 +295,9 @@ impl SimbodyModel {
         if perm.iter().any(|&p| p == usize::MAX) {
             return Err(SimbodyError::Input("a coordinate has no Simbody mobility".into()));
         }
+        if perm != simbody_q_order(system) {
+            return Err(SimbodyError::Input(format!("Simbody ordered the coordinates {perm:?}, leap predicted {:?}", simbody_q_order(system))));
+        }
         let mobod_of_model_body = system.system_body_of.iter().map(|&s| s as i32 + 1).collect();
         Ok(SimbodyModel {
             sys,
@@ -187,7 +310,60 @@ impl SimbodyModel {
             bodies_buf: Vec::new(),
             points_buf: Vec::new(),
             forces_buf: Vec::new(),
+            nz,
+            last_error,
+            callback_calls,
         })
+    }
+
+    /// Simbody's q index of each leap coordinate.
+    pub fn simbody_q_index(&self) -> &[usize] {
+        &self.perm
+    }
+
+    /// Simbody mobilized-body index of each model body.
+    pub fn mobilized_body_of_model_body(&self) -> &[i32] {
+        &self.mobod_of_model_body
+    }
+
+    /// Number of auxiliary states of the Rust force element.
+    pub fn nz(&self) -> usize {
+        self.nz
+    }
+
+    /// Set the auxiliary states.
+    pub fn set_z(&mut self, z: &[f64]) -> Result<(), SimbodyError> {
+        self.check("z", z.len(), self.nz)?;
+        Ok(self.sys.pin_mut().set_z(z)?)
+    }
+
+    /// The auxiliary states.
+    pub fn z(&self, z: &mut [f64]) -> Result<(), SimbodyError> {
+        self.check("z", z.len(), self.nz)?;
+        Ok(self.sys.get_z(z)?)
+    }
+
+    /// The auxiliary states' derivatives at the current state.
+    pub fn zdot(&mut self, zdot: &mut [f64]) -> Result<(), SimbodyError> {
+        self.check("zdot", zdot.len(), self.nz)?;
+        self.sys.pin_mut().calc_zdot(zdot).map_err(|e| self.with_callback_error(e))
+    }
+
+    /// The last error the Rust force element reported, if any (taken).
+    pub fn take_force_error(&self) -> Option<String> {
+        self.last_error.lock().ok().and_then(|mut g| g.take())
+    }
+
+    /// How often Simbody called the Rust force element.
+    pub fn force_calls(&self) -> u64 {
+        self.callback_calls.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    fn with_callback_error(&self, e: cxx::Exception) -> SimbodyError {
+        match self.take_force_error() {
+            Some(rust) => SimbodyError::Simbody(format!("{} (force element: {rust})", e.what())),
+            None => e.into(),
+        }
     }
 
     /// Number of generalized coordinates.
@@ -278,7 +454,10 @@ impl SimbodyModel {
     /// Accelerations q̈ under the applied forces (leap order).
     pub fn accelerations(&mut self, qdd: &mut [f64]) -> Result<(), SimbodyError> {
         self.check("qdd", qdd.len(), self.n)?;
-        self.sys.pin_mut().calc_udot(&mut self.tmp[..self.n])?;
+        let n = self.n;
+        if let Err(e) = self.sys.pin_mut().calc_udot(&mut self.tmp[..n]) {
+            return Err(self.with_callback_error(e));
+        }
         for k in 0..self.n {
             qdd[k] = self.tmp[self.perm[k]];
         }
@@ -338,12 +517,112 @@ impl SimbodyModel {
 
     /// Integrate to `t_final` with the applied forces held constant.
     pub fn integrate(&mut self, integrator: SimbodyIntegrator, accuracy: f64, t_final: f64) -> Result<IntegratorStats, SimbodyError> {
-        Ok(self.sys.pin_mut().integrate(integrator.code(), accuracy, t_final)?)
+        self.take_force_error();
+        match self.sys.pin_mut().integrate(integrator.code(), accuracy, t_final) {
+            Ok(s) => Ok(s),
+            Err(e) => Err(self.with_callback_error(e)),
+        }
     }
 
     /// Make the facade throw (kind 0: a Simbody stage error; 1: a SimTK
     /// exception; other: `std::runtime_error`), to test error propagation.
     pub fn throw_for_test(&mut self, kind: i32) -> Result<(), SimbodyError> {
         Ok(self.sys.pin_mut().throw_for_test(kind)?)
+    }
+}
+
+/// Simbody's q index of each leap coordinate of `system`: mobilizers take
+/// their q's in body creation order (Planar: rotation, x, y).
+pub fn simbody_q_order(system: &SystemSpec) -> Vec<usize> {
+    let mut perm = vec![usize::MAX; system.nq()];
+    let mut next = 0;
+    for sb in &system.bodies {
+        let qs: Vec<usize> = match &sb.mobilizer {
+            Mobilizer::Planar { q } => q.to_vec(),
+            Mobilizer::Pin { q } | Mobilizer::TranslatingHinge { q, .. } => vec![*q],
+            Mobilizer::Weld => vec![],
+        };
+        for q in qs {
+            perm[q] = next;
+            next += 1;
+        }
+    }
+    perm
+}
+
+/// Point kinematics at the state Simbody is realizing, seen through model
+/// bodies and model coordinates (for force elements inside a callback).
+/// The first FFI error is kept in `error` and NaN returned.
+pub struct SimbodyKinematics<'c, 'a> {
+    pub ctx: &'c ForceContext<'a>,
+    /// Simbody mobilized body of each model body.
+    pub mobod: &'c [i32],
+    /// Simbody q index of each model coordinate.
+    pub q_index: &'c [usize],
+    pub q: &'c [f64],
+    pub u: &'c [f64],
+    pub error: std::cell::RefCell<Option<String>>,
+}
+
+impl SimbodyKinematics<'_, '_> {
+    fn keep(&self, r: Result<[f64; 3], String>) -> [f64; 3] {
+        match r {
+            Ok(v) => v,
+            Err(e) => {
+                self.error.borrow_mut().get_or_insert(e);
+                [f64::NAN; 3]
+            }
+        }
+    }
+}
+
+impl crate::path::BodyKinematics<f64> for SimbodyKinematics<'_, '_> {
+    fn position(&self, body: usize, loc: [f64; 3]) -> [f64; 3] {
+        self.keep(self.ctx.station_position(self.mobod[body], loc))
+    }
+    fn velocity(&self, body: usize, loc: [f64; 3]) -> [f64; 3] {
+        self.keep(self.ctx.station_velocity(self.mobod[body], loc))
+    }
+    fn to_ground(&self, body: usize, v: [f64; 3]) -> [f64; 3] {
+        self.keep(self.ctx.express_in_ground(self.mobod[body], v))
+    }
+    fn coordinate(&self, coordinate: usize) -> (f64, f64) {
+        let k = self.q_index[coordinate];
+        (self.q[k], self.u[k])
+    }
+}
+
+/// Forces collected during a callback, then handed to Simbody in one go
+/// (buffers keep their capacity between calls).
+#[derive(Debug, Default, Clone)]
+pub struct ForceBuffer {
+    pub points: Vec<(usize, [f64; 3], [f64; 3])>,
+    pub generalized: Vec<(usize, f64)>,
+}
+
+impl ForceBuffer {
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.generalized.clear();
+    }
+
+    /// Apply the collected forces (model bodies and model coordinates).
+    pub fn flush(&self, ctx: &mut ForceContext<'_>, mobod: &[i32], u_index: &[usize]) -> Result<(), String> {
+        for (b, p, f) in &self.points {
+            ctx.add_station_force(mobod[*b], *p, *f)?;
+        }
+        for (c, f) in &self.generalized {
+            ctx.add_mobility_force(u_index[*c] as i32, *f)?;
+        }
+        Ok(())
+    }
+}
+
+impl crate::path::ForceSink<f64> for ForceBuffer {
+    fn add_point_force(&mut self, body: usize, loc: [f64; 3], force: [f64; 3]) {
+        self.points.push((body, loc, force));
+    }
+    fn add_generalized_force(&mut self, coordinate: usize, force: f64) {
+        self.generalized.push((coordinate, force));
     }
 }
