@@ -13,6 +13,7 @@ pub mod multibody;
 pub mod simbody;
 pub mod crosscheck;
 pub mod bench;
+pub mod io;
 pub mod muscle;
 pub mod contact;
 pub mod ligament;

@@ -1,0 +1,258 @@
+//! OpenSim storage files: `.sto` (STOFileAdapter version 3, as Moco writes
+//! them; version 1 read too) and `.mot`, and controls read from them.
+//!
+//! Formats follow `shared/reference/opensim-conventions.md` §3.1: metadata
+//! `key=value` lines sorted by key, `DataType=double`, `version=3`,
+//! `OpenSimVersion`, `endheader`, a tab-separated label line starting with
+//! `time`, then rows printed with 16 significant digits.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A table of time series, OpenSim style.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StoTable {
+    /// First header line (the table's name), if any.
+    pub name: Option<String>,
+    /// Metadata `key=value` (sorted on writing).
+    pub metadata: BTreeMap<String, String>,
+    /// Column labels after `time`.
+    pub labels: Vec<String>,
+    pub time: Vec<f64>,
+    /// One row per time, `labels.len()` values each.
+    pub rows: Vec<Vec<f64>>,
+}
+
+/// A storage file could not be read or written.
+#[derive(Debug, thiserror::Error)]
+pub enum StoError {
+    #[error("{file}: {source}")]
+    Io { file: PathBuf, source: std::io::Error },
+    #[error("{file}: line {line}: {reason}")]
+    Parse { file: PathBuf, line: usize, reason: String },
+    #[error("{file}: column '{column}': {reason}")]
+    Column { file: PathBuf, column: String, reason: String },
+}
+
+fn fmt_value(v: f64) -> String {
+    if v.is_nan() {
+        "NaN".into()
+    } else if v.is_infinite() {
+        if v > 0.0 { "Inf".into() } else { "-Inf".into() }
+    } else {
+        // 16 significant digits, like setprecision(16) in the default format.
+        let s = format!("{:.15e}", v);
+        let parsed: f64 = s.parse().unwrap_or(v);
+        let plain = format!("{parsed}");
+        if plain.len() <= 24 { plain } else { s }
+    }
+}
+
+impl StoTable {
+    /// Write as an STOFileAdapter version-3 file (Moco's format).
+    pub fn write_sto(&self, path: &Path) -> Result<(), StoError> {
+        let mut out = String::new();
+        if let Some(n) = &self.name {
+            let _ = writeln!(out, "{n}");
+        }
+        for (k, v) in &self.metadata {
+            let _ = writeln!(out, "{k}={v}");
+        }
+        let _ = writeln!(out, "DataType=double");
+        let _ = writeln!(out, "version=3");
+        let _ = writeln!(out, "OpenSimVersion=4.6 (written by leap {})", env!("CARGO_PKG_VERSION"));
+        let _ = writeln!(out, "endheader");
+        self.write_body(&mut out);
+        std::fs::write(path, out).map_err(|source| StoError::Io { file: path.into(), source })
+    }
+
+    /// Write as a version-1 motion file (`.mot`), as OpenSim's Storage does.
+    pub fn write_mot(&self, path: &Path) -> Result<(), StoError> {
+        let mut out = String::new();
+        let _ = writeln!(out, "{}", self.name.clone().unwrap_or_else(|| "leap".into()));
+        let _ = writeln!(out, "version=1");
+        let _ = writeln!(out, "nRows={}", self.time.len());
+        let _ = writeln!(out, "nColumns={}", self.labels.len() + 1);
+        let _ = writeln!(out, "inDegrees={}", self.metadata.get("inDegrees").map(String::as_str).unwrap_or("no"));
+        let _ = writeln!(out, "endheader");
+        self.write_body(&mut out);
+        std::fs::write(path, out).map_err(|source| StoError::Io { file: path.into(), source })
+    }
+
+    fn write_body(&self, out: &mut String) {
+        out.push_str("time");
+        for l in &self.labels {
+            out.push('\t');
+            out.push_str(l);
+        }
+        out.push('\n');
+        for (t, row) in self.time.iter().zip(&self.rows) {
+            out.push_str(&fmt_value(*t));
+            for v in row {
+                out.push('\t');
+                out.push_str(&fmt_value(*v));
+            }
+            out.push('\n');
+        }
+    }
+
+    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF).
+    pub fn read(path: &Path) -> Result<Self, StoError> {
+        let text = std::fs::read_to_string(path).map_err(|source| StoError::Io { file: path.into(), source })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse the text of a storage file; `path` names it in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, StoError> {
+        let perr = |line: usize, reason: String| StoError::Parse { file: path.into(), line, reason };
+        let mut table = StoTable::default();
+        let mut lines = text.lines().enumerate();
+        let mut found_end = false;
+        for (i, raw) in lines.by_ref() {
+            let line = raw.trim_end_matches('\r').trim();
+            if line == "endheader" {
+                found_end = true;
+                break;
+            }
+            if let Some((k, v)) = line.split_once('=') {
+                let k = k.trim();
+                if !matches!(k, "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns") {
+                    table.metadata.insert(k.to_string(), v.trim().to_string());
+                }
+            } else if i == 0 && !line.is_empty() {
+                table.name = Some(line.to_string());
+            }
+        }
+        if !found_end {
+            return Err(perr(text.lines().count(), "no 'endheader' line".into()));
+        }
+        let (label_line, labels_raw) = loop {
+            match lines.next() {
+                Some((i, raw)) if raw.trim().is_empty() => {
+                    let _ = i;
+                    continue;
+                }
+                Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r')),
+                None => return Err(perr(text.lines().count(), "no column labels after 'endheader'".into())),
+            }
+        };
+        let labels: Vec<String> = if labels_raw.contains('\t') {
+            labels_raw.split('\t').map(|s| s.trim().to_string()).collect()
+        } else {
+            labels_raw.split_whitespace().map(str::to_string).collect()
+        };
+        if labels.first().map(String::as_str) != Some("time") {
+            return Err(perr(label_line, format!("the first column must be 'time', got '{}'", labels.first().cloned().unwrap_or_default())));
+        }
+        table.labels = labels[1..].to_vec();
+        for (i, raw) in lines {
+            let line = raw.trim_end_matches('\r').trim();
+            if line.is_empty() {
+                continue;
+            }
+            let cells: Vec<&str> = if line.contains('\t') { line.split('\t').map(str::trim).collect() } else { line.split_whitespace().collect() };
+            if cells.len() != labels.len() {
+                return Err(perr(i + 1, format!("{} values, expected {}", cells.len(), labels.len())));
+            }
+            let mut vals = Vec::with_capacity(cells.len());
+            for (c, cell) in cells.iter().enumerate() {
+                let v: f64 = match *cell {
+                    "NaN" | "nan" => f64::NAN,
+                    "Inf" | "inf" => f64::INFINITY,
+                    "-Inf" | "-inf" => f64::NEG_INFINITY,
+                    s => s.parse().map_err(|_| perr(i + 1, format!("column '{}': '{s}' is not a number", labels[c])))?,
+                };
+                vals.push(v);
+            }
+            table.time.push(vals[0]);
+            table.rows.push(vals[1..].to_vec());
+        }
+        Ok(table)
+    }
+
+    /// The values of one column.
+    pub fn column(&self, label: &str) -> Option<Vec<f64>> {
+        let k = self.labels.iter().position(|l| l == label)?;
+        Some(self.rows.iter().map(|r| r[k]).collect())
+    }
+}
+
+/// Excitations over time read from a controls file, one column per muscle,
+/// linearly interpolated (held constant outside the time range).
+#[derive(Debug, Clone)]
+pub struct Controls {
+    pub time: Vec<f64>,
+    /// `values[k][m]`: muscle m at time k.
+    pub values: Vec<Vec<f64>>,
+}
+
+impl Controls {
+    /// Read excitations for `muscles` from an OpenSim controls or Moco
+    /// solution file. A muscle's column may be named `/forceset/<m>` (Moco),
+    /// `<m>` or `<m>.excitation` (OpenSim 3 controls). Every muscle must
+    /// have a column; values must be finite and in [0, 1]; time must
+    /// increase strictly.
+    pub fn from_file(path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
+        let t = StoTable::read(path)?;
+        Self::from_table(&t, path, muscles)
+    }
+
+    /// As [`Self::from_file`] for a parsed table.
+    pub fn from_table(t: &StoTable, path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
+        if t.time.is_empty() {
+            return Err(StoError::Parse { file: path.into(), line: 0, reason: "no data rows".into() });
+        }
+        for k in 0..t.time.len() {
+            if !t.time[k].is_finite() {
+                return Err(StoError::Column { file: path.into(), column: "time".into(), reason: format!("row {} is not finite", k + 1) });
+            }
+            if k > 0 && t.time[k] <= t.time[k - 1] {
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: "time".into(),
+                    reason: format!("not strictly increasing: row {} has t = {} after t = {}", k + 1, t.time[k], t.time[k - 1]),
+                });
+            }
+        }
+        let mut cols = Vec::with_capacity(muscles.len());
+        for m in muscles {
+            let names = [format!("/forceset/{m}"), m.to_string(), format!("{m}.excitation")];
+            let k = names
+                .iter()
+                .find_map(|n| t.labels.iter().position(|l| l == n))
+                .ok_or_else(|| StoError::Column { file: path.into(), column: format!("/forceset/{m}"), reason: format!("missing: no excitation column for muscle '{m}'") })?;
+            for (r, row) in t.rows.iter().enumerate() {
+                let v = row[k];
+                if !v.is_finite() || !(0.0..=1.0).contains(&v) {
+                    return Err(StoError::Column {
+                        file: path.into(),
+                        column: t.labels[k].clone(),
+                        reason: format!("row {} (t = {}): excitation {v} is not a number in [0, 1]", r + 1, t.time[r]),
+                    });
+                }
+            }
+            cols.push(k);
+        }
+        let values = t.rows.iter().map(|row| cols.iter().map(|&k| row[k]).collect()).collect();
+        Ok(Controls { time: t.time.clone(), values })
+    }
+
+    /// Excitations at time `t` into `out`.
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        let n = self.time.len();
+        if t <= self.time[0] {
+            out.copy_from_slice(&self.values[0]);
+            return;
+        }
+        if t >= self.time[n - 1] {
+            out.copy_from_slice(&self.values[n - 1]);
+            return;
+        }
+        let k = self.time.partition_point(|&x| x <= t) - 1;
+        let w = (t - self.time[k]) / (self.time[k + 1] - self.time[k]);
+        for (m, o) in out.iter_mut().enumerate() {
+            *o = (1.0 - w) * self.values[k][m] + w * self.values[k + 1][m];
+        }
+    }
+}
