@@ -178,6 +178,8 @@ struct SimbodySystem::Impl {
     bool finalized = false;
     Vec3 gravity{0, 0, 0};
     RustForceImpl* rust_force = nullptr;  // owned by its Force::Custom
+    std::unique_ptr<Integrator> integ;
+    std::unique_ptr<TimeStepper> stepper;
     std::vector<MobilizedBody> bodies;  // index 0 is Ground
     Impl() : matter(system), forces(system), discrete(forces, matter) {
         bodies.push_back(matter.Ground());
@@ -434,6 +436,56 @@ double SimbodySystem::energy() {
     p->require_final("energy");
     p->system.realize(p->state, Stage::Dynamics);
     return p->system.calcEnergy(p->state);
+}
+
+namespace {
+std::unique_ptr<Integrator> make_integrator(MultibodySystem& system, std::int32_t method, double accuracy) {
+    if (!(accuracy > 0)) throw std::invalid_argument("integrator: accuracy must be positive");
+    std::unique_ptr<Integrator> integ;
+    switch (method) {
+        case 0: integ.reset(new RungeKuttaMersonIntegrator(system)); break;
+        case 1: integ.reset(new RungeKuttaFeldbergIntegrator(system)); break;
+        case 2: integ.reset(new RungeKutta3Integrator(system)); break;
+        case 3: integ.reset(new CPodesIntegrator(system, CPodes::BDF, CPodes::Newton)); break;
+        case 4: integ.reset(new ExplicitEulerIntegrator(system, accuracy)); break;
+        default: throw std::invalid_argument("integrator: unknown method " + std::to_string(method));
+    }
+    if (method != 4) integ->setAccuracy(accuracy);
+    return integ;
+}
+
+IntegratorStats stats_of(const Integrator& integ, double t) {
+    IntegratorStats s;
+    s.steps_taken = integ.getNumStepsTaken();
+    s.steps_attempted = integ.getNumStepsAttempted();
+    s.realizations = integ.getNumRealizations();
+    s.error_test_failures = integ.getNumErrorTestFailures();
+    s.final_time = t;
+    return s;
+}
+}  // namespace
+
+void SimbodySystem::integration_start(std::int32_t method, double accuracy, double min_step, double max_step) {
+    p->require_final("integration_start");
+    p->stepper.reset();
+    p->integ = make_integrator(p->system, method, accuracy);
+    if (min_step > 0 && method != 4) p->integ->setMinimumStepSize(min_step);
+    if (max_step > 0 && method != 4) p->integ->setMaximumStepSize(max_step);
+    p->integ->setAllowInterpolation(false);
+    p->stepper.reset(new TimeStepper(p->system, *p->integ));
+    p->stepper->initialize(p->state);
+}
+
+IntegratorStats SimbodySystem::integration_step_to(double t) {
+    if (!p->stepper) throw std::logic_error("integration_step_to: call integration_start first");
+    if (!(t >= p->integ->getTime())) throw std::invalid_argument("integration_step_to: time goes backwards");
+    while (p->integ->getTime() < t) {
+        const Integrator::SuccessfulStepStatus st = p->stepper->stepTo(t);
+        if (st == Integrator::EndOfSimulation) break;
+        if (p->integ->isSimulationOver()) break;
+    }
+    p->state = p->integ->getState();
+    return stats_of(*p->integ, p->state.getTime());
 }
 
 IntegratorStats SimbodySystem::integrate(std::int32_t method, double accuracy, double t_final) {

@@ -84,6 +84,11 @@ public:
     // held constant. method: 0 RungeKuttaMerson, 1 RungeKuttaFeldberg,
     // 2 RungeKutta3, 3 CPodes, 4 explicit Euler (fixed step = accuracy).
     IntegratorStats integrate(std::int32_t method, double accuracy, double t_final);
+    // A persistent integration: start from the current state, then advance
+    // to successive times (the integrator keeps its step size between them).
+    // min_step/max_step <= 0 leave Simbody's defaults.
+    void integration_start(std::int32_t method, double accuracy, double min_step, double max_step);
+    IntegratorStats integration_step_to(double t);
 
     // For tests of the bridge itself: throws a SimTK or std exception.
     void throw_for_test(std::int32_t kind);

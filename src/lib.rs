@@ -14,6 +14,7 @@ pub mod simbody;
 pub mod crosscheck;
 pub mod bench;
 pub mod io;
+pub mod integrator;
 pub mod muscle;
 pub mod contact;
 pub mod ligament;

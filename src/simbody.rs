@@ -92,6 +92,8 @@ mod ffi {
         fn total_mass(self: Pin<&mut SimbodySystem>) -> Result<f64>;
         fn energy(self: Pin<&mut SimbodySystem>) -> Result<f64>;
         fn integrate(self: Pin<&mut SimbodySystem>, method: i32, accuracy: f64, t_final: f64) -> Result<IntegratorStats>;
+        fn integration_start(self: Pin<&mut SimbodySystem>, method: i32, accuracy: f64, min_step: f64, max_step: f64) -> Result<()>;
+        fn integration_step_to(self: Pin<&mut SimbodySystem>, t: f64) -> Result<IntegratorStats>;
         fn throw_for_test(self: Pin<&mut SimbodySystem>, kind: i32) -> Result<()>;
     }
 }
@@ -519,6 +521,22 @@ impl SimbodyModel {
     pub fn integrate(&mut self, integrator: SimbodyIntegrator, accuracy: f64, t_final: f64) -> Result<IntegratorStats, SimbodyError> {
         self.take_force_error();
         match self.sys.pin_mut().integrate(integrator.code(), accuracy, t_final) {
+            Ok(s) => Ok(s),
+            Err(e) => Err(self.with_callback_error(e)),
+        }
+    }
+
+    /// Start a persistent integration from the current state (and applied
+    /// forces); `min_step`/`max_step` ≤ 0 keep Simbody's defaults.
+    pub fn integration_start(&mut self, integrator: SimbodyIntegrator, accuracy: f64, min_step: f64, max_step: f64) -> Result<(), SimbodyError> {
+        self.take_force_error();
+        self.sys.pin_mut().integration_start(integrator.code(), accuracy, min_step, max_step).map_err(|e| self.with_callback_error(e))
+    }
+
+    /// Advance the persistent integration to `t`; the model's state is then
+    /// the integrator's. Counters are cumulative since the start.
+    pub fn integration_step_to(&mut self, t: f64) -> Result<IntegratorStats, SimbodyError> {
+        match self.sys.pin_mut().integration_step_to(t) {
             Ok(s) => Ok(s),
             Err(e) => Err(self.with_callback_error(e)),
         }

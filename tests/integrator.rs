@@ -1,0 +1,76 @@
+//! The Dormand-Prince 5(4) integrator against closed-form solutions.
+
+use leap::integrator::{Dopri5, Dopri5Options, IntegrationError, OdeSystem};
+
+struct Oscillator;
+impl OdeSystem for Oscillator {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        dx[0] = x[1];
+        dx[1] = -4.0 * x[0];
+        Ok(())
+    }
+}
+
+fn run(accuracy: f64) -> (f64, Dopri5) {
+    let mut sys = Oscillator;
+    let opts = Dopri5Options { accuracy, ..Default::default() };
+    let mut ig = Dopri5::new(&mut sys, 0.0, &[1.0, 0.0], opts).unwrap();
+    while ig.t() < 10.0 {
+        ig.step(&mut sys, 10.0).unwrap();
+    }
+    // x(t) = cos 2t
+    let err = (ig.x()[0] - (20.0f64).cos()).abs().max((ig.x()[1] + 2.0 * (20.0f64).sin()).abs());
+    (err, ig)
+}
+
+#[test]
+fn oscillator_error_follows_the_accuracy() {
+    let (e5, ig5) = run(1e-5);
+    let (e9, ig9) = run(1e-9);
+    assert!(e5 < 1e-3, "{e5}");
+    assert!(e9 < 1e-7, "{e9}");
+    assert!(ig9.stats.steps > ig5.stats.steps);
+    assert_eq!(ig9.t(), 10.0);
+    // FSAL: 6 new evaluations per attempted step, plus the first.
+    assert_eq!(ig9.stats.f_evals, 1 + 6 * (ig9.stats.steps + ig9.stats.rejected_steps));
+}
+
+#[test]
+fn dense_output_is_accurate_inside_a_step() {
+    let (_, ig) = run(1e-10);
+    let mid = 0.5 * (ig.t_prev() + ig.t());
+    let mut x = [0.0; 2];
+    ig.dense(mid, &mut x);
+    assert!((x[0] - (2.0 * mid).cos()).abs() < 1e-6);
+}
+
+struct Failing;
+impl OdeSystem for Failing {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, t: f64, _x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        if t > 0.5 {
+            return Err("muscle fibre length went negative".into());
+        }
+        dx[0] = 1.0;
+        Ok(())
+    }
+}
+
+#[test]
+fn rhs_errors_report_time_and_reason() {
+    let mut sys = Failing;
+    let mut ig = Dopri5::new(&mut sys, 0.0, &[0.0], Dopri5Options::default()).unwrap();
+    let e = loop {
+        match ig.step(&mut sys, 1.0) {
+            Ok(_) => continue,
+            Err(e) => break e,
+        }
+    };
+    assert!(matches!(e, IntegrationError::Rhs { t, .. } if t > 0.5));
+    assert!(e.to_string().contains("fibre length"));
+}
