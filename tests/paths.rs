@@ -5,7 +5,7 @@
 use leap::model::Model;
 use leap::multibody::{GeneralizedForces, ModelView, Multibody};
 use leap::path::PathSmoothing;
-use leap::scalar::{Dual64, DualStruct};
+use leap::scalar::Dual64;
 
 fn eval(model: &Model, model_q: &[f64], muscle: usize, smoothing: PathSmoothing) -> (f64, Vec<f64>) {
     let sys = model.system(false).unwrap();
