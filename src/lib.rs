@@ -5,6 +5,9 @@
 //! elements ([`muscle`], [`contact`], [`ligament`]) → the optimizer
 //! ([`nlp`], [`sqp`]) → output ([`io`]).
 
+// Index loops mirror the equations they implement.
+#![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
+
 pub mod scalar;
 pub mod spline;
 pub mod path;

@@ -533,7 +533,7 @@ impl Multibody {
             for k in 0..j {
                 d -= l[j * n + k] * l[j * n + k];
             }
-            if !(d.re() > 0.0) {
+            if d.re().is_nan() || d.re() <= 0.0 {
                 return Err(SingularMassMatrix { pivot: j, value: d.re() });
             }
             let djj = d.sqrt();

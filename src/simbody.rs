@@ -294,7 +294,7 @@ impl SimbodyModel {
                 perm[q] = first as usize + j;
             }
         }
-        if perm.iter().any(|&p| p == usize::MAX) {
+        if perm.contains(&usize::MAX) {
             return Err(SimbodyError::Input("a coordinate has no Simbody mobility".into()));
         }
         if perm != simbody_q_order(system) {
