@@ -116,6 +116,13 @@ void ForceCtx::express_in_ground(std::int32_t body, rust::Slice<const double> v,
     for (int i = 0; i < 3; ++i) out[(std::size_t)i] = g[i];
 }
 
+void ForceCtx::express_in_body(std::int32_t body, rust::Slice<const double> v, rust::Slice<double> out) const {
+    check_len("vector", v.size(), 3);
+    check_len("out", out.size(), 3);
+    const Vec3 b = ctx_body(in, body).expressGroundVectorInBodyFrame(in->s, vec3(v));
+    for (int i = 0; i < 3; ++i) out[(std::size_t)i] = b[i];
+}
+
 void ForceCtx::add_station_force(std::int32_t body, rust::Slice<const double> point, rust::Slice<const double> force) {
     check_len("point", point.size(), 3);
     check_len("force", force.size(), 3);

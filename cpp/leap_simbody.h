@@ -22,6 +22,7 @@ public:
     void station_position(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const;
     void station_velocity(std::int32_t body, rust::Slice<const double> point, rust::Slice<double> out) const;
     void express_in_ground(std::int32_t body, rust::Slice<const double> v, rust::Slice<double> out) const;
+    void express_in_body(std::int32_t body, rust::Slice<const double> v, rust::Slice<double> out) const;
     void add_station_force(std::int32_t body, rust::Slice<const double> point, rust::Slice<const double> force);
     void add_mobility_force(std::int32_t u_index, double force);
 private:

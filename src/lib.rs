@@ -18,6 +18,7 @@ pub mod crosscheck;
 pub mod bench;
 pub mod io;
 pub mod integrator;
+pub mod ode;
 pub mod muscle;
 pub mod contact;
 pub mod ligament;

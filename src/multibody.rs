@@ -611,6 +611,11 @@ impl<'a, S: Scalar> crate::path::BodyKinematics<S> for ModelView<'a, S> {
         let (ci, _) = self.mb.frame_of_model_body(body);
         self.mb.to_ground(self.ws, ci, v)
     }
+    fn to_body(&self, body: usize, v: [S; 3]) -> [S; 3] {
+        let (ci, _) = self.mb.frame_of_model_body(body);
+        let (c, s) = (self.ws.cos[ci], self.ws.sin[ci]);
+        [c * v[0] + s * v[1], c * v[1] - s * v[0], v[2]]
+    }
     fn coordinate(&self, coordinate: usize) -> (S, S) {
         let k = self.q_of[coordinate];
         (self.ws.q[k], self.ws.u[k])

@@ -75,6 +75,13 @@ pub trait BodyKinematics<S: Scalar> {
     fn velocity(&self, body: usize, loc: [S; 3]) -> [S; 3];
     /// A body-frame vector expressed in ground.
     fn to_ground(&self, body: usize, v: [S; 3]) -> [S; 3];
+    /// A ground vector expressed in the body frame.
+    fn to_body(&self, body: usize, v: [S; 3]) -> [S; 3];
+    /// The body-frame location of the body point now at ground point `p`.
+    fn station_at(&self, body: usize, p: [S; 3]) -> [S; 3] {
+        let o = self.position(body, [S::zero(); 3]);
+        self.to_body(body, [p[0] - o[0], p[1] - o[1], p[2] - o[2]])
+    }
     /// Value and speed of a model coordinate.
     fn coordinate(&self, coordinate: usize) -> (S, S);
 }

@@ -47,6 +47,7 @@ mod ffi {
         fn station_position(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
         fn station_velocity(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
         fn express_in_ground(self: &ForceCtx, body: i32, v: &[f64], out: &mut [f64]) -> Result<()>;
+        fn express_in_body(self: &ForceCtx, body: i32, v: &[f64], out: &mut [f64]) -> Result<()>;
         fn add_station_force(self: Pin<&mut ForceCtx>, body: i32, point: &[f64], force: &[f64]) -> Result<()>;
         fn add_mobility_force(self: Pin<&mut ForceCtx>, u_index: i32, force: f64) -> Result<()>;
 
@@ -209,6 +210,11 @@ impl ForceContext<'_> {
     pub fn express_in_ground(&self, body: i32, v: [f64; 3]) -> Result<[f64; 3], String> {
         let mut out = [0.0; 3];
         self.ctx.express_in_ground(body, &v, &mut out).map_err(|e| e.what().to_string())?;
+        Ok(out)
+    }
+    pub fn express_in_body(&self, body: i32, v: [f64; 3]) -> Result<[f64; 3], String> {
+        let mut out = [0.0; 3];
+        self.ctx.express_in_body(body, &v, &mut out).map_err(|e| e.what().to_string())?;
         Ok(out)
     }
     pub fn add_station_force(&mut self, body: i32, point: [f64; 3], force: [f64; 3]) -> Result<(), String> {
@@ -603,6 +609,9 @@ impl crate::path::BodyKinematics<f64> for SimbodyKinematics<'_, '_> {
     }
     fn to_ground(&self, body: usize, v: [f64; 3]) -> [f64; 3] {
         self.keep(self.ctx.express_in_ground(self.mobod[body], v))
+    }
+    fn to_body(&self, body: usize, v: [f64; 3]) -> [f64; 3] {
+        self.keep(self.ctx.express_in_body(self.mobod[body], v))
     }
     fn coordinate(&self, coordinate: usize) -> (f64, f64) {
         let k = self.q_index[coordinate];

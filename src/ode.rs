@@ -1,0 +1,334 @@
+//! The explicit state equation ẋ = f(x, u, t) of a musculoskeletal model, in
+//! OpenSim's formulation: x = (q, q̇, l^M, a) with fibre lengths and
+//! activations of every muscle whose states the system carries, u the
+//! excitations (Porsa, Lin & Pandy 2016, eqs. 1-2; model-equations.md §2.6).
+//!
+//! The force laws (muscle, contact, passive joint torque) enter through
+//! [`ForceLaws`], so one orchestration serves every law the model file can
+//! choose and every scalar type. In the symmetric system each left muscle
+//! shares the states of its right partner (it is its mirror image, checked
+//! when the equation is built) and its tension is applied by doubling the
+//! right one; left contact spheres and ligaments act on the left bodies and
+//! coordinates, which follow the right ones exactly.
+
+use crate::model::{Model, ModelError, SystemSpec};
+use crate::multibody::{GeneralizedForces, ModelView, Multibody, SingularMassMatrix, Workspace};
+use crate::path::{BodyKinematics, ForceSink, PathSmoothing};
+use crate::scalar::Scalar;
+
+/// What a muscle law returns for one muscle at one state.
+#[derive(Debug, Clone, Copy)]
+pub struct MuscleRates<S> {
+    /// Tendon force applied along the path (N).
+    pub tendon_force: S,
+    /// d(fibre length)/dt (m/s).
+    pub fiber_velocity: S,
+    /// d(activation)/dt (1/s).
+    pub activation_rate: S,
+}
+
+/// The force laws of a model, by element index into [`Model`]'s lists.
+pub trait ForceLaws<S: Scalar> {
+    /// Muscle `m` with activation `a`, fibre length `lm`, muscle-tendon
+    /// length `lmt` and lengthening speed `vmt`, under excitation `u`.
+    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String>;
+    /// Contact sphere `k` with centre position and velocity in ground:
+    /// the force on the sphere and its point of application, in ground.
+    fn sphere(&self, k: usize, p_ground_centre: [S; 3], v_ground_centre: [S; 3]) -> ([S; 3], [S; 3]);
+    /// Passive torque of ligament `l` at coordinate value `q` and speed `qd`.
+    fn ligament(&self, l: usize, q: S, qd: S) -> S;
+}
+
+/// A state equation could not be built or evaluated.
+#[derive(Debug, thiserror::Error)]
+pub enum OdeError {
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error("{0}")]
+    Symmetry(String),
+    #[error("muscle '{muscle}': {reason}")]
+    Muscle { muscle: String, reason: String },
+    #[error(transparent)]
+    Singular(#[from] SingularMassMatrix),
+    #[error("wrong length of {what}: {got} (expected {want})")]
+    Length { what: &'static str, got: usize, want: usize },
+}
+
+/// The state equation of a model's full or symmetric system.
+#[derive(Debug, Clone)]
+pub struct StateEquation {
+    pub model: Model,
+    pub system: SystemSpec,
+    pub multibody: Multibody,
+    /// Model muscles whose states the system carries.
+    pub muscles: Vec<usize>,
+    /// How many model muscles each carried muscle stands for (1 or 2).
+    pub multiplicity: Vec<f64>,
+    /// How conditional path points switch.
+    pub smoothing: PathSmoothing,
+}
+
+/// Buffers for one evaluation thread.
+#[derive(Debug, Clone)]
+pub struct StateWorkspace<S: Scalar> {
+    pub mb: Workspace<S>,
+    tau: Vec<S>,
+    qdd: Vec<S>,
+    /// Per carried muscle after an evaluation: MTU length, speed, tendon force.
+    pub mtu_length: Vec<S>,
+    pub mtu_speed: Vec<S>,
+    pub tendon_force: Vec<S>,
+    /// Per sphere after an evaluation: force on the sphere (ground).
+    pub sphere_force: Vec<[S; 3]>,
+    /// Per ligament after an evaluation: torque (N·m).
+    pub ligament_torque: Vec<S>,
+}
+
+impl StateEquation {
+    /// The state equation of `model`'s symmetric (or full) system.
+    pub fn new(model: &Model, symmetric: bool, smoothing: PathSmoothing) -> Result<Self, OdeError> {
+        let system = model.system(symmetric)?;
+        let multibody = Multibody::new(model, &system);
+        let mut muscles = Vec::new();
+        let mut multiplicity = Vec::new();
+        for (i, m) in model.muscles.iter().enumerate() {
+            let name = &m.spec.name;
+            if symmetric {
+                if let Some(stem) = name.strip_suffix("_l") {
+                    if model.muscles.iter().any(|o| o.spec.name == format!("{stem}_r")) {
+                        continue; // carried by its right partner
+                    }
+                }
+                if let Some(stem) = name.strip_suffix("_r") {
+                    if let Some(j) = model.muscles.iter().position(|o| o.spec.name == format!("{stem}_l")) {
+                        check_mirror(model, &system, &multibody, i, j)?;
+                        muscles.push(i);
+                        multiplicity.push(2.0);
+                        continue;
+                    }
+                }
+            }
+            muscles.push(i);
+            multiplicity.push(1.0);
+        }
+        Ok(StateEquation { model: model.clone(), system, multibody, muscles, multiplicity, smoothing })
+    }
+
+    /// Number of generalized coordinates.
+    pub fn nq(&self) -> usize {
+        self.system.nq()
+    }
+
+    /// Number of carried muscles (= excitations).
+    pub fn nm(&self) -> usize {
+        self.muscles.len()
+    }
+
+    /// Number of states: q, q̇, fibre lengths, activations.
+    pub fn nx(&self) -> usize {
+        2 * self.nq() + 2 * self.nm()
+    }
+
+    /// OpenSim 4 state names, in x's order.
+    pub fn state_names(&self) -> Vec<String> {
+        let mut out = Vec::with_capacity(self.nx());
+        let coord_path = |c: usize, what: &str| {
+            let name = &self.model.coordinates[c].name;
+            let joint = self.model.joints.iter().find(|j| match &j.kind {
+                crate::model::JointKind::Planar { coordinates } => coordinates.contains(&c),
+                crate::model::JointKind::Pin { coordinate } | crate::model::JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
+                crate::model::JointKind::Weld => false,
+            });
+            format!("/jointset/{}/{name}/{what}", joint.map(|j| j.name.as_str()).unwrap_or("?"))
+        };
+        for &c in &self.system.coordinates {
+            out.push(coord_path(c, "value"));
+        }
+        for &c in &self.system.coordinates {
+            out.push(coord_path(c, "speed"));
+        }
+        for &m in &self.muscles {
+            out.push(format!("/forceset/{}/fiber_length", self.model.muscles[m].spec.name));
+        }
+        for &m in &self.muscles {
+            out.push(format!("/forceset/{}/activation", self.model.muscles[m].spec.name));
+        }
+        out
+    }
+
+    /// Control names (Moco: `/forceset/<muscle>`).
+    pub fn control_names(&self) -> Vec<String> {
+        self.muscles.iter().map(|&m| format!("/forceset/{}", self.model.muscles[m].spec.name)).collect()
+    }
+
+    /// Buffers for evaluations with scalar type `S`.
+    pub fn workspace<S: Scalar>(&self) -> StateWorkspace<S> {
+        let n = self.nq();
+        let nm = self.nm();
+        let z = S::zero();
+        let ns = self.model.contact.as_ref().map(|c| c.spheres.len()).unwrap_or(0);
+        StateWorkspace {
+            mb: self.multibody.workspace(),
+            tau: vec![z; n],
+            qdd: vec![z; n],
+            mtu_length: vec![z; nm],
+            mtu_speed: vec![z; nm],
+            tendon_force: vec![z; nm],
+            sphere_force: vec![[z; 3]; ns],
+            ligament_torque: vec![z; self.model.ligaments.len()],
+        }
+    }
+
+    /// ẋ = f(x, u): writes `xdot` (length [`Self::nx`]).
+    pub fn rhs<S: Scalar, L: ForceLaws<S>>(&self, laws: &L, ws: &mut StateWorkspace<S>, x: &[S], u: &[S], xdot: &mut [S]) -> Result<(), OdeError> {
+        let (n, nm) = (self.nq(), self.nm());
+        if x.len() != self.nx() {
+            return Err(OdeError::Length { what: "x", got: x.len(), want: self.nx() });
+        }
+        if u.len() != nm {
+            return Err(OdeError::Length { what: "u", got: u.len(), want: nm });
+        }
+        if xdot.len() != self.nx() {
+            return Err(OdeError::Length { what: "xdot", got: xdot.len(), want: self.nx() });
+        }
+        let (q, rest) = x.split_at(n);
+        let (qd, rest) = rest.split_at(n);
+        let (lm, act) = rest.split_at(nm);
+        self.multibody.set_state(&mut ws.mb, q, qd);
+        for t in ws.tau.iter_mut() {
+            *t = S::zero();
+        }
+        let q_of = &self.system.q_of_model_coordinate;
+        {
+            let view = ModelView { mb: &self.multibody, ws: &ws.mb, q_of };
+            let mut sink = GeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau };
+            self.apply_forces(laws, &view, &mut sink, lm, act, u, &mut xdot[2 * n..], Outputs {
+                mtu_length: &mut ws.mtu_length,
+                mtu_speed: &mut ws.mtu_speed,
+                tendon_force: &mut ws.tendon_force,
+                sphere_force: &mut ws.sphere_force,
+                ligament_torque: &mut ws.ligament_torque,
+            })?;
+        }
+        self.multibody.forward_dynamics(&mut ws.mb, &ws.tau, &mut ws.qdd)?;
+        xdot[..n].copy_from_slice(qd);
+        xdot[n..2 * n].copy_from_slice(&ws.qdd);
+        Ok(())
+    }
+
+    /// The forces of every element at the state `view` shows, into `sink`;
+    /// muscle rates into `zdot` = [d l^M/dt, da/dt]. Shared by both backends.
+    #[allow(clippy::too_many_arguments)]
+    pub fn apply_forces<S: Scalar, L: ForceLaws<S>, K: BodyKinematics<S>, F: ForceSink<S>>(
+        &self,
+        laws: &L,
+        view: &K,
+        sink: &mut F,
+        lm: &[S],
+        act: &[S],
+        u: &[S],
+        zdot: &mut [S],
+        out: Outputs<'_, S>,
+    ) -> Result<(), OdeError> {
+        let nm = self.nm();
+        // Passive joint torques.
+        for (l, lig) in self.model.ligaments.iter().enumerate() {
+            let (qc, qdc) = view.coordinate(lig.coordinate);
+            let t = laws.ligament(l, qc, qdc);
+            out.ligament_torque[l] = t;
+            sink.add_generalized_force(lig.coordinate, t);
+        }
+        // Foot-ground contact.
+        if let Some(contact) = &self.model.contact {
+            for (k, sp) in contact.spheres.iter().enumerate() {
+                let loc = [S::from(sp.location[0]), S::from(sp.location[1]), S::from(sp.location[2])];
+                let p = view.position(sp.body, loc);
+                let v = view.velocity(sp.body, loc);
+                let (f, at) = laws.sphere(k, p, v);
+                out.sphere_force[k] = f;
+                if f.iter().any(|c| c.re() != 0.0) {
+                    let station = view.station_at(sp.body, at);
+                    sink.add_point_force(sp.body, station, f);
+                }
+            }
+        }
+        // Muscles.
+        for (k, &mi) in self.muscles.iter().enumerate() {
+            let muscle = &self.model.muscles[mi];
+            let pv = muscle.path.calc::<S, K, F>(view, self.smoothing, None);
+            let rates = laws
+                .muscle(mi, act[k], lm[k], pv.length, pv.lengthening_speed, u[k])
+                .map_err(|reason| OdeError::Muscle { muscle: muscle.spec.name.clone(), reason })?;
+            out.mtu_length[k] = pv.length;
+            out.mtu_speed[k] = pv.lengthening_speed;
+            out.tendon_force[k] = rates.tendon_force;
+            zdot[k] = rates.fiber_velocity;
+            zdot[nm + k] = rates.activation_rate;
+            let tension = rates.tendon_force * self.multiplicity[k];
+            muscle.path.calc(view, self.smoothing, Some((tension, &mut *sink)));
+        }
+        Ok(())
+    }
+}
+
+/// Where [`StateEquation::apply_forces`] reports per-element results.
+pub struct Outputs<'a, S> {
+    pub mtu_length: &'a mut [S],
+    pub mtu_speed: &'a mut [S],
+    pub tendon_force: &'a mut [S],
+    pub sphere_force: &'a mut [[S; 3]],
+    pub ligament_torque: &'a mut [S],
+}
+
+/// Check that muscle `j` (left) mirrors muscle `i` (right) in the symmetric
+/// system: equal parameters and equal path lengths at several poses.
+fn check_mirror(model: &Model, system: &SystemSpec, mb: &Multibody, i: usize, j: usize) -> Result<(), OdeError> {
+    let (a, b) = (&model.muscles[i].spec, &model.muscles[j].spec);
+    let params = |m: &crate::model::MuscleSpec| {
+        [
+            m.max_isometric_force,
+            m.optimal_fiber_length,
+            m.tendon_slack_length,
+            m.pennation_angle_at_optimal,
+            m.max_contraction_velocity,
+            m.activation_time_constant,
+            m.deactivation_time_constant,
+            m.FmaxTendonStrain,
+            m.FmaxMuscleStrain,
+            m.KshapeActive,
+            m.KshapePassive,
+            m.Af,
+            m.Flen,
+        ]
+    };
+    if params(a) != params(b) {
+        return Err(OdeError::Symmetry(format!("{}: muscle '{}' has parameters different from '{}'; the symmetric system needs mirror images", model.file.display(), b.name, a.name)));
+    }
+    let n = system.nq();
+    let mut ws = mb.workspace::<f64>();
+    for k in 0..4 {
+        let q: Vec<f64> = system
+            .coordinates
+            .iter()
+            .map(|&c| {
+                let [lo, hi] = model.coordinates[c].range;
+                let s = 0.5 + 0.4 * ((k * 7 + c) as f64).sin();
+                lo + s * (hi - lo).min(3.0)
+            })
+            .collect();
+        mb.set_state(&mut ws, &q, &vec![0.0; n]);
+        let view = ModelView { mb, ws: &ws, q_of: &system.q_of_model_coordinate };
+        let sm = PathSmoothing::Smooth { delta: 0.02 };
+        let li = model.muscles[i].path.calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None).length;
+        let lj = model.muscles[j].path.calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None).length;
+        if (li - lj).abs() > 1e-12 * li.abs().max(1.0) {
+            return Err(OdeError::Symmetry(format!(
+                "{}: muscle '{}' is not the mirror image of '{}' (path lengths {lj} m and {li} m at the same symmetric pose)",
+                model.file.display(),
+                b.name,
+                a.name
+            )));
+        }
+    }
+    Ok(())
+}

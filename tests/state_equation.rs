@@ -1,0 +1,143 @@
+//! The state equation's plumbing with simple closed-form laws: the symmetric
+//! system equals the full system with mirrored states, dual numbers agree
+//! with finite differences, and the layout follows OpenSim's names.
+
+use leap::model::Model;
+use leap::ode::{ForceLaws, MuscleRates, StateEquation};
+use leap::path::PathSmoothing;
+use leap::scalar::{Dual64, Scalar};
+
+/// Simple smooth laws with known structure (not OpenSim's; those have their
+/// own golden tests): tendon force F0·a·(l_MT/0.3), fibre velocity
+/// proportional to the MTU speed, first-order activation; a penalty contact;
+/// a linear-spring ligament.
+struct TestLaws<'a>(&'a Model);
+
+impl<S: Scalar> ForceLaws<S> for TestLaws<'_> {
+    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
+        let f0 = self.0.muscles[m].spec.max_isometric_force;
+        Ok(MuscleRates { tendon_force: a * lmt * (f0 / 0.3), fiber_velocity: vmt * 0.5 - lm * 0.1, activation_rate: (u - a) * 25.0 })
+    }
+    fn sphere(&self, _k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+        let r = 0.032;
+        let pen = p[1] * -1.0 + r;
+        if pen.re() <= 0.0 {
+            return ([S::zero(); 3], p);
+        }
+        let fy = pen * pen * 1e6 * (S::one() - v[1] * 2.0);
+        ([v[0] * -100.0, fy, S::zero()], [p[0], p[1] - r, p[2]])
+    }
+    fn ligament(&self, _l: usize, q: S, qd: S) -> S {
+        q * -3.0 - qd * 0.1
+    }
+}
+
+fn symmetric_state(eq: &StateEquation, k: usize) -> (Vec<f64>, Vec<f64>) {
+    let (n, nm) = (eq.nq(), eq.nm());
+    let mut x = vec![0.0; eq.nx()];
+    let q0 = eq.system.q_from_model(&eq.model.poses["squat"]);
+    for i in 0..n {
+        x[i] = q0[i] + 0.003 * ((k + i) as f64).sin();
+        x[n + i] = 0.5 * ((2 * k + i) as f64).cos();
+    }
+    // Lower the pelvis so the feet press into the ground.
+    let ty = eq.system.q_of_model_coordinate[eq.model.coordinate_index("pelvis_ty").unwrap()];
+    x[ty] -= 0.01;
+    for m in 0..nm {
+        x[2 * n + m] = 0.1 + 0.01 * m as f64;
+        x[2 * n + nm + m] = 0.2 + 0.02 * ((m + k) as f64).sin();
+    }
+    let u = (0..nm).map(|m| 0.5 + 0.4 * ((m * 3 + k) as f64).cos()).collect();
+    (x, u)
+}
+
+#[test]
+fn symmetric_system_equals_full_system_with_mirrored_states() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let laws = TestLaws(&model);
+    let sym = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let full = StateEquation::new(&model, false, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    assert_eq!((sym.nq(), sym.nm(), sym.nx()), (7, 24, 62));
+    assert_eq!((full.nq(), full.nm(), full.nx()), (10, 48, 116));
+    let names = sym.state_names();
+    assert_eq!(names[3], "/jointset/hip_r/hip_flexion_r/value");
+    assert_eq!(names[7 + 4], "/jointset/knee_r/knee_angle_r/speed");
+    assert_eq!(names[14], "/forceset/ercspn_r/fiber_length");
+    assert_eq!(names[38 + 20], "/forceset/soleus_r/activation");
+    for k in 0..4 {
+        let (xs, us) = symmetric_state(&sym, k);
+        // Full state: every model coordinate from its symmetric driver; left
+        // muscles copy their right partners.
+        let (ns, nms, nf, nmf) = (sym.nq(), sym.nm(), full.nq(), full.nm());
+        let mq = sym.system.model_from_q(&xs[..ns]);
+        let mu = sym.system.model_from_q(&xs[ns..2 * ns]);
+        let mut xf = vec![0.0; full.nx()];
+        xf[..nf].copy_from_slice(&full.system.q_from_model(&mq));
+        xf[nf..2 * nf].copy_from_slice(&full.system.q_from_model(&mu));
+        let mut uf = vec![0.0; nmf];
+        for (j, &mi) in full.muscles.iter().enumerate() {
+            let name = &model.muscles[mi].spec.name;
+            let right = name.strip_suffix("_l").map(|s| format!("{s}_r")).unwrap_or(name.clone());
+            let ks = sym.muscles.iter().position(|&m| model.muscles[m].spec.name == right).unwrap();
+            xf[2 * nf + j] = xs[2 * ns + ks];
+            xf[2 * nf + nmf + j] = xs[2 * ns + nms + ks];
+            uf[j] = us[ks];
+        }
+        let mut ds = vec![0.0; sym.nx()];
+        let mut df = vec![0.0; full.nx()];
+        sym.rhs(&laws, &mut sym.workspace(), &xs, &us, &mut ds).unwrap();
+        let mut wf = full.workspace();
+        full.rhs(&laws, &mut wf, &xf, &uf, &mut df).unwrap();
+        assert!(wf.sphere_force.iter().any(|f| f[1] > 0.0), "the feet touch the ground");
+        // Accelerations of every symmetric coordinate.
+        let scale = df[nf..2 * nf].iter().fold(1.0f64, |a, x| a.max(x.abs()));
+        for (i, &c) in sym.system.coordinates.iter().enumerate() {
+            let a_full = df[nf + full.system.q_of_model_coordinate[c]];
+            assert!((ds[ns + i] - a_full).abs() <= 1e-10 * scale, "q̈ of {}: {} vs {}", model.coordinates[c].name, ds[ns + i], a_full);
+        }
+        for (ks, &mi) in sym.muscles.iter().enumerate() {
+            let j = full.muscles.iter().position(|&m| m == mi).unwrap();
+            assert!((ds[2 * ns + ks] - df[2 * nf + j]).abs() < 1e-12);
+            assert!((ds[2 * ns + nms + ks] - df[2 * nf + nmf + j]).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn state_derivative_jacobian_matches_central_differences() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let laws = TestLaws(&model);
+    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let (x, u) = symmetric_state(&eq, 1);
+    let nx = eq.nx();
+    let mut wd = eq.workspace::<Dual64>();
+    let mut w = eq.workspace::<f64>();
+    let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
+    for dir in (0..nx).step_by(5) {
+        let xd: Vec<Dual64> = x.iter().enumerate().map(|(i, &v)| if i == dir { Dual64::from(v).derivative() } else { Dual64::from(v) }).collect();
+        let mut fd = vec![Dual64::from(0.0); nx];
+        eq.rhs(&laws, &mut wd, &xd, &ud, &mut fd).unwrap();
+        let h = 1e-6;
+        let (mut xp, mut xm) = (x.clone(), x.clone());
+        xp[dir] += h;
+        xm[dir] -= h;
+        let (mut fp, mut fm) = (vec![0.0; nx], vec![0.0; nx]);
+        eq.rhs(&laws, &mut w, &xp, &u, &mut fp).unwrap();
+        eq.rhs(&laws, &mut w, &xm, &u, &mut fm).unwrap();
+        for i in 0..nx {
+            let cd = (fp[i] - fm[i]) / (2.0 * h);
+            assert!((fd[i].eps - cd).abs() <= 1e-5 * (1.0 + cd.abs()), "∂f[{i}]/∂x[{dir}]: dual {} vs central {}", fd[i].eps, cd);
+        }
+    }
+}
+
+#[test]
+fn wrong_lengths_are_errors() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let eq = StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
+    let laws = TestLaws(&model);
+    let mut w = eq.workspace::<f64>();
+    let mut xd = vec![0.0; 62];
+    assert!(eq.rhs(&laws, &mut w, &vec![0.0; 61], &vec![0.0; 24], &mut xd).is_err());
+    assert!(eq.rhs(&laws, &mut w, &vec![0.0; 62], &vec![0.0; 23], &mut xd).is_err());
+}
