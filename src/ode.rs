@@ -332,3 +332,115 @@ fn check_mirror(model: &Model, system: &SystemSpec, mb: &Multibody, i: usize, j:
     }
     Ok(())
 }
+
+/// Excitations seen by the Simbody force element: fixed values, or a
+/// function of time (controls file, bang-bang pattern).
+pub enum Excitation {
+    Constant(Vec<f64>),
+    OfTime(Box<dyn Fn(f64, &mut [f64]) + Send>),
+}
+
+/// The same state equation evaluated by Simbody: q and q̇ in Simbody's
+/// multibody system, fibre lengths and activations as Simbody auxiliary (z)
+/// states, and every force computed by the Rust laws inside a Simbody force
+/// element from Simbody's own kinematics.
+pub struct SimbodyStateEquation {
+    pub equation: std::sync::Arc<StateEquation>,
+    pub simbody: crate::simbody::SimbodyModel,
+    excitation: std::sync::Arc<std::sync::Mutex<Excitation>>,
+    perm: Vec<usize>,
+}
+
+impl SimbodyStateEquation {
+    /// Build Simbody's system for `equation` with force laws `laws`.
+    pub fn new<L>(equation: std::sync::Arc<StateEquation>, laws: std::sync::Arc<L>) -> Result<Self, crate::simbody::SimbodyError>
+    where
+        L: ForceLaws<f64> + Send + Sync + 'static,
+    {
+        let sys = &equation.system;
+        let perm = crate::simbody::simbody_q_order(sys);
+        let q_index: Vec<usize> = sys.q_of_model_coordinate.iter().map(|&k| perm[k]).collect();
+        let mobod: Vec<i32> = sys.system_body_of.iter().map(|&s| s as i32 + 1).collect();
+        let nm = equation.nm();
+        let excitation = std::sync::Arc::new(std::sync::Mutex::new(Excitation::Constant(vec![0.0; nm])));
+        let exc = excitation.clone();
+        let eq = equation.clone();
+        let mut buf = crate::simbody::ForceBuffer::default();
+        let mut u = vec![0.0; nm];
+        let ns = eq.model.contact.as_ref().map(|c| c.spheres.len()).unwrap_or(0);
+        let (mut o1, mut o2, mut o3, mut o4, mut o5) = (vec![0.0; nm], vec![0.0; nm], vec![0.0; nm], vec![[0.0; 3]; ns], vec![0.0; eq.model.ligaments.len()]);
+        let f: Box<crate::simbody::ForceFn> = Box::new(move |ctx, t, q, qd, z, zdot| {
+            match &*exc.lock().map_err(|_| "excitation lock poisoned".to_string())? {
+                Excitation::Constant(v) => u.copy_from_slice(v),
+                Excitation::OfTime(g) => g(t, &mut u),
+            }
+            buf.clear();
+            {
+                let kin = crate::simbody::SimbodyKinematics { ctx, mobod: &mobod, q_index: &q_index, q, u: qd, error: Default::default() };
+                let (lm, act) = z.split_at(nm);
+                eq.apply_forces(&*laws, &kin, &mut buf, lm, act, &u, zdot, Outputs {
+                    mtu_length: &mut o1,
+                    mtu_speed: &mut o2,
+                    tendon_force: &mut o3,
+                    sphere_force: &mut o4,
+                    ligament_torque: &mut o5,
+                })
+                .map_err(|e| e.to_string())?;
+                if let Some(e) = kin.error.into_inner() {
+                    return Err(e);
+                }
+            }
+            buf.flush(ctx, &mobod, &q_index)
+        });
+        let simbody = crate::simbody::SimbodyModel::with_force(&equation.model, &equation.system, Some((f, 2 * nm)))?;
+        Ok(SimbodyStateEquation { equation, simbody, excitation, perm })
+    }
+
+    /// Set the excitations the force element sees.
+    pub fn set_excitation(&mut self, e: Excitation) {
+        if let Ok(mut g) = self.excitation.lock() {
+            *g = e;
+        }
+    }
+
+    /// Simbody's q index of each system coordinate.
+    pub fn simbody_q_index(&self) -> &[usize] {
+        &self.perm
+    }
+
+    /// Set the full state x = (q, q̇, l^M, a) at time t.
+    pub fn set_state(&mut self, t: f64, x: &[f64]) -> Result<(), crate::simbody::SimbodyError> {
+        let n = self.equation.nq();
+        if x.len() != self.equation.nx() {
+            return Err(crate::simbody::SimbodyError::Input(format!("x has length {}, expected {}", x.len(), self.equation.nx())));
+        }
+        self.simbody.set_state(t, &x[..n], &x[n..2 * n])?;
+        self.simbody.set_z(&x[2 * n..])
+    }
+
+    /// The current state x.
+    pub fn state(&mut self, x: &mut [f64]) -> Result<f64, crate::simbody::SimbodyError> {
+        let n = self.equation.nq();
+        let (q, rest) = x.split_at_mut(n);
+        let (u, z) = rest.split_at_mut(n);
+        let t = self.simbody.state(q, u)?;
+        self.simbody.z(z)?;
+        Ok(t)
+    }
+
+    /// ẋ = f(x, u) computed by Simbody.
+    pub fn rhs(&mut self, x: &[f64], u: &[f64], xdot: &mut [f64]) -> Result<(), crate::simbody::SimbodyError> {
+        let n = self.equation.nq();
+        if u.len() != self.equation.nm() || xdot.len() != self.equation.nx() {
+            return Err(crate::simbody::SimbodyError::Input("wrong length of u or xdot".into()));
+        }
+        self.set_excitation(Excitation::Constant(u.to_vec()));
+        // Setting the state invalidates every cached force (the excitation
+        // lives outside Simbody's state).
+        self.set_state(0.0, x)?;
+        self.simbody.set_applied_forces(&vec![0.0; n], &[])?;
+        xdot[..n].copy_from_slice(&x[n..2 * n]);
+        self.simbody.accelerations(&mut xdot[n..2 * n])?;
+        self.simbody.zdot(&mut xdot[2 * n..])
+    }
+}

@@ -3,7 +3,8 @@
 //! with finite differences, and the layout follows OpenSim's names.
 
 use leap::model::Model;
-use leap::ode::{ForceLaws, MuscleRates, StateEquation};
+use leap::ode::{ForceLaws, MuscleRates, SimbodyStateEquation, StateEquation};
+use std::sync::Arc;
 use leap::path::PathSmoothing;
 use leap::scalar::{Dual64, Scalar};
 
@@ -11,9 +12,9 @@ use leap::scalar::{Dual64, Scalar};
 /// own golden tests): tendon force F0·a·(l_MT/0.3), fibre velocity
 /// proportional to the MTU speed, first-order activation; a penalty contact;
 /// a linear-spring ligament.
-struct TestLaws<'a>(&'a Model);
+struct TestLaws(Model);
 
-impl<S: Scalar> ForceLaws<S> for TestLaws<'_> {
+impl<S: Scalar> ForceLaws<S> for TestLaws {
     fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
         let f0 = self.0.muscles[m].spec.max_isometric_force;
         Ok(MuscleRates { tendon_force: a * lmt * (f0 / 0.3), fiber_velocity: vmt * 0.5 - lm * 0.1, activation_rate: (u - a) * 25.0 })
@@ -54,7 +55,7 @@ fn symmetric_state(eq: &StateEquation, k: usize) -> (Vec<f64>, Vec<f64>) {
 #[test]
 fn symmetric_system_equals_full_system_with_mirrored_states() {
     let model = Model::from_file("models/jumper.json").unwrap();
-    let laws = TestLaws(&model);
+    let laws = TestLaws(model.clone());
     let sym = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let full = StateEquation::new(&model, false, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     assert_eq!((sym.nq(), sym.nm(), sym.nx()), (7, 24, 62));
@@ -106,7 +107,7 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
 #[test]
 fn state_derivative_jacobian_matches_central_differences() {
     let model = Model::from_file("models/jumper.json").unwrap();
-    let laws = TestLaws(&model);
+    let laws = TestLaws(model.clone());
     let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let (x, u) = symmetric_state(&eq, 1);
     let nx = eq.nx();
@@ -135,9 +136,48 @@ fn state_derivative_jacobian_matches_central_differences() {
 fn wrong_lengths_are_errors() {
     let model = Model::from_file("models/jumper.json").unwrap();
     let eq = StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
-    let laws = TestLaws(&model);
+    let laws = TestLaws(model.clone());
     let mut w = eq.workspace::<f64>();
     let mut xd = vec![0.0; 62];
     assert!(eq.rhs(&laws, &mut w, &vec![0.0; 61], &vec![0.0; 24], &mut xd).is_err());
     assert!(eq.rhs(&laws, &mut w, &vec![0.0; 62], &vec![0.0; 23], &mut xd).is_err());
+}
+
+#[test]
+fn simbody_state_equation_matches_rust_native() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    for symmetric in [true, false] {
+        let eq = Arc::new(StateEquation::new(&model, symmetric, PathSmoothing::Smooth { delta: 0.02 }).unwrap());
+        let laws = Arc::new(TestLaws(model.clone()));
+        let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone()).unwrap();
+        let mut w = eq.workspace::<f64>();
+        let nx = eq.nx();
+        let n = eq.nq();
+        let mut worst: f64 = 0.0;
+        for k in 0..6 {
+            let (x, u) = if symmetric {
+                symmetric_state(&eq, k)
+            } else {
+                let mut x = vec![0.0; nx];
+                let q0 = eq.system.q_from_model(&model.poses["squat"]);
+                for i in 0..n {
+                    x[i] = q0[i] + 0.003 * ((k + 3 * i) as f64).sin();
+                    x[n + i] = 0.4 * ((k + i) as f64).cos();
+                }
+                x[eq.system.q_of_model_coordinate[model.coordinate_index("pelvis_ty").unwrap()]] -= 0.01;
+                for i in 2 * n..nx {
+                    x[i] = 0.1 + 0.003 * i as f64;
+                }
+                (x, (0..eq.nm()).map(|m| 0.3 + 0.02 * m as f64).collect())
+            };
+            let (mut fr, mut fs) = (vec![0.0; nx], vec![0.0; nx]);
+            eq.rhs(&*laws, &mut w, &x, &u, &mut fr).unwrap();
+            sb.rhs(&x, &u, &mut fs).unwrap();
+            let scale = fs.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for i in 0..nx {
+                worst = worst.max((fr[i] - fs[i]).abs() / scale);
+            }
+        }
+        assert!(worst <= 1e-9, "symmetric={symmetric}: worst normwise relative difference {worst:e}");
+    }
 }
