@@ -1,0 +1,335 @@
+//! Forward simulation of a jump: integrate ẋ = f(x, u(t)) from a start
+//! state, detect lift-off (no vertical ground force), follow the flight to
+//! the centre-of-mass apex, and report what the paper reports.
+
+use crate::integrator::{Dopri5, Dopri5Options, IntegrationError, OdeSystem};
+use crate::io::StoTable;
+use crate::ode::{ForceLaws, StateEquation, StateWorkspace};
+use serde::Serialize;
+use std::path::Path;
+
+/// Excitations as a function of time.
+pub trait ExcitationSource {
+    fn at(&self, t: f64, u: &mut [f64]);
+}
+
+impl ExcitationSource for crate::io::Controls {
+    fn at(&self, t: f64, u: &mut [f64]) {
+        crate::io::Controls::at(self, t, u)
+    }
+}
+
+/// The bang-bang pattern: each muscle fully on (1) inside its interval,
+/// otherwise at `off_level` (the minimum excitation).
+#[derive(Debug, Clone, Serialize)]
+pub struct BangBang {
+    /// Per muscle: `Some((t_on, t_off))` or `None` (always off).
+    pub intervals: Vec<Option<(f64, f64)>>,
+    pub off_level: f64,
+}
+
+impl ExcitationSource for BangBang {
+    fn at(&self, t: f64, u: &mut [f64]) {
+        for (o, iv) in u.iter_mut().zip(&self.intervals) {
+            *o = match iv {
+                Some((a, b)) if t >= *a && t < *b => 1.0,
+                _ => self.off_level,
+            };
+        }
+    }
+}
+
+/// Net sagittal action of each carried muscle at a pose: positive when its
+/// moment arms, weighted by sign, extend the trunk, hip and knee and
+/// plantarflex the ankle (OpenSim signs: lumbar extension +, hip flexion +,
+/// knee angle + toward extension, ankle angle + dorsiflexion).
+pub fn extensor_moments(eq: &StateEquation, pose: &[f64]) -> Vec<f64> {
+    use crate::multibody::{GeneralizedForces, ModelView};
+    let sys = &eq.system;
+    let mut ws = eq.multibody.workspace::<f64>();
+    let q = sys.q_from_model(pose);
+    eq.multibody.set_state(&mut ws, &q, &vec![0.0; q.len()]);
+    let sign_of = |name: &str| -> f64 {
+        if name.starts_with("lumbar_extension") || name.starts_with("knee_angle") {
+            1.0
+        } else if name.starts_with("hip_flexion") || name.starts_with("ankle_angle") {
+            -1.0
+        } else {
+            0.0
+        }
+    };
+    eq.muscles
+        .iter()
+        .map(|&mi| {
+            let mut tau = vec![0.0; q.len()];
+            {
+                let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &sys.q_of_model_coordinate };
+                let mut sink = GeneralizedForces { mb: &eq.multibody, ws: &ws, q_of: &sys.q_of_model_coordinate, tau: &mut tau };
+                eq.model.muscles[mi].path.calc(&view, eq.smoothing, Some((1.0, &mut sink)));
+            }
+            let f0 = eq.model.muscles[mi].spec.max_isometric_force;
+            sys.coordinates.iter().enumerate().map(|(k, &c)| sign_of(&eq.model.coordinates[c].name) * tau[k] * f0).sum()
+        })
+        .collect()
+}
+
+/// Results of a forward jump.
+#[derive(Debug, Clone, Serialize)]
+pub struct JumpSummary {
+    /// Apex COM height minus standing COM height (m).
+    pub jump_height_m: f64,
+    pub liftoff_time_s: Option<f64>,
+    /// Vertical COM velocity at lift-off (m/s).
+    pub liftoff_com_velocity_mps: Option<f64>,
+    /// COM height at lift-off (m).
+    pub liftoff_com_height_m: Option<f64>,
+    /// Peak total vertical ground force / body weight.
+    pub peak_vertical_grf_bw: f64,
+    /// Apex COM height (m) and the standing COM height it is measured from.
+    pub apex_com_height_m: f64,
+    pub standing_com_height_m: f64,
+    pub final_time_s: f64,
+    pub steps: usize,
+    pub rejected_steps: usize,
+    pub f_evals: usize,
+    pub wall_time_s: f64,
+    pub integrator: String,
+    pub accuracy: f64,
+}
+
+/// A recorded trajectory: times, states, controls and ground forces.
+#[derive(Debug, Clone, Default)]
+pub struct Trajectory {
+    pub time: Vec<f64>,
+    pub states: Vec<Vec<f64>>,
+    pub controls: Vec<Vec<f64>>,
+    /// Per time: right and left foot force (ground on foot, N) and centre of
+    /// pressure on the ground (m): [Fx, Fy, Fz, px, py, pz] × 2.
+    pub grf: Vec<[f64; 12]>,
+}
+
+/// A simulation stopped early: the cause, where, and what was computed.
+#[derive(Debug, thiserror::Error)]
+#[error("integration failed at t = {t}: {cause}")]
+pub struct SimulationFailure {
+    pub t: f64,
+    pub state: Vec<f64>,
+    pub cause: String,
+    pub trajectory: Trajectory,
+}
+
+struct Rhs<'a, L: ForceLaws<f64>, E: ExcitationSource> {
+    eq: &'a StateEquation,
+    laws: &'a L,
+    exc: &'a E,
+    ws: StateWorkspace<f64>,
+    u: Vec<f64>,
+}
+
+impl<L: ForceLaws<f64>, E: ExcitationSource> OdeSystem for Rhs<'_, L, E> {
+    fn dim(&self) -> usize {
+        self.eq.nx()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        self.exc.at(t, &mut self.u);
+        self.eq.rhs(self.laws, &mut self.ws, x, &self.u, dx).map_err(|e| e.to_string())
+    }
+}
+
+/// Ground forces per foot from the workspace of the last evaluation.
+fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 12] {
+    let mut out = [0.0; 12];
+    let Some(contact) = &eq.model.contact else { return out };
+    let n = eq.nq();
+    let mut mbw = eq.multibody.workspace::<f64>();
+    eq.multibody.set_state(&mut mbw, &x[..n], &x[n..2 * n]);
+    let mut moment = [[0.0f64; 2]; 2]; // Σ x·Fy, Σ z·Fy per side
+    for (k, sp) in contact.spheres.iter().enumerate() {
+        let f = ws.sphere_force[k];
+        let side = if eq.model.bodies[sp.body].name.ends_with("_l") { 1 } else { 0 };
+        let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
+        let p = eq.multibody.point_position(&mbw, ci, [sp.location[0] + off[0], sp.location[1] + off[1], sp.location[2] + off[2]]);
+        for d in 0..3 {
+            out[6 * side + d] += f[d];
+        }
+        moment[side][0] += p[0] * f[1];
+        moment[side][1] += p[2] * f[1];
+    }
+    for side in 0..2 {
+        let fy = out[6 * side + 1];
+        if fy > 0.0 {
+            out[6 * side + 3] = moment[side][0] / fy;
+            out[6 * side + 5] = moment[side][1] / fy;
+        }
+    }
+    out
+}
+
+/// Options of a Rust-native forward simulation.
+#[derive(Debug, Clone, Copy)]
+pub struct SimulateOptions {
+    pub integrator: Dopri5Options,
+    /// Stop here if the jump has not reached its apex (s).
+    pub t_max: f64,
+}
+
+impl Default for SimulateOptions {
+    fn default() -> Self {
+        SimulateOptions { integrator: Dopri5Options::default(), t_max: 2.0 }
+    }
+}
+
+/// Integrate a jump with the Rust-native Dormand-Prince 5(4) from `x0`.
+pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
+    eq: &StateEquation,
+    laws: &L,
+    exc: &E,
+    x0: &[f64],
+    standing_com_height: f64,
+    opts: SimulateOptions,
+) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
+    let start = std::time::Instant::now();
+    let n = eq.nq();
+    let nm = eq.nm();
+    let mut sys = Rhs { eq, laws, exc, ws: eq.workspace(), u: vec![0.0; nm] };
+    let mut traj = Trajectory::default();
+    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| Box::new(SimulationFailure { t, state: x.to_vec(), cause, trajectory: traj });
+    let mut ig = match Dopri5::new(&mut sys, 0.0, x0, opts.integrator) {
+        Ok(ig) => ig,
+        Err(e) => return Err(fail(0.0, x0, e.to_string(), traj)),
+    };
+    let weight = eq.model.total_mass() * (eq.model.gravity[1].abs());
+    let record = |traj: &mut Trajectory, sys: &mut Rhs<'_, L, E>, t: f64, x: &[f64]| -> Result<f64, String> {
+        let mut dx = vec![0.0; x.len()];
+        sys.rhs(t, x, &mut dx)?;
+        let g = grf_of(sys.eq, &sys.ws, x);
+        traj.time.push(t);
+        traj.states.push(x.to_vec());
+        traj.controls.push(sys.u.clone());
+        traj.grf.push(g);
+        Ok(g[1] + g[7])
+    };
+    let mut peak_fy = match record(&mut traj, &mut sys, 0.0, x0) {
+        Ok(f) => f,
+        Err(e) => return Err(fail(0.0, x0, e, traj)),
+    };
+    let mut in_contact = peak_fy > 0.0;
+    let mut liftoff: Option<(f64, Vec<f64>)> = None;
+    let com = |x: &[f64]| -> ([f64; 3], [f64; 3]) {
+        let mut w = eq.multibody.workspace::<f64>();
+        eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
+        (eq.multibody.com_position(&w), eq.multibody.com_velocity(&w))
+    };
+    let mut apex = f64::NEG_INFINITY;
+    loop {
+        let t = match ig.step(&mut sys, opts.t_max) {
+            Ok(t) => t,
+            Err(e) => {
+                let (t, x) = (ig.t(), ig.x().to_vec());
+                let cause = match e {
+                    IntegrationError::Rhs { reason, .. } => reason,
+                    other => other.to_string(),
+                };
+                return Err(fail(t, &x, cause, traj));
+            }
+        };
+        let x = ig.x().to_vec();
+        let fy = match record(&mut traj, &mut sys, t, &x) {
+            Ok(f) => f,
+            Err(e) => return Err(fail(t, &x, e, traj)),
+        };
+        peak_fy = peak_fy.max(fy);
+        if fy > 0.0 {
+            in_contact = true;
+        }
+        if in_contact && liftoff.is_none() && fy <= 0.0 {
+            // Bisect on the dense output for the last instant with contact.
+            let (mut a, mut b) = (ig.t_prev(), t);
+            let mut xm = vec![0.0; x.len()];
+            let mut dx = vec![0.0; x.len()];
+            for _ in 0..40 {
+                let m = 0.5 * (a + b);
+                ig.dense(m, &mut xm);
+                if sys.rhs(m, &xm, &mut dx).is_err() {
+                    break;
+                }
+                let g = grf_of(eq, &sys.ws, &xm);
+                if g[1] + g[7] > 0.0 {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            ig.dense(b, &mut xm);
+            liftoff = Some((b, xm));
+        }
+        let (c, v) = com(&x);
+        if liftoff.is_some() {
+            apex = apex.max(c[1]);
+            if v[1] <= 0.0 || fy > 0.0 {
+                break;
+            }
+        }
+        if t >= opts.t_max {
+            apex = apex.max(c[1]);
+            break;
+        }
+    }
+    let (lt, lv, lh) = match &liftoff {
+        Some((t, xl)) => {
+            let (c, v) = com(xl);
+            (Some(*t), Some(v[1]), Some(c[1]))
+        }
+        None => (None, None, None),
+    };
+    // In flight the COM rises ballistically: apex from lift-off in closed form.
+    let g = eq.model.gravity[1].abs();
+    if let (Some(h), Some(v)) = (lh, lv) {
+        apex = apex.max(h + v.max(0.0) * v.max(0.0) / (2.0 * g));
+    }
+    let summary = JumpSummary {
+        jump_height_m: apex - standing_com_height,
+        liftoff_time_s: lt,
+        liftoff_com_velocity_mps: lv,
+        liftoff_com_height_m: lh,
+        peak_vertical_grf_bw: peak_fy / weight,
+        apex_com_height_m: apex,
+        standing_com_height_m: standing_com_height,
+        final_time_s: ig.t(),
+        steps: ig.stats.steps,
+        rejected_steps: ig.stats.rejected_steps,
+        f_evals: ig.stats.f_evals,
+        wall_time_s: start.elapsed().as_secs_f64(),
+        integrator: "Dormand-Prince 5(4) (Rust-native)".into(),
+        accuracy: opts.integrator.accuracy,
+    };
+    Ok((summary, traj))
+}
+
+/// Write states and controls (.sto, OpenSim 4 names) and ground reaction
+/// forces (.mot) of a trajectory into `dir` with file prefix `name`.
+pub fn write_trajectory(eq: &StateEquation, traj: &Trajectory, dir: &Path, name: &str) -> Result<Vec<std::path::PathBuf>, crate::io::StoError> {
+    let mut states = StoTable { name: None, ..Default::default() };
+    states.metadata.insert("inDegrees".into(), "no".into());
+    states.labels = eq.state_names();
+    states.time = traj.time.clone();
+    states.rows = traj.states.clone();
+    let mut controls = StoTable::default();
+    controls.metadata.insert("inDegrees".into(), "no".into());
+    controls.labels = eq.control_names();
+    controls.time = traj.time.clone();
+    controls.rows = traj.controls.clone();
+    let mut grf = StoTable { name: Some(format!("{name}_grf")), ..Default::default() };
+    for side in ["r", "l"] {
+        for l in ["vx", "vy", "vz", "px", "py", "pz"] {
+            grf.labels.push(format!("ground_force_{side}_{l}"));
+        }
+    }
+    grf.time = traj.time.clone();
+    grf.rows = traj.grf.iter().map(|g| g.to_vec()).collect();
+    let paths = [dir.join(format!("{name}_states.sto")), dir.join(format!("{name}_controls.sto")), dir.join(format!("{name}_grf.mot"))];
+    states.write_sto(&paths[0])?;
+    controls.write_sto(&paths[1])?;
+    grf.write_mot(&paths[2])?;
+    Ok(paths.to_vec())
+}
