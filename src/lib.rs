@@ -19,6 +19,7 @@ pub mod bench;
 pub mod io;
 pub mod integrator;
 pub mod ode;
+pub mod laws;
 pub mod simulate;
 pub mod muscle;
 pub mod contact;

@@ -1,0 +1,351 @@
+//! OpenSim's force laws for the state equation: Thelen2003Muscle with
+//! first-order activation, HuntCrossleyForce and SmoothSphereHalfSpaceForce
+//! for sphere-ground contact, and exponential passive joint torques,
+//! generic over the scalar type. Equations and their sources are in
+//! `shared/reference/model-equations.md` (§1.1, §2.2-§2.7, §4.2-§4.3, §5.3).
+
+use crate::model::{ContactLaw, ContactSpec, Model, MuscleModel, MuscleSpec};
+use crate::ode::{ForceLaws, MuscleRates};
+use crate::scalar::{c, Scalar};
+
+/// Thelen's maximum pennation angle, acos(0.1) (OpenSim 3.2 `buildMuscle`).
+const MAX_PENNATION: f64 = 1.4706289056333368;
+/// Thelen's minimum activation (3.2: fixed; 4.x `minimum_activation`).
+pub const MIN_ACTIVATION: f64 = 0.01;
+/// Thelen's force-velocity extrapolation threshold (default, absent in 3.x files).
+const FV_THRESHOLD: f64 = 0.95;
+
+/// Thelen2003Muscle with its constants precomputed.
+#[derive(Debug, Clone)]
+pub struct Thelen {
+    pub f0: f64,
+    pub lopt: f64,
+    pub lts: f64,
+    pub vmax: f64,
+    pub tau_act: f64,
+    pub tau_deact: f64,
+    #[allow(dead_code)]
+    e0_t: f64,
+    e0_m: f64,
+    gamma: f64,
+    kpe: f64,
+    af: f64,
+    flen: f64,
+    /// Parallelogram height l_o·sin φ_o and minimum fibre length.
+    height: f64,
+    pub min_fiber_length: f64,
+    pennated: bool,
+    e_toe: f64,
+    k_lin: f64,
+}
+
+/// Everything Thelen2003Muscle computes at one state (OpenSim's names).
+#[derive(Debug, Clone, Copy)]
+pub struct ThelenInfo<S> {
+    pub activation_rate: S,
+    pub fiber_velocity: S,
+    pub fiber_length: S,
+    pub pennation_angle: S,
+    pub tendon_length: S,
+    pub tendon_force: S,
+    pub active_fiber_force: S,
+    pub passive_fiber_force: S,
+    pub normalized_fiber_length: S,
+    pub normalized_fiber_velocity: S,
+    pub active_force_length_multiplier: S,
+    pub force_velocity_multiplier: S,
+    pub fiber_clamped: bool,
+}
+
+impl Thelen {
+    pub fn new(m: &MuscleSpec) -> Self {
+        let e = std::f64::consts::E;
+        let e3 = e * e * e;
+        let e_toe = 99.0 * m.FmaxTendonStrain * e3 / (166.0 * e3 - 67.0);
+        let height = m.optimal_fiber_length * m.pennation_angle_at_optimal.sin();
+        Thelen {
+            f0: m.max_isometric_force,
+            lopt: m.optimal_fiber_length,
+            lts: m.tendon_slack_length,
+            vmax: m.max_contraction_velocity,
+            tau_act: m.activation_time_constant,
+            tau_deact: m.deactivation_time_constant,
+            e0_t: m.FmaxTendonStrain,
+            e0_m: m.FmaxMuscleStrain,
+            gamma: m.KshapeActive,
+            kpe: m.KshapePassive,
+            af: m.Af,
+            flen: m.Flen,
+            height,
+            min_fiber_length: height / MAX_PENNATION.sin(),
+            pennated: m.pennation_angle_at_optimal > f64::EPSILON,
+            e_toe,
+            k_lin: 0.67 / (m.FmaxTendonStrain - e_toe),
+        }
+    }
+
+    /// Active force-length multiplier (Gaussian).
+    pub fn fal<S: Scalar>(&self, ln: S) -> S {
+        let d = ln - 1.0;
+        (-(d * d) / self.gamma).exp()
+    }
+
+    /// Passive force-length multiplier.
+    pub fn fpe<S: Scalar>(&self, ln: S) -> S {
+        if ln.re() <= 1.0 {
+            S::zero()
+        } else {
+            (((ln - 1.0) * (self.kpe / self.e0_m)).exp() - 1.0) / (self.kpe.exp() - 1.0)
+        }
+    }
+
+    /// Tendon force-strain multiplier with Thelen's exact toe constants.
+    pub fn fse<S: Scalar>(&self, strain: S) -> S {
+        let ftoe = 0.33;
+        let ktoe = 3.0;
+        if strain.re() <= 0.0 {
+            S::zero()
+        } else if strain.re() <= self.e_toe {
+            ((strain * (ktoe / self.e_toe)).exp() - 1.0) * (ftoe / (ktoe.exp() - 1.0))
+        } else {
+            (strain - self.e_toe) * self.k_lin + ftoe
+        }
+    }
+
+    /// Pennation angle at fibre length `lm` (already clamped to l_min).
+    fn pennation<S: Scalar>(&self, lm: S) -> S {
+        if !self.pennated {
+            return S::zero();
+        }
+        let s = lm.recip() * self.height;
+        if lm.re() > self.min_fiber_length && s.re() < MAX_PENNATION.sin() {
+            s.asin()
+        } else {
+            c(MAX_PENNATION)
+        }
+    }
+
+    /// Normalised fibre velocity from Thelen's inverted force-velocity curve
+    /// with linear extrapolation (`calcdlceN`).
+    fn dlce_n<S: Scalar>(&self, act: S, fal: S, f: S) -> S {
+        let a_big = act * fal;
+        let k = act * 0.75 + 0.25;
+        let (af, flen) = (self.af, self.flen);
+        let b_of = |f: S| -> (S, S) {
+            if f.re() <= a_big.re() {
+                (a_big + f / af, c(1.0 / af))
+            } else {
+                ((a_big * flen - f) * ((2.0 + 2.0 / af) / (flen - 1.0)), c(-(2.0 + 2.0 / af) / (flen - 1.0)))
+            }
+        };
+        let knee = a_big * (FV_THRESHOLD * flen);
+        if f.re() > 0.0 && f.re() < knee.re() {
+            let (b, _) = b_of(f);
+            k * (f - a_big) / b
+        } else {
+            let f0 = if f.re() <= 0.0 { S::zero() } else { knee };
+            let (b0, db0) = b_of(f0);
+            let g0 = k * (f0 - a_big) / b0;
+            let slope = k / b0 - k * (f0 - a_big) * db0 / (b0 * b0);
+            g0 + slope * (f - f0)
+        }
+    }
+
+    /// Activation rate (OpenSim 4.x: excitation not clamped; §1.1).
+    pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let tau = if u.re() > ac.re() { (ac * 1.5 + 0.5) * self.tau_act } else { (ac * 1.5 + 0.5).recip() * self.tau_deact };
+        (u - ac) / tau
+    }
+
+    /// The muscle's state derivatives and outputs (§2.2-§2.6).
+    pub fn calc<S: Scalar>(&self, a: S, lm_state: S, lmt: S, _vmt: S, u: S) -> ThelenInfo<S> {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let lm = if lm_state.re() < self.min_fiber_length { c(self.min_fiber_length) } else { lm_state };
+        let phi = self.pennation(lm);
+        let cos_phi = phi.cos();
+        let lt = lmt - lm * cos_phi;
+        let ln = lm / self.lopt;
+        let fse = self.fse(lt / self.lts - 1.0);
+        let fal = self.fal(ln);
+        let fpe = self.fpe(ln);
+        let f = fse / cos_phi - fpe;
+        let mut vn = self.dlce_n(ac, fal, f);
+        let clamped = lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0;
+        if clamped {
+            vn = S::zero();
+        }
+        let fv = if clamped { S::one() } else { f / (ac * fal) };
+        ThelenInfo {
+            activation_rate: self.activation_rate(a, u),
+            fiber_velocity: vn * (self.vmax * self.lopt),
+            fiber_length: lm,
+            pennation_angle: phi,
+            tendon_length: lt,
+            tendon_force: fse * self.f0,
+            active_fiber_force: if clamped { S::zero() } else { ac * fal * fv * self.f0 },
+            passive_fiber_force: if clamped { S::zero() } else { fpe * self.f0 },
+            normalized_fiber_length: ln,
+            normalized_fiber_velocity: vn,
+            active_force_length_multiplier: fal,
+            force_velocity_multiplier: fv,
+            fiber_clamped: clamped,
+        }
+    }
+
+    /// Fibre length in static equilibrium (v_MT = 0, so f_v = 1) at
+    /// activation `a` and muscle-tendon length `lmt`: the root of
+    /// (a·f_al + f_pe)·cos φ = f_se, by bisection (OpenSim's
+    /// `computeInitialFiberEquilibrium` solves the same equation, §2.7).
+    pub fn equilibrium_fiber_length(&self, a: f64, lmt: f64) -> f64 {
+        let ac = a.clamp(MIN_ACTIVATION, 1.0);
+        let resid = |lm: f64| {
+            let phi: f64 = self.pennation(lm);
+            let lt = lmt - lm * phi.cos();
+            let ln = lm / self.lopt;
+            (ac * self.fal(ln) + self.fpe(ln)) * phi.cos() - self.fse(lt / self.lts - 1.0)
+        };
+        // Residual rises with l_M (the tendon shortens): bracket and bisect.
+        let mut lo = self.min_fiber_length.max(1e-6 * self.lopt);
+        let mut hi = lmt.max(lo * 2.0);
+        if resid(lo) > 0.0 {
+            return lo;
+        }
+        if resid(hi) < 0.0 {
+            return hi;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if resid(mid) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+            if hi - lo < 1e-15 * self.lopt {
+                break;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+fn clamp<S: Scalar>(x: S, lo: f64, hi: f64) -> S {
+    if x.re() < lo {
+        c(lo)
+    } else if x.re() > hi {
+        c(hi)
+    } else {
+        x
+    }
+}
+
+/// Force on a sphere of radius `r` from the ground half-space (normal +y)
+/// and its point of application, for the contact law of `spec` (§4.2-§4.3).
+/// One contact element per sphere, so HuntCrossleyForce's "return" quirk
+/// across spheres does not arise.
+pub fn sphere_ground_force<S: Scalar>(spec: &ContactSpec, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+    let depth = p[1] * -1.0 + r;
+    // v_n: penetration rate (the sphere moving into the ground).
+    let vn = v[1] * -1.0;
+    let (mus, mud, muv, vt) = (spec.static_friction, spec.dynamic_friction, spec.viscous_friction, spec.transition_velocity);
+    let k = 0.5 * spec.stiffness.powf(2.0 / 3.0);
+    let point = [p[0], p[1] - (depth * -0.5 + r), p[2]];
+    match spec.law {
+        ContactLaw::HuntCrossleyForce => {
+            if depth.re() <= 0.0 {
+                return ([S::zero(); 3], point);
+            }
+            let fh = (depth * r).sqrt() * depth * (4.0 / 3.0 * k * k.sqrt());
+            let f = fh * (vn * (1.5 * spec.dissipation) + 1.0);
+            if f.re() <= 0.0 {
+                return ([S::zero(); 3], point);
+            }
+            let vs2 = v[0] * v[0] + v[2] * v[2];
+            if vs2.re() == 0.0 {
+                return ([S::zero(), f, S::zero()], point);
+            }
+            let vs = vs2.sqrt();
+            let vr = vs / vt;
+            let ff = f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
+            ([v[0] / vs * -ff, f, v[2] / vs * -ff], point)
+        }
+        ContactLaw::SmoothSphereHalfSpaceForce => {
+            let cf = spec.derivative_smoothing.unwrap_or(1e-5);
+            let bd = spec.hertz_smoothing.unwrap_or(300.0);
+            let bv = spec.hunt_crossley_smoothing.unwrap_or(50.0);
+            let d2 = (depth * depth + cf).sqrt();
+            let fh = d2 * d2.sqrt() * (4.0 / 3.0 * k * (r * k).sqrt()) * ((depth * bd).tanh() * 0.5 + 0.5);
+            let shift = if spec.dissipation == 0.0 { f64::INFINITY } else { 2.0 / (3.0 * spec.dissipation) };
+            let sw = if shift.is_infinite() { S::one() } else { ((vn + shift) * bv).tanh() * 0.5 + 0.5 };
+            let f = fh * (vn * (1.5 * spec.dissipation) + 1.0) * sw;
+            let vs = (v[0] * v[0] + v[2] * v[2] + cf).sqrt();
+            let vr = vs / vt;
+            let ff = f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
+            ([v[0] / vs * -ff, f, v[2] / vs * -ff], point)
+        }
+    }
+}
+
+fn min1<S: Scalar>(x: S) -> S {
+    if x.re() < 1.0 {
+        x
+    } else {
+        S::one()
+    }
+}
+
+/// Anderson & Pandy's exponential passive torque with damping (§5.3).
+pub fn passive_torque<S: Scalar>(l: &crate::model::LigamentSpec, q: S, qd: S) -> S {
+    ((q - l.theta2) * l.k2).exp() * l.k1 + ((q - l.theta1) * l.k4).exp() * l.k3 - qd * l.damping
+}
+
+/// The laws a model file names, ready for the state equation.
+#[derive(Debug, Clone)]
+pub struct OpenSimLaws {
+    pub muscles: Vec<Thelen>,
+    contact: Option<ContactSpec>,
+    radii: Vec<f64>,
+    ligaments: Vec<crate::model::LigamentSpec>,
+}
+
+/// The model asks for a law leap does not have.
+#[derive(Debug, Clone, thiserror::Error)]
+#[error("{0}")]
+pub struct UnsupportedLaw(pub String);
+
+impl OpenSimLaws {
+    pub fn new(model: &Model) -> Result<Self, UnsupportedLaw> {
+        if model.muscle_model != MuscleModel::Thelen2003Muscle {
+            return Err(UnsupportedLaw(format!(
+                "{}: forces.muscle_model: {:?} is not available in the state equation yet; use Thelen2003Muscle",
+                model.file.display(),
+                model.muscle_model
+            )));
+        }
+        Ok(OpenSimLaws {
+            muscles: model.muscles.iter().map(|m| Thelen::new(&m.spec)).collect(),
+            contact: model.contact.as_ref().map(|c| c.spec.clone()),
+            radii: model.contact.as_ref().map(|c| c.spheres.iter().map(|s| s.radius).collect()).unwrap_or_default(),
+            ligaments: model.ligaments.iter().map(|l| l.spec.clone()).collect(),
+        })
+    }
+}
+
+impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
+    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
+        let info = self.muscles[m].calc(a, lm, lmt, vmt, u);
+        if !info.fiber_velocity.re().is_finite() || !info.tendon_force.re().is_finite() {
+            return Err(format!("non-finite fibre velocity or tendon force (a = {}, l_M = {}, l_MT = {})", a.re(), lm.re(), lmt.re()));
+        }
+        Ok(MuscleRates { tendon_force: info.tendon_force, fiber_velocity: info.fiber_velocity, activation_rate: info.activation_rate })
+    }
+    fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+        match &self.contact {
+            Some(spec) => sphere_ground_force(spec, self.radii[k], p, v),
+            None => ([S::zero(); 3], p),
+        }
+    }
+    fn ligament(&self, l: usize, q: S, qd: S) -> S {
+        passive_torque(&self.ligaments[l], q, qd)
+    }
+}

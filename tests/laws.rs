@@ -1,0 +1,107 @@
+//! OpenSim's force laws against OpenSim 4.6's own numbers
+//! (model-equations.md §8, tests/data/thelen_opensim46.json) and against
+//! their closed forms.
+
+use leap::laws::{passive_torque, sphere_ground_force, Thelen};
+use leap::model::{ContactLaw, ContactSpec, LigamentSpec, MuscleSpec};
+
+fn muscle(phi0: f64, p: &serde_json::Value) -> MuscleSpec {
+    MuscleSpec {
+        name: "m".into(),
+        max_isometric_force: 1000.0,
+        optimal_fiber_length: 0.1,
+        tendon_slack_length: 0.2,
+        pennation_angle_at_optimal: phi0,
+        max_contraction_velocity: 10.0,
+        activation_time_constant: p["activation_time_constant"].as_f64().unwrap(),
+        deactivation_time_constant: p["deactivation_time_constant"].as_f64().unwrap(),
+        FmaxTendonStrain: p["FmaxTendonStrain"].as_f64().unwrap(),
+        FmaxMuscleStrain: 0.6,
+        KshapeActive: p["KshapeActive"].as_f64().unwrap(),
+        KshapePassive: p["KshapePassive"].as_f64().unwrap(),
+        Af: p["Af"].as_f64().unwrap(),
+        Flen: p["Flen"].as_f64().unwrap(),
+        path: vec![],
+    }
+}
+
+/// Relative error with an absolute floor (the tables carry 10 significant
+/// digits; zero entries are exact zeros in OpenSim).
+fn close(a: f64, b: f64, floor: f64) -> bool {
+    (a - b).abs() <= 2e-9 * b.abs().max(floor)
+}
+
+#[test]
+fn thelen_matches_opensim_46_tables() {
+    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap()).unwrap();
+    for set in ["defaults", "legacy"] {
+        let d = &data[set];
+        for row in d["rows"].as_array().unwrap() {
+            let r: Vec<f64> = row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let th = Thelen::new(&muscle(r[0], &d["params"]));
+            let info = th.calc(r[4], r[3], r[1], r[2], r[5]);
+            let ctx = format!("{set} {r:?}");
+            assert!(close(info.tendon_force, r[6], 1e-6), "F_T {} ({ctx})", info.tendon_force);
+            assert!(close(info.fiber_velocity, r[7], 1e-6), "v_M {} ({ctx})", info.fiber_velocity);
+            assert!(close(info.force_velocity_multiplier, r[8], 1e-6), "f_v {} ({ctx})", info.force_velocity_multiplier);
+            assert!(close(info.pennation_angle, r[9], 1e-6), "phi {} ({ctx})", info.pennation_angle);
+            assert!(close(info.activation_rate, r[10], 1e-6), "da/dt {} ({ctx})", info.activation_rate);
+        }
+        for row in d["equilibrium"].as_array().unwrap() {
+            let r: Vec<f64> = row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let th = Thelen::new(&muscle(r[0], &d["params"]));
+            let lm = th.equilibrium_fiber_length(r[2], r[1]);
+            // OpenSim's equilibrium solver stops at a force residual of
+            // 1e-8·F0, so its l_M is good to about 1e-9 m (§2.7).
+            assert!((lm - r[3]).abs() < 2e-9, "{set} equilibrium l_M {lm} vs {} ({r:?})", r[3]);
+            let info = th.calc(r[2], lm, r[1], 0.0, r[2]);
+            assert!((info.tendon_force - r[4]).abs() < 1e-5 * r[4].max(1.0), "{set} equilibrium F_T {} vs {}", info.tendon_force, r[4]);
+            assert!(info.fiber_velocity.abs() < 1e-9, "equilibrium fibre velocity {}", info.fiber_velocity);
+        }
+    }
+}
+
+/// Hunt-Crossley in closed form: f = (4/3)·√R·(E/2^{3/2})·δ^{3/2}·(1 + 1.5 c v_n),
+/// friction μ·f·min(v_s/v_t, 1) with μ_s = μ_d (model-equations.md §4.2).
+#[test]
+fn hunt_crossley_closed_form() {
+    let spec = ContactSpec {
+        law: ContactLaw::HuntCrossleyForce,
+        stiffness: 1e7,
+        dissipation: 0.5,
+        static_friction: 0.8,
+        dynamic_friction: 0.8,
+        viscous_friction: 0.0,
+        transition_velocity: 0.01,
+        hertz_smoothing: None,
+        hunt_crossley_smoothing: None,
+        derivative_smoothing: None,
+        spheres: vec![],
+    };
+    let r = 0.05;
+    for (depth, vy, vx) in [(0.001, 0.0, 0.0), (0.002, -0.3, 0.005), (0.004, 0.2, -0.5)] {
+        let p = [0.3, r - depth, 0.1];
+        let (f, at) = sphere_ground_force(&spec, r, p, [vx, vy, 0.0]);
+        let fh = 4.0 / 3.0 * r.sqrt() * (1e7 / 2f64.powf(1.5)) * depth.powf(1.5);
+        let fy = fh * (1.0 + 1.5 * 0.5 * (-vy));
+        assert!((f[1] - fy).abs() < 1e-10 * fy, "{} vs {fy}", f[1]);
+        let fx = -(vx.signum()) * 0.8 * fy * (vx.abs() / 0.01).min(1.0);
+        assert!((f[0] - fx).abs() < 1e-10 * fy, "{} vs {fx}", f[0]);
+        assert!((at[1] - (-depth / 2.0)).abs() < 1e-15, "contact point mid-overlap");
+    }
+    // Out of contact, or separating fast enough: no force.
+    assert_eq!(sphere_ground_force(&spec, r, [0.0, r + 1e-6, 0.0], [0.0, 0.0, 0.0]).0, [0.0; 3]);
+    assert_eq!(sphere_ground_force(&spec, r, [0.0, r - 1e-3, 0.0], [0.0, 3.0, 0.0]).0[1], 0.0);
+}
+
+/// model-equations.md §8.4: OpenSim 4.6 HuntCrossleyForce values.
+#[test]
+fn passive_torque_is_the_anderson_pandy_exponential() {
+    let l = LigamentSpec { coordinate: "knee_angle_r".into(), k1: -6.09, k2: 33.94, k3: 11.03, k4: -11.33, theta1: -2.4, theta2: 0.13, damping: 0.1 };
+    // Sign check of model-data.md §9: at q = 0.13 the first term is −6.09 N·m.
+    let t: f64 = passive_torque(&l, 0.13, 0.0);
+    assert!((t - (-6.09 + 11.03 * (-11.33f64 * (0.13 + 2.4)).exp())).abs() < 1e-12);
+    let t2: f64 = passive_torque(&l, -1.0, 2.0);
+    let want = -6.09 * (33.94f64 * (-1.0 - 0.13)).exp() + 11.03 * (-11.33f64 * (-1.0 + 2.4)).exp() - 0.2;
+    assert!((t2 - want).abs() < 1e-12);
+}
