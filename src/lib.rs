@@ -21,6 +21,7 @@ pub mod integrator;
 pub mod ode;
 pub mod laws;
 pub mod simulate;
+pub mod squat;
 pub mod muscle;
 pub mod contact;
 pub mod ligament;
