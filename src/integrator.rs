@@ -131,6 +131,7 @@ impl Dopri5 {
     pub fn step<S: OdeSystem>(&mut self, sys: &mut S, t_end: f64) -> Result<f64, IntegrationError> {
         let n = self.x.len();
         let tol = self.options.accuracy;
+        let mut stage_error: Option<(f64, String)> = None;
         loop {
             if self.stats.steps + self.stats.rejected_steps >= self.options.max_steps {
                 return Err(IntegrationError::TooManySteps { t: self.t, max_steps: self.options.max_steps });
@@ -151,22 +152,36 @@ impl Dopri5 {
                 if s == 6 {
                     self.xnew.copy_from_slice(&self.xs);
                 }
-                let (head, tail) = self.k.split_at_mut(s);
-                let _ = head;
-                sys.rhs(self.t + C[s] * h, &self.xs, &mut tail[0]).map_err(|reason| IntegrationError::Rhs { t: self.t + C[s] * h, reason })?;
+                let (_, tail) = self.k.split_at_mut(s);
                 self.stats.f_evals += 1;
+                if let Err(reason) = sys.rhs(self.t + C[s] * h, &self.xs, &mut tail[0]) {
+                    // A trial state the model rejects (e.g. a fibre out of
+                    // range) fails the step, as in Simbody: retry smaller.
+                    stage_error = Some((self.t + C[s] * h, reason));
+                    break;
+                }
             }
-            // Error estimate (the 7th stage is f at the new point: FSAL).
-            let mut err2 = 0.0;
+            if let Some((t_fail, reason)) = stage_error.take() {
+                self.stats.rejected_steps += 1;
+                let hn = h * 0.25;
+                if hn < self.options.min_step {
+                    return Err(IntegrationError::Rhs { t: t_fail, reason });
+                }
+                self.h = hn;
+                continue;
+            }
+            // Error estimate (the 7th stage is f at the new point: FSAL), in
+            // the max norm so that one stiff component (a fibre at low
+            // activation) cannot hide among the others.
+            let mut err: f64 = 0.0;
             for i in 0..n {
                 let mut e = 0.0;
                 for s in 0..7 {
                     e += E[s] * self.k[s][i];
                 }
                 let sc = tol + tol * self.x[i].abs().max(self.xnew[i].abs());
-                err2 += (h * e / sc).powi(2);
+                err = err.max((h * e / sc).abs());
             }
-            let err = (err2 / n.max(1) as f64).sqrt();
             let finite = err.is_finite() && self.xnew.iter().all(|v| v.is_finite());
             if finite && err <= 1.0 {
                 self.t_prev = self.t;

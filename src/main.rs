@@ -29,6 +29,34 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Forward simulation of the jump from the static squat (OpenSim's
+    /// ForwardTool): excitations from a controls file or the bang-bang pattern.
+    Simulate {
+        /// Study file (JSON); command-line options override it.
+        #[arg(long)]
+        study: Option<PathBuf>,
+        #[arg(long)]
+        model: Option<PathBuf>,
+        /// OpenSim controls (.sto) or Moco solution with /forceset/<muscle> columns.
+        #[arg(long)]
+        controls: Option<PathBuf>,
+        /// RungeKuttaMerson (default), RungeKuttaFeldberg, RungeKutta3, CPodes,
+        /// ExplicitEuler (Simbody) or DormandPrince (Rust-native).
+        #[arg(long)]
+        integrator: Option<String>,
+        /// Integrator accuracy (ExplicitEuler: fixed step in s). Default 1e-5.
+        #[arg(long)]
+        accuracy: Option<f64>,
+        /// Stop time if the apex is not reached (s).
+        #[arg(long)]
+        t_max: Option<f64>,
+        /// Results directory (default results/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Print one JSON object.
+        #[arg(long)]
+        json: bool,
+    },
     /// Benchmarks that print tables (medians of repeated batches).
     Bench {
         #[command(subcommand)]
@@ -75,6 +103,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(if report.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
         }
+        Command::Simulate { study, model, controls, integrator, accuracy, t_max, out, json } => {
+            simulate(study, model, controls, integrator, accuracy, t_max, out, json)
+        }
         Command::Bench { which: BenchCommand::Dynamics { model, json } } => {
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::dynamics(&m)?;
@@ -84,6 +115,128 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 println!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
+        }
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn simulate(
+    study: Option<PathBuf>,
+    model: Option<PathBuf>,
+    controls: Option<PathBuf>,
+    integrator: Option<String>,
+    accuracy: Option<f64>,
+    t_max: Option<f64>,
+    out: Option<PathBuf>,
+    json: bool,
+) -> Result<ExitCode> {
+    use leap::simulate::*;
+    use std::sync::Arc;
+    // Study file first (paths relative to it), then command-line overrides.
+    let (mut st, base) = match &study {
+        Some(p) => {
+            let text = std::fs::read_to_string(p).with_context(|| format!("{}: cannot read the study file", p.display()))?;
+            let de = &mut serde_json::Deserializer::from_str(&text);
+            let st: SimulateStudy = serde_path_to_error::deserialize(de).map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?;
+            (st, p.parent().map(|d| d.to_path_buf()).unwrap_or_default())
+        }
+        None => (SimulateStudy::default(), PathBuf::new()),
+    };
+    let rel = |s: &str| -> PathBuf { if study.is_some() { base.join(s) } else { PathBuf::from(s) } };
+    let model_path = model.unwrap_or_else(|| rel(&st.model));
+    let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
+    let out_dir = out.unwrap_or_else(|| rel(&st.out));
+    if let Some(i) = integrator {
+        st.integrator = i;
+    }
+    if let Some(a) = accuracy {
+        st.accuracy = a;
+    }
+    if let Some(t) = t_max {
+        st.t_max = t;
+    }
+    let where_ = study.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default();
+    if !(st.accuracy.is_finite() && st.accuracy > 0.0) {
+        anyhow::bail!("{where_}accuracy: must be positive, got {}", st.accuracy);
+    }
+    if !(st.t_max.is_finite() && st.t_max > 0.0) {
+        anyhow::bail!("{where_}t_max: must be positive, got {}", st.t_max);
+    }
+    if !(st.report_interval.is_finite() && st.report_interval > 0.0) {
+        anyhow::bail!("{where_}report_interval: must be positive, got {}", st.report_interval);
+    }
+    let choice = parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
+    let m = leap::model::Model::from_file(&model_path)?;
+    let laws = leap::laws::OpenSimLaws::new(&m)?;
+    let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
+    let pose = m.poses.get("squat").cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: the model has no 'squat' pose to start from", model_path.display()))?;
+    let squat = leap::squat::static_squat(&eq, &laws, &pose)?;
+    let names: Vec<&str> = eq.muscles.iter().map(|&k| m.muscles[k].spec.name.as_str()).collect();
+    let exc = match &controls_path {
+        Some(p) => StudyExcitation::Controls(leap::io::Controls::from_file(p, &names)?),
+        None => {
+            let bb = st.bang_bang.clone().unwrap_or(BangBangSpec { on: None, on_time: 0.0, off_time: f64::INFINITY });
+            let on: Vec<bool> = match &bb.on {
+                Some(list) => {
+                    for n in list {
+                        if !names.contains(&n.as_str()) {
+                            anyhow::bail!("{where_}bang_bang.on: unknown muscle '{n}' (the symmetric model's muscles are {})", names.join(", "));
+                        }
+                    }
+                    names.iter().map(|n| list.iter().any(|l| l == n)).collect()
+                }
+                None => extensor_moments(&eq, &pose).iter().map(|&e| e > 0.0).collect(),
+            };
+            StudyExcitation::BangBang(BangBang {
+                intervals: on.iter().map(|&o| if o { Some((bb.on_time, bb.off_time)) } else { None }).collect(),
+                off_level: leap::laws::MIN_ACTIVATION,
+            })
+        }
+    };
+    let standing = standing_com_height(&eq);
+    let result = match choice {
+        IntegratorChoice::DormandPrince => {
+            let opts = SimulateOptions { integrator: leap::integrator::Dopri5Options { accuracy: st.accuracy, ..Default::default() }, t_max: st.t_max };
+            simulate_rust(&eq, &laws, &exc, &squat.x, standing, opts)
+        }
+        IntegratorChoice::Simbody(which) => {
+            simulate_simbody(&Arc::new(eq.clone()), &Arc::new(laws.clone()), &exc, &squat.x, standing, which, st.accuracy, st.t_max, st.report_interval)
+        }
+    };
+    std::fs::create_dir_all(&out_dir).with_context(|| format!("{}: cannot create the results directory", out_dir.display()))?;
+    match result {
+        Ok((summary, traj)) => {
+            let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
+            let mut v = serde_json::to_value(&summary)?;
+            v["files"] = serde_json::json!(files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
+            v["static_squat_max_abs_qdd"] = serde_json::json!(squat.max_abs_qdd);
+            std::fs::write(out_dir.join("jump_summary.json"), serde_json::to_string_pretty(&v)?)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&v)?);
+            } else {
+                let f = |o: Option<f64>, scale: f64, unit: &str| o.map(|v| format!("{:.3} {unit}", v * scale)).unwrap_or_else(|| "-".into());
+                println!("forward jump ({}, accuracy {:e}) from the static squat", summary.integrator, summary.accuracy);
+                println!("  jump height            {:.1} cm", 100.0 * summary.jump_height_m);
+                println!("  lift-off time          {}", f(summary.liftoff_time_s, 1.0, "s"));
+                println!("  lift-off COM velocity  {}", f(summary.liftoff_com_velocity_mps, 1.0, "m/s"));
+                println!("  peak vertical GRF      {:.2} BW", summary.peak_vertical_grf_bw);
+                println!("  steps {} (rejected {}), f evaluations {}, wall {:.3} s", summary.steps, summary.rejected_steps, summary.f_evals, summary.wall_time_s);
+                println!("  results in {}", out_dir.display());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Err(failure) => {
+            let files = write_trajectory(&eq, &failure.trajectory, &out_dir, "jump")?;
+            let names = eq.state_names();
+            let state: serde_json::Map<String, serde_json::Value> = names.iter().zip(&failure.state).map(|(n, v)| (n.clone(), serde_json::json!(v))).collect();
+            let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
+                "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>()});
+            std::fs::write(out_dir.join("jump_summary.json"), serde_json::to_string_pretty(&v)?)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&v)?);
+            }
+            eprintln!("error: integration failed at t = {} s: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
+            Ok(ExitCode::from(1))
         }
     }
 }

@@ -132,6 +132,10 @@ impl<L: ForceLaws<f64>, E: ExcitationSource> OdeSystem for Rhs<'_, L, E> {
     }
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
         self.exc.at(t, &mut self.u);
+        // OpenSim 4: Thelen's min_control is its minimum activation.
+        for v in self.u.iter_mut() {
+            *v = v.clamp(crate::laws::MIN_ACTIVATION, 1.0);
+        }
         self.eq.rhs(self.laws, &mut self.ws, x, &self.u, dx).map_err(|e| e.to_string())
     }
 }
@@ -332,4 +336,321 @@ pub fn write_trajectory(eq: &StateEquation, traj: &Trajectory, dir: &Path, name:
     controls.write_sto(&paths[1])?;
     grf.write_mot(&paths[2])?;
     Ok(paths.to_vec())
+}
+
+/// Integrate a jump with one of Simbody's integrators (the Simbody backend
+/// of the state equation), recording every `report_interval` seconds.
+/// Lift-off is located to within the report interval by bisection on a
+/// re-integration from the last report before it.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
+    eq: &std::sync::Arc<StateEquation>,
+    laws: &std::sync::Arc<crate::laws::OpenSimLaws>,
+    exc: &E,
+    x0: &[f64],
+    standing_com_height: f64,
+    integrator: crate::simbody::SimbodyIntegrator,
+    accuracy: f64,
+    t_max: f64,
+    report_interval: f64,
+) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
+    use crate::ode::{Excitation, SimbodyStateEquation};
+    let start = std::time::Instant::now();
+    let n = eq.nq();
+    let nm = eq.nm();
+    let mut traj = Trajectory::default();
+    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| Box::new(SimulationFailure { t, state: x.to_vec(), cause, trajectory: traj });
+    let mut sb = match SimbodyStateEquation::new(eq.clone(), laws.clone()) {
+        Ok(s) => s,
+        Err(e) => return Err(fail(0.0, x0, e.to_string(), traj)),
+    };
+    let e2 = exc.clone();
+    sb.set_excitation(Excitation::OfTime(Box::new(move |t, u| {
+        e2.at(t, u);
+        for v in u.iter_mut() {
+            *v = v.clamp(crate::laws::MIN_ACTIVATION, 1.0);
+        }
+    })));
+    // Ground forces at a state, from the Rust-native evaluation of the same
+    // equation (checked against Simbody by `leap crosscheck`).
+    let mut ws = eq.workspace::<f64>();
+    let mut u = vec![0.0; nm];
+    let mut dx = vec![0.0; eq.nx()];
+    let mut grf_at = |t: f64, x: &[f64], u: &mut Vec<f64>| -> Result<[f64; 12], String> {
+        exc.at(t, u);
+        for v in u.iter_mut() {
+            *v = v.clamp(crate::laws::MIN_ACTIVATION, 1.0);
+        }
+        eq.rhs(&**laws, &mut ws, x, u, &mut dx).map_err(|e| e.to_string())?;
+        Ok(grf_of(eq, &ws, x))
+    };
+    let start_at = |sb: &mut SimbodyStateEquation, t: f64, x: &[f64]| -> Result<(), String> {
+        sb.set_state(t, x).map_err(|e| e.to_string())?;
+        sb.simbody.set_applied_forces(&vec![0.0; n], &[]).map_err(|e| e.to_string())?;
+        sb.simbody.integration_start(integrator, accuracy, 1e-8, 1.0).map_err(|e| e.to_string())
+    };
+    if let Err(e) = start_at(&mut sb, 0.0, x0) {
+        return Err(fail(0.0, x0, e, traj));
+    }
+    let weight = eq.model.total_mass() * eq.model.gravity[1].abs();
+    let mut x = x0.to_vec();
+    let mut t = 0.0;
+    let g0 = match grf_at(0.0, &x, &mut u) {
+        Ok(g) => g,
+        Err(e) => return Err(fail(0.0, &x, e, traj)),
+    };
+    traj.time.push(0.0);
+    traj.states.push(x.clone());
+    traj.controls.push(u.clone());
+    traj.grf.push(g0);
+    let mut peak_fy = g0[1] + g0[7];
+    let mut in_contact = peak_fy > 0.0;
+    let mut liftoff: Option<(f64, Vec<f64>)> = None;
+    let mut stats = crate::simbody::IntegratorStats::default();
+    let mut extra = crate::simbody::IntegratorStats::default();
+    let com = |x: &[f64]| -> ([f64; 3], [f64; 3]) {
+        let mut w = eq.multibody.workspace::<f64>();
+        eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
+        (eq.multibody.com_position(&w), eq.multibody.com_velocity(&w))
+    };
+    let mut apex = f64::NEG_INFINITY;
+    while t < t_max {
+        let t_next = (t + report_interval).min(t_max);
+        let x_prev = x.clone();
+        let t_prev = t;
+        match sb.simbody.integration_step_to(t_next) {
+            Ok(s) => stats = s,
+            Err(e) => return Err(fail(t, &x, e.to_string(), traj)),
+        }
+        t = match sb.state(&mut x) {
+            Ok(t) => t,
+            Err(e) => return Err(fail(t, &x, e.to_string(), traj)),
+        };
+        let g = match grf_at(t, &x, &mut u) {
+            Ok(g) => g,
+            Err(e) => return Err(fail(t, &x, e, traj)),
+        };
+        traj.time.push(t);
+        traj.states.push(x.clone());
+        traj.controls.push(u.clone());
+        traj.grf.push(g);
+        let fy = g[1] + g[7];
+        peak_fy = peak_fy.max(fy);
+        if fy > 0.0 {
+            in_contact = true;
+        }
+        if in_contact && liftoff.is_none() && fy <= 0.0 {
+            // Bisection by re-integrating from the last report.
+            let (mut a, mut b) = (t_prev, t);
+            let mut xb = x.clone();
+            let mut xm = x.clone();
+            for _ in 0..20 {
+                let m = 0.5 * (a + b);
+                if start_at(&mut sb, t_prev, &x_prev).is_err() {
+                    break;
+                }
+                match sb.simbody.integration_step_to(m) {
+                    Ok(s) => {
+                        extra.steps_taken += s.steps_taken;
+                        extra.steps_attempted += s.steps_attempted;
+                        extra.realizations += s.realizations;
+                    }
+                    Err(_) => break,
+                }
+                if sb.state(&mut xm).is_err() {
+                    break;
+                }
+                match grf_at(m, &xm, &mut u) {
+                    Ok(gm) if gm[1] + gm[7] > 0.0 => a = m,
+                    Ok(_) => {
+                        b = m;
+                        xb.copy_from_slice(&xm);
+                    }
+                    Err(_) => break,
+                }
+            }
+            liftoff = Some((b, xb));
+            // Continue from the reported state.
+            let _ = extra.final_time;
+            if let Err(e) = start_at(&mut sb, t, &x) {
+                return Err(fail(t, &x, e, traj));
+            }
+            extra.steps_taken += stats.steps_taken;
+            extra.steps_attempted += stats.steps_attempted;
+            extra.realizations += stats.realizations;
+            extra.error_test_failures += stats.error_test_failures;
+            stats = crate::simbody::IntegratorStats::default();
+        }
+        let (c, v) = com(&x);
+        if liftoff.is_some() {
+            apex = apex.max(c[1]);
+            if v[1] <= 0.0 || fy > 0.0 {
+                break;
+            }
+        }
+        if t >= t_max {
+            apex = apex.max(c[1]);
+        }
+    }
+    let (lt, lv, lh) = match &liftoff {
+        Some((t, xl)) => {
+            let (c, v) = com(xl);
+            (Some(*t), Some(v[1]), Some(c[1]))
+        }
+        None => (None, None, None),
+    };
+    let g = eq.model.gravity[1].abs();
+    if let (Some(h), Some(v)) = (lh, lv) {
+        apex = apex.max(h + v.max(0.0) * v.max(0.0) / (2.0 * g));
+    }
+    let steps = (stats.steps_taken + extra.steps_taken) as usize;
+    let attempted = (stats.steps_attempted + extra.steps_attempted) as usize;
+    let summary = JumpSummary {
+        jump_height_m: apex - standing_com_height,
+        liftoff_time_s: lt,
+        liftoff_com_velocity_mps: lv,
+        liftoff_com_height_m: lh,
+        peak_vertical_grf_bw: peak_fy / weight,
+        apex_com_height_m: apex,
+        standing_com_height_m: standing_com_height,
+        final_time_s: t,
+        steps,
+        rejected_steps: attempted.saturating_sub(steps),
+        f_evals: (stats.realizations + extra.realizations) as usize,
+        wall_time_s: start.elapsed().as_secs_f64(),
+        integrator: format!("{integrator:?} (Simbody)"),
+        accuracy,
+    };
+    Ok((summary, traj))
+}
+
+/// Whole-body COM height of the model standing (its `standing` pose, or
+/// the coordinates' defaults).
+pub fn standing_com_height(eq: &StateEquation) -> f64 {
+    let pose = eq.model.poses.get("standing").cloned().unwrap_or_else(|| eq.model.coordinates.iter().map(|c| c.default_value).collect());
+    let mut w = eq.multibody.workspace::<f64>();
+    let q = eq.system.q_from_model(&pose);
+    eq.multibody.set_state(&mut w, &q, &vec![0.0; q.len()]);
+    eq.multibody.com_position(&w)[1]
+}
+
+/// A forward-simulation study (JSON). Paths are relative to the study file.
+#[derive(Debug, Clone, serde::Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimulateStudy {
+    #[serde(default = "default_model")]
+    pub model: String,
+    /// `RungeKuttaMerson` (default, as OpenSim), `RungeKuttaFeldberg`,
+    /// `RungeKutta3`, `CPodes`, `ExplicitEuler` (Simbody) or `DormandPrince`
+    /// (Rust-native).
+    #[serde(default = "default_integrator")]
+    pub integrator: String,
+    /// Integrator accuracy (for ExplicitEuler: the fixed step, s).
+    #[serde(default = "default_accuracy")]
+    pub accuracy: f64,
+    /// Stop here if the apex is not reached (s).
+    #[serde(default = "default_t_max")]
+    pub t_max: f64,
+    /// Results directory.
+    #[serde(default = "default_out")]
+    pub out: String,
+    /// Excitations from an OpenSim controls or Moco solution file; else the
+    /// bang-bang pattern.
+    #[serde(default)]
+    pub controls: Option<String>,
+    #[serde(default)]
+    pub bang_bang: Option<BangBangSpec>,
+    /// Report interval of the Simbody integrators (s).
+    #[serde(default = "default_report")]
+    pub report_interval: f64,
+}
+
+/// The bang-bang pattern: muscles in `on` (default: the extensors at the
+/// squat) are fully on between `on_time` and `off_time`, the others off.
+#[derive(Debug, Clone, serde::Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BangBangSpec {
+    #[serde(default)]
+    pub on: Option<Vec<String>>,
+    #[serde(default)]
+    pub on_time: f64,
+    #[serde(default = "default_off")]
+    pub off_time: f64,
+}
+
+fn default_model() -> String {
+    "models/jumper.json".into()
+}
+fn default_integrator() -> String {
+    "RungeKuttaMerson".into()
+}
+fn default_accuracy() -> f64 {
+    1e-5
+}
+fn default_t_max() -> f64 {
+    1.0
+}
+fn default_out() -> String {
+    "results".into()
+}
+fn default_report() -> f64 {
+    1e-3
+}
+fn default_off() -> f64 {
+    f64::INFINITY
+}
+
+impl Default for SimulateStudy {
+    fn default() -> Self {
+        SimulateStudy {
+            model: default_model(),
+            integrator: default_integrator(),
+            accuracy: default_accuracy(),
+            t_max: default_t_max(),
+            out: default_out(),
+            controls: None,
+            bang_bang: None,
+            report_interval: default_report(),
+        }
+    }
+}
+
+/// Which integrator a name means.
+pub enum IntegratorChoice {
+    Simbody(crate::simbody::SimbodyIntegrator),
+    DormandPrince,
+}
+
+/// Parse an integrator name (OpenSim's names).
+pub fn parse_integrator(name: &str) -> Result<IntegratorChoice, String> {
+    use crate::simbody::SimbodyIntegrator as S;
+    Ok(match name {
+        "RungeKuttaMerson" => IntegratorChoice::Simbody(S::RungeKuttaMerson),
+        "RungeKuttaFeldberg" => IntegratorChoice::Simbody(S::RungeKuttaFeldberg),
+        "RungeKutta3" => IntegratorChoice::Simbody(S::RungeKutta3),
+        "CPodes" => IntegratorChoice::Simbody(S::CPodes),
+        "ExplicitEuler" => IntegratorChoice::Simbody(S::ExplicitEuler),
+        "DormandPrince" | "DormandPrince54" => IntegratorChoice::DormandPrince,
+        other => {
+            return Err(format!(
+                "unknown integrator '{other}': use RungeKuttaMerson, RungeKuttaFeldberg, RungeKutta3, CPodes, ExplicitEuler or DormandPrince"
+            ))
+        }
+    })
+}
+
+/// Excitations of a study: a controls file or the bang-bang pattern.
+#[derive(Clone)]
+pub enum StudyExcitation {
+    Controls(crate::io::Controls),
+    BangBang(BangBang),
+}
+
+impl ExcitationSource for StudyExcitation {
+    fn at(&self, t: f64, u: &mut [f64]) {
+        match self {
+            StudyExcitation::Controls(c) => c.at(t, u),
+            StudyExcitation::BangBang(b) => b.at(t, u),
+        }
+    }
 }
