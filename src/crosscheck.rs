@@ -18,8 +18,10 @@ use rand_chacha::ChaCha8Rng;
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-/// The largest error the cross-check accepts.
+/// The largest error the cross-check accepts for the multibody quantities.
 pub const TOLERANCE: f64 = 1e-10;
+/// The largest error it accepts for the state equation ẋ = f(x, u).
+pub const STATE_EQUATION_TOLERANCE: f64 = 1e-9;
 
 /// A cross-check could not run.
 #[derive(Debug, thiserror::Error)]
@@ -30,6 +32,10 @@ pub enum CrosscheckError {
     Simbody(#[from] SimbodyError),
     #[error(transparent)]
     Singular(#[from] SingularMassMatrix),
+    #[error(transparent)]
+    Ode(#[from] crate::ode::OdeError),
+    #[error(transparent)]
+    Laws(#[from] crate::laws::UnsupportedLaw),
 }
 
 /// Largest normwise relative errors, per comparison and quantity.
@@ -40,6 +46,11 @@ pub struct CrosscheckReport {
     pub seed: u64,
     pub tolerance: f64,
     pub max_rel_error: f64,
+    /// Largest normwise relative error of ẋ = f(x, u) (Rust-native laws and
+    /// kinematics against the same laws inside Simbody), if the model has
+    /// force elements.
+    pub state_equation_max_rel_error: Option<f64>,
+    pub state_equation_tolerance: f64,
     pub passed: bool,
     /// comparison → quantity → max relative error
     pub comparisons: BTreeMap<String, BTreeMap<String, f64>>,
@@ -243,15 +254,73 @@ pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport,
         }
     }
     let max_rel_error = comparisons.values().flat_map(|t| t.values()).fold(0.0f64, |a, &b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
+    let state_equation_max_rel_error = if model.muscles.is_empty() && model.contact.is_none() && model.ligaments.is_empty() {
+        None
+    } else {
+        let mut worst: f64 = 0.0;
+        let mut table = BTreeMap::new();
+        for symmetric in [true, false] {
+            if symmetric && model.symmetry.is_empty() {
+                continue;
+            }
+            let e = state_equation_error(model, symmetric, samples, &mut rng)?;
+            table.insert(if symmetric { "symmetric".to_string() } else { "full".to_string() }, e);
+            worst = worst.max(if e.is_nan() { f64::INFINITY } else { e });
+        }
+        comparisons.insert("state_equation_rust_vs_simbody".into(), table);
+        Some(worst)
+    };
+    let passed = max_rel_error <= TOLERANCE && state_equation_max_rel_error.is_none_or(|e| e <= STATE_EQUATION_TOLERANCE);
     Ok(CrosscheckReport {
         model: model.file.display().to_string(),
         samples,
         seed,
         tolerance: TOLERANCE,
         max_rel_error,
-        passed: max_rel_error <= TOLERANCE,
+        state_equation_max_rel_error,
+        state_equation_tolerance: STATE_EQUATION_TOLERANCE,
+        passed,
         comparisons,
     })
+}
+
+/// Largest normwise relative error of ẋ = f(x, u) between the Rust-native
+/// state equation and the same equation inside Simbody, at random states
+/// near the model's squat (so that the feet touch the ground) with random
+/// speeds, fibre lengths, activations and excitations.
+fn state_equation_error(model: &Model, symmetric: bool, samples: usize, rng: &mut ChaCha8Rng) -> Result<f64, CrosscheckError> {
+    use crate::ode::{SimbodyStateEquation, StateEquation};
+    use std::sync::Arc;
+    let eq = Arc::new(StateEquation::new(model, symmetric, crate::path::PathSmoothing::Smooth { delta: 0.02 })?);
+    let laws = Arc::new(crate::laws::OpenSimLaws::new(model)?);
+    let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone())?;
+    let (n, nm, nx) = (eq.nq(), eq.nm(), eq.nx());
+    let pose = model.poses.get("squat").cloned().unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    let q0 = eq.system.q_from_model(&pose);
+    let ty = model.coordinate_index("pelvis_ty").map(|c| eq.system.q_of_model_coordinate[c]);
+    let mut ws = eq.workspace::<f64>();
+    let mut worst: f64 = 0.0;
+    for _ in 0..samples {
+        let mut x = vec![0.0; nx];
+        for i in 0..n {
+            x[i] = q0[i] + rng.random_range(-0.05..=0.05);
+            x[n + i] = rng.random_range(-2.0..=2.0);
+        }
+        if let Some(ty) = ty {
+            x[ty] += rng.random_range(-0.03..=0.0);
+        }
+        for k in 0..nm {
+            let lopt = model.muscles[eq.muscles[k]].spec.optimal_fiber_length;
+            x[2 * n + k] = lopt * rng.random_range(0.5..=1.5);
+            x[2 * n + nm + k] = rng.random_range(0.01..=1.0);
+        }
+        let u: Vec<f64> = (0..nm).map(|_| rng.random_range(0.01..=1.0)).collect();
+        let (mut fr, mut fs) = (vec![0.0; nx], vec![0.0; nx]);
+        eq.rhs(&*laws, &mut ws, &x, &u, &mut fr)?;
+        sb.rhs(&x, &u, &mut fs)?;
+        worst = worst.max(rel_err(&fr, &fs));
+    }
+    Ok(worst)
 }
 
 /// Station forces on the left side equal to those on the right partner
@@ -285,20 +354,31 @@ impl CrosscheckReport {
     /// A table a person can read.
     pub fn table(&self) -> String {
         let mut t = comfy_table::Table::new();
-        let cols: Vec<&String> = self.comparisons.keys().collect();
+        let cols: Vec<&String> = self.comparisons.keys().filter(|k| k.as_str() != "state_equation_rust_vs_simbody").collect();
         let mut header = vec!["quantity".to_string()];
         header.extend(cols.iter().map(|s| s.to_string()));
         t.set_header(header);
         let names = ["mass_matrix", "bias", "qdd", "com_position", "com_velocity", "com_acceleration", "station_position", "station_velocity"];
         for q in names {
+            if cols.iter().all(|c| !self.comparisons[*c].contains_key(q)) {
+                continue;
+            }
             let mut row = vec![q.to_string()];
             for c in &cols {
                 row.push(self.comparisons[*c].get(q).map(|e| format!("{e:.2e}")).unwrap_or_else(|| "-".into()));
             }
             t.add_row(row);
         }
+        let fline = match (self.state_equation_max_rel_error, self.comparisons.get("state_equation_rust_vs_simbody")) {
+            (Some(e), Some(tab)) => format!(
+                "\nstate equation ẋ = f(x, u), Rust-native against Simbody: {} (tolerance {:.0e})",
+                tab.iter().map(|(k, v)| format!("{k} {v:.2e}")).collect::<Vec<_>>().join(", "),
+                self.state_equation_tolerance
+            ) + if e.is_nan() { " NaN" } else { "" },
+            _ => String::new(),
+        };
         format!(
-            "{t}\nmodel {}: {} samples (seed {}), largest relative error {:.2e}, tolerance {:.0e}: {}",
+            "{t}{fline}\nmodel {}: {} samples (seed {}), largest relative error {:.2e}, tolerance {:.0e}: {}",
             self.model,
             self.samples,
             self.seed,
