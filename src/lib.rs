@@ -22,6 +22,7 @@ pub mod ode;
 pub mod laws;
 pub mod simulate;
 pub mod squat;
+pub mod eval;
 pub mod muscle;
 pub mod contact;
 pub mod ligament;

@@ -57,6 +57,31 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// ẋ = f(x, u) and its parts (muscle, contact and joint quantities) at
+    /// given states, like OpenSim's Analyze tool. Input: JSON
+    /// ({"state": {name: value}, "excitation": {"/forceset/<m>": value}} or
+    /// {"x": [...], "u": [...]}, or an array of these) or CSV (a header of
+    /// state and control names, one row per evaluation).
+    Eval {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        #[arg(long)]
+        input: PathBuf,
+        /// The full 10-coordinate system instead of the symmetric one.
+        #[arg(long)]
+        full: bool,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Print the state and control names `leap eval` expects, and the static
+    /// squat as a ready-made input.
+    Squat {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        #[arg(long)]
+        full: bool,
+    },
     /// Benchmarks that print tables (medians of repeated batches).
     Bench {
         #[command(subcommand)]
@@ -105,6 +130,50 @@ fn run(cli: Cli) -> Result<ExitCode> {
         }
         Command::Simulate { study, model, controls, integrator, accuracy, t_max, out, json } => {
             simulate(study, model, controls, integrator, accuracy, t_max, out, json)
+        }
+        Command::Eval { model, input, full, json } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let laws = leap::laws::OpenSimLaws::new(&m)?;
+            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let inputs = leap::eval::read_inputs(&eq, &input)?;
+            let mut reports = Vec::with_capacity(inputs.len());
+            for (k, (x, u)) in inputs.iter().enumerate() {
+                reports.push(leap::eval::evaluate(&eq, &laws, x, u).with_context(|| format!("{}: evaluation {k}", input.display()))?);
+            }
+            if json {
+                let v = if reports.len() == 1 { serde_json::to_value(&reports[0])? } else { serde_json::to_value(&reports)? };
+                println!("{}", serde_json::to_string_pretty(&v)?);
+            } else {
+                for (k, r) in reports.iter().enumerate() {
+                    println!("evaluation {k}");
+                    let mut t = comfy_table::Table::new();
+                    t.set_header(["muscle", "L_MT (m)", "v_MT (m/s)", "l_M (m)", "v_M (m/s)", "pennation (rad)", "tendon force (N)", "moment arms (m)"]);
+                    for (name, mr) in &r.muscles {
+                        let arms: Vec<String> = mr.moment_arms.iter().map(|(c, v)| format!("{c} {v:+.4}")).collect();
+                        t.add_row([name.clone(), format!("{:.5}", mr.length), format!("{:+.4}", mr.lengthening_speed), format!("{:.5}", mr.fiber_length), format!("{:+.4}", mr.fiber_velocity), format!("{:.4}", mr.pennation_angle), format!("{:.2}", mr.tendon_force), arms.join(", ")]);
+                    }
+                    println!("{t}");
+                    let acc: Vec<String> = r.accelerations.iter().map(|(c, v)| format!("{c} {v:+.4e}")).collect();
+                    println!("q̈: {}", acc.join(", "));
+                    let lig: Vec<String> = r.ligament_torques.iter().map(|(c, v)| format!("{c} {v:+.3}")).collect();
+                    println!("passive torques (N·m): {}", lig.join(", "));
+                    let fy: f64 = r.contact_forces.values().map(|f| f[1]).sum();
+                    println!("total vertical contact force: {fy:.2} N");
+                }
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Squat { model, full } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let laws = leap::laws::OpenSimLaws::new(&m)?;
+            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let pose = m.poses.get("squat").cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: no 'squat' pose", model.display()))?;
+            let sq = leap::squat::static_squat(&eq, &laws, &pose)?;
+            let state: serde_json::Map<String, serde_json::Value> = eq.state_names().into_iter().zip(sq.x.iter()).map(|(n, v)| (n, serde_json::json!(v))).collect();
+            let exc: serde_json::Map<String, serde_json::Value> = eq.control_names().into_iter().zip(sq.excitation.iter()).map(|(n, v)| (n, serde_json::json!(v))).collect();
+            let v = serde_json::json!({"state": state, "excitation": exc, "max_abs_qdd": sq.max_abs_qdd, "vertical_grf_bw": sq.vertical_grf_bw, "qp_iterations": sq.qp_iterations});
+            println!("{}", serde_json::to_string_pretty(&v)?);
+            Ok(ExitCode::SUCCESS)
         }
         Command::Bench { which: BenchCommand::Dynamics { model, json } } => {
             let m = leap::model::Model::from_file(&model)?;

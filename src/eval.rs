@@ -1,0 +1,187 @@
+//! `leap eval`: ẋ = f(x, u) and all its parts at given states, the way
+//! OpenSim's Analyze tool reports muscle, contact and joint quantities.
+//!
+//! Input (JSON): one object or an array of objects, each
+//! `{"state": {"<OpenSim state name>": value, ...}, "excitation":
+//! {"/forceset/<muscle>": value, ...}}` or `{"x": [...], "u": [...]}` in the
+//! order of [`StateEquation::state_names`] and
+//! [`StateEquation::control_names`]. Input (CSV): a header of state and
+//! control names (an optional `time` column is ignored), one evaluation per
+//! row. Missing states or excitations are errors.
+
+use crate::laws::OpenSimLaws;
+use crate::multibody::{GeneralizedForces, ModelView};
+use crate::ode::StateEquation;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+/// One muscle's quantities (OpenSim's output names).
+#[derive(Debug, Clone, Serialize)]
+pub struct MuscleReport {
+    pub length: f64,
+    pub lengthening_speed: f64,
+    /// Moment arm per coordinate (m), r = −∂L/∂q; zero entries omitted.
+    pub moment_arms: BTreeMap<String, f64>,
+    pub fiber_length: f64,
+    pub fiber_velocity: f64,
+    pub pennation_angle: f64,
+    pub tendon_length: f64,
+    pub tendon_force: f64,
+    pub active_fiber_force: f64,
+    pub passive_fiber_force: f64,
+    pub activation_rate: f64,
+}
+
+/// Everything at one state.
+#[derive(Debug, Clone, Serialize)]
+pub struct EvalReport {
+    /// ẋ by state name.
+    pub state_derivative: BTreeMap<String, f64>,
+    /// q̈ by coordinate name.
+    pub accelerations: BTreeMap<String, f64>,
+    pub muscles: BTreeMap<String, MuscleReport>,
+    /// Force on each contact sphere from the ground (N, ground frame).
+    pub contact_forces: BTreeMap<String, [f64; 3]>,
+    /// Passive joint torques (N·m) by coordinate.
+    pub ligament_torques: BTreeMap<String, f64>,
+    pub com_position: [f64; 3],
+    pub com_velocity: [f64; 3],
+}
+
+/// Bad `leap eval` input: names the file, the entry and the field.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {place}: {reason}")]
+pub struct EvalInputError {
+    pub file: String,
+    pub place: String,
+    pub reason: String,
+}
+
+/// Read evaluations (x, u) from a JSON or CSV file.
+pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Vec<(Vec<f64>, Vec<f64>)>, EvalInputError> {
+    let file = path.display().to_string();
+    let err = |place: String, reason: String| EvalInputError { file: file.clone(), place, reason };
+    let text = std::fs::read_to_string(path).map_err(|e| err("(file)".into(), e.to_string()))?;
+    let states = eq.state_names();
+    let controls = eq.control_names();
+    let is_csv = path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("csv")).unwrap_or(false);
+    let mut out = Vec::new();
+    if is_csv {
+        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+        let (_, header) = lines.next().ok_or_else(|| err("line 1".into(), "empty file".into()))?;
+        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        let find = |name: &str| cols.iter().position(|c| *c == name);
+        let xi: Vec<usize> = states.iter().map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'")))).collect::<Result<_, _>>()?;
+        let ui: Vec<usize> = controls.iter().map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'")))).collect::<Result<_, _>>()?;
+        for (ln, line) in lines {
+            let cells: Vec<&str> = line.split(',').map(str::trim).collect();
+            if cells.len() != cols.len() {
+                return Err(err(format!("line {}", ln + 1), format!("{} values, expected {}", cells.len(), cols.len())));
+            }
+            let parse = |k: usize| -> Result<f64, EvalInputError> {
+                let v: f64 = cells[k].parse().map_err(|_| err(format!("line {}, column '{}'", ln + 1, cols[k]), format!("'{}' is not a number", cells[k])))?;
+                if !v.is_finite() {
+                    return Err(err(format!("line {}, column '{}'", ln + 1, cols[k]), "not finite".into()));
+                }
+                Ok(v)
+            };
+            let x = xi.iter().map(|&k| parse(k)).collect::<Result<Vec<_>, _>>()?;
+            let u = ui.iter().map(|&k| parse(k)).collect::<Result<Vec<_>, _>>()?;
+            out.push((x, u));
+        }
+        return Ok(out);
+    }
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| err(format!("line {}, column {}", e.line(), e.column()), e.to_string()))?;
+    let items: Vec<&serde_json::Value> = match &v {
+        serde_json::Value::Array(a) => a.iter().collect(),
+        other => vec![other],
+    };
+    for (i, item) in items.iter().enumerate() {
+        let place = |f: &str| if items.len() > 1 { format!("[{i}].{f}") } else { f.to_string() };
+        let vector = |key: &str, named: &str, names: &[String]| -> Result<Vec<f64>, EvalInputError> {
+            if let Some(arr) = item.get(key) {
+                let arr = arr.as_array().ok_or_else(|| err(place(key), "must be an array of numbers".into()))?;
+                if arr.len() != names.len() {
+                    return Err(err(place(key), format!("{} values, expected {}", arr.len(), names.len())));
+                }
+                return arr
+                    .iter()
+                    .enumerate()
+                    .map(|(k, v)| v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| err(place(&format!("{key}[{k}]")), "not a finite number".into())))
+                    .collect();
+            }
+            let obj = item.get(named).and_then(|o| o.as_object()).ok_or_else(|| err(place(named), format!("missing: give '{named}' (by name) or '{key}' (array)")))?;
+            for k in obj.keys() {
+                if !names.contains(k) {
+                    return Err(err(place(&format!("{named}.{k}")), "unknown name".into()));
+                }
+            }
+            names
+                .iter()
+                .map(|n| {
+                    obj.get(n)
+                        .ok_or_else(|| err(place(named), format!("missing '{n}'")))
+                        .and_then(|v| v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| err(place(&format!("{named}.{n}")), "not a finite number".into())))
+                })
+                .collect()
+        };
+        let x = vector("x", "state", &states)?;
+        let u = vector("u", "excitation", &controls)?;
+        out.push((x, u));
+    }
+    Ok(out)
+}
+
+/// Evaluate ẋ = f(x, u) and its parts.
+pub fn evaluate(eq: &StateEquation, laws: &OpenSimLaws, x: &[f64], u: &[f64]) -> Result<EvalReport, crate::ode::OdeError> {
+    let (n, nm) = (eq.nq(), eq.nm());
+    let mut ws = eq.workspace::<f64>();
+    let mut xdot = vec![0.0; eq.nx()];
+    eq.rhs(laws, &mut ws, x, u, &mut xdot)?;
+    let names = eq.state_names();
+    let model = &eq.model;
+    let coord_name = |k: usize| model.coordinates[eq.system.coordinates[k]].name.clone();
+    let mut muscles = BTreeMap::new();
+    let mbw = &ws.mb;
+    for (k, &mi) in eq.muscles.iter().enumerate() {
+        let m = &model.muscles[mi];
+        let mut tau = vec![0.0; n];
+        {
+            let view = ModelView { mb: &eq.multibody, ws: mbw, q_of: &eq.system.q_of_model_coordinate };
+            let mut sink = GeneralizedForces { mb: &eq.multibody, ws: mbw, q_of: &eq.system.q_of_model_coordinate, tau: &mut tau };
+            m.path.calc(&view, eq.smoothing, Some((1.0, &mut sink)));
+        }
+        let info = laws.muscles[mi].calc(x[2 * n + nm + k], x[2 * n + k], ws.mtu_length[k], ws.mtu_speed[k], u[k]);
+        muscles.insert(
+            m.spec.name.clone(),
+            MuscleReport {
+                length: ws.mtu_length[k],
+                lengthening_speed: ws.mtu_speed[k],
+                moment_arms: (0..n).filter(|&j| tau[j].abs() > 1e-12).map(|j| (coord_name(j), tau[j])).collect(),
+                fiber_length: info.fiber_length,
+                fiber_velocity: info.fiber_velocity,
+                pennation_angle: info.pennation_angle,
+                tendon_length: info.tendon_length,
+                tendon_force: info.tendon_force,
+                active_fiber_force: info.active_fiber_force,
+                passive_fiber_force: info.passive_fiber_force,
+                activation_rate: info.activation_rate,
+            },
+        );
+    }
+    let contact_forces = match &model.contact {
+        Some(c) => c.spheres.iter().zip(&ws.sphere_force).map(|(s, f)| (s.name.clone(), *f)).collect(),
+        None => BTreeMap::new(),
+    };
+    let ligament_torques = model.ligaments.iter().zip(&ws.ligament_torque).map(|(l, t)| (model.coordinates[l.coordinate].name.clone(), *t)).collect();
+    Ok(EvalReport {
+        state_derivative: names.iter().cloned().zip(xdot.iter().copied()).collect(),
+        accelerations: (0..n).map(|k| (coord_name(k), xdot[n + k])).collect(),
+        muscles,
+        contact_forces,
+        ligament_torques,
+        com_position: eq.multibody.com_position(mbw),
+        com_velocity: eq.multibody.com_velocity(mbw),
+    })
+}
