@@ -148,3 +148,149 @@ impl DynamicsReport {
         format!("q̈ evaluation, {}\n{t}\n{}", self.model, ratios.join("\n"))
     }
 }
+
+/// Time per evaluation of ẋ = f(x, u) of the symmetric jumper at states
+/// along a squat: Rust-native (f64, and with one dual direction) against the
+/// Simbody backend.
+pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck::CrosscheckError> {
+    use crate::ode::{SimbodyStateEquation, StateEquation};
+    use crate::scalar::Dual64;
+    use std::sync::Arc;
+    let eq = Arc::new(StateEquation::new(model, true, crate::path::PathSmoothing::Smooth { delta: 0.02 })?);
+    let laws = Arc::new(crate::laws::OpenSimLaws::new(model)?);
+    let pose = model.poses.get("squat").cloned().unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input(e.to_string())))?;
+    let (n, nx) = (eq.nq(), eq.nx());
+    let states: Vec<Vec<f64>> = (0..16)
+        .map(|k| {
+            let mut x = sq.x.clone();
+            for i in 0..n {
+                x[n + i] = 0.05 * k as f64 * ((i + 1) as f64).sin();
+            }
+            x
+        })
+        .collect();
+    let u = sq.excitation.clone();
+    let mut rows = Vec::new();
+    let mut ws = eq.workspace::<f64>();
+    let mut xd = vec![0.0; nx];
+    let mut bad = false;
+    let (m, lo, hi) = time_per_call(21, 5_000, |i| {
+        bad |= eq.rhs(&*laws, &mut ws, &states[i % 16], &u, &mut xd).is_err();
+        black_box(&xd);
+    });
+    let row = |backend: &str, what: &str, (m, lo, hi): (f64, f64, f64), b: usize, c: usize| BenchRow {
+        system: "symmetric jumper".into(),
+        backend: backend.into(),
+        what: what.into(),
+        nq: nx,
+        median_ns: m,
+        min_ns: lo,
+        max_ns: hi,
+        batches: b,
+        calls_per_batch: c,
+    };
+    rows.push(row("rust-native", "ẋ = f(x, u), f64", (m, lo, hi), 21, 5_000));
+    let mut wsd = eq.workspace::<Dual64>();
+    let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
+    let sd: Vec<Vec<Dual64>> = states.iter().map(|x| x.iter().enumerate().map(|(i, &v)| if i == 3 { Dual64::from(v).derivative() } else { Dual64::from(v) }).collect()).collect();
+    let mut xdd = vec![Dual64::from(0.0); nx];
+    let t_dual = time_per_call(11, 2_000, |i| {
+        bad |= eq.rhs(&*laws, &mut wsd, &sd[i % 16], &ud, &mut xdd).is_err();
+        black_box(&xdd);
+    });
+    rows.push(row("rust-native", "ẋ and one directional derivative (Dual64)", t_dual, 11, 2_000));
+    let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone())?;
+    let mut err = None;
+    let t_sb = time_per_call(7, 300, |i| {
+        if let Err(e) = sb.rhs(&states[i % 16], &u, &mut xd) {
+            err = Some(e);
+        }
+        black_box(&xd);
+    });
+    if let Some(e) = err {
+        return Err(e.into());
+    }
+    if bad {
+        return Err(crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input("f(x, u) failed during the benchmark".into())));
+    }
+    rows.push(row("simbody", "ẋ = f(x, u) (forces in a Simbody force element)", t_sb, 7, 300));
+    let speedup = vec![("f(x, u)".to_string(), t_sb.0 / m)];
+    Ok(DynamicsReport { model: model.file.display().to_string(), rows, speedup })
+}
+
+/// One forward jump per integrator and accuracy from the static squat with
+/// the default bang-bang excitations.
+#[derive(Debug, Clone, Serialize)]
+pub struct IntegratorRow {
+    pub integrator: String,
+    pub accuracy: f64,
+    pub steps: usize,
+    pub rejected_steps: usize,
+    pub f_evals: usize,
+    pub wall_time_s: f64,
+    pub jump_height_m: f64,
+    pub liftoff_time_s: Option<f64>,
+}
+
+/// Forward jumps with every integrator (a table).
+pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<IntegratorRow>, String> {
+    use crate::simulate::*;
+    use std::sync::Arc;
+    let eq = crate::ode::StateEquation::new(model, true, crate::path::PathSmoothing::Exact).map_err(|e| e.to_string())?;
+    let laws = crate::laws::OpenSimLaws::new(model).map_err(|e| e.to_string())?;
+    let pose = model.poses.get("squat").cloned().ok_or("the model has no squat pose")?;
+    let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| e.to_string())?;
+    let ext = extensor_moments(&eq, &pose);
+    let exc = StudyExcitation::BangBang(BangBang {
+        intervals: ext.iter().map(|&e| if e > 0.0 { Some((0.0, f64::INFINITY)) } else { None }).collect(),
+        off_level: crate::laws::MIN_ACTIVATION,
+    });
+    let standing = standing_com_height(&eq);
+    let (eqa, lawsa) = (Arc::new(eq.clone()), Arc::new(laws.clone()));
+    let mut rows = Vec::new();
+    for &(name, acc) in cases {
+        let r = match parse_integrator(name)? {
+            IntegratorChoice::DormandPrince => simulate_rust(
+                &eq,
+                &laws,
+                &exc,
+                &sq.x,
+                standing,
+                SimulateOptions { integrator: crate::integrator::Dopri5Options { accuracy: acc, max_steps: 200_000, ..Default::default() }, t_max: 1.0 },
+            ),
+            IntegratorChoice::Simbody(w) => simulate_simbody(&eqa, &lawsa, &exc, &sq.x, standing, w, acc, 1.0, 1e-3),
+        };
+        let (s, _) = r.map_err(|e| format!("{name} at {acc:e}: {e}"))?;
+        rows.push(IntegratorRow {
+            integrator: s.integrator.clone(),
+            accuracy: acc,
+            steps: s.steps,
+            rejected_steps: s.rejected_steps,
+            f_evals: s.f_evals,
+            wall_time_s: s.wall_time_s,
+            jump_height_m: s.jump_height_m,
+            liftoff_time_s: s.liftoff_time_s,
+        });
+    }
+    Ok(rows)
+}
+
+/// The integrator table as text.
+pub fn integrator_table(rows: &[IntegratorRow]) -> String {
+    let mut t = comfy_table::Table::new();
+    t.set_header(["integrator", "accuracy", "steps", "rejected", "f evaluations", "wall time (s)", "jump height (cm)", "lift-off (s)"]);
+    for r in rows {
+        t.add_row([
+            r.integrator.clone(),
+            format!("{:e}", r.accuracy),
+            r.steps.to_string(),
+            r.rejected_steps.to_string(),
+            r.f_evals.to_string(),
+            format!("{:.3}", r.wall_time_s),
+            format!("{:.2}", 100.0 * r.jump_height_m),
+            r.liftoff_time_s.map(|t| format!("{t:.4}")).unwrap_or("-".into()),
+        ]);
+    }
+    format!("forward jump from the static squat, default bang-bang excitations\n{t}")
+}

@@ -248,7 +248,8 @@ pub fn sphere_ground_force<S: Scalar>(spec: &ContactSpec, r: f64, p: [S; 3], v: 
     // v_n: penetration rate (the sphere moving into the ground).
     let vn = v[1] * -1.0;
     let (mus, mud, muv, vt) = (spec.static_friction, spec.dynamic_friction, spec.viscous_friction, spec.transition_velocity);
-    let k = 0.5 * spec.stiffness.powf(2.0 / 3.0);
+    // Simbody stores E^(2/3); two equal surfaces combine to ½·E^(2/3).
+    let k = 0.5 * spec.stiffness.cbrt() * spec.stiffness.cbrt();
     let point = [p[0], p[1] - (depth * -0.5 + r), p[2]];
     match spec.law {
         ContactLaw::HuntCrossleyForce => {

@@ -99,6 +99,21 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Time per ẋ = f(x, u) evaluation, Rust-native against Simbody.
+    StateEquation {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+    /// One forward jump per integrator and accuracy: steps, rejected steps,
+    /// f evaluations, wall time.
+    Integrators {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -173,6 +188,38 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let exc: serde_json::Map<String, serde_json::Value> = eq.control_names().into_iter().zip(sq.excitation.iter()).map(|(n, v)| (n, serde_json::json!(v))).collect();
             let v = serde_json::json!({"state": state, "excitation": exc, "max_abs_qdd": sq.max_abs_qdd, "vertical_grf_bw": sq.vertical_grf_bw, "qp_iterations": sq.qp_iterations});
             println!("{}", serde_json::to_string_pretty(&v)?);
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench { which: BenchCommand::StateEquation { model, json } } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let report = leap::bench::state_equation(&m)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                println!("{}", report.table());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench { which: BenchCommand::Integrators { model, json } } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let cases = [
+                ("RungeKuttaMerson", 1e-3),
+                ("RungeKuttaMerson", 1e-5),
+                ("RungeKuttaFeldberg", 1e-3),
+                ("RungeKuttaFeldberg", 1e-5),
+                ("RungeKutta3", 1e-5),
+                ("CPodes", 1e-5),
+                ("ExplicitEuler", 2e-5),
+                ("DormandPrince", 1e-3),
+                ("DormandPrince", 1e-5),
+                ("DormandPrince", 1e-7),
+            ];
+            let rows = leap::bench::integrators(&m, &cases).map_err(|e| anyhow::anyhow!(e))?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&rows)?);
+            } else {
+                println!("{}", leap::bench::integrator_table(&rows));
+            }
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench { which: BenchCommand::Dynamics { model, json } } => {

@@ -640,3 +640,35 @@ impl<'a, S: Scalar> crate::path::ForceSink<S> for GeneralizedForces<'a, S> {
         self.tau[self.q_of[coordinate]] += force;
     }
 }
+
+/// Generalized forces of a unit tension (the moment arms), added scaled into
+/// a [`GeneralizedForces`] sink: the Rust backend's fast muscle path.
+pub struct UnitGeneralizedForces<'a, S: Scalar> {
+    pub mb: &'a Multibody,
+    pub ws: &'a Workspace<S>,
+    pub q_of: &'a [usize],
+    pub tau: &'a mut [S],
+}
+
+impl<'a, S: Scalar> crate::path::ForceSink<S> for UnitGeneralizedForces<'a, S> {
+    fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
+        let (ci, off) = self.mb.frame_of_model_body(body);
+        self.mb.add_point_force_s(self.ws, ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]], force, self.tau);
+    }
+    fn add_generalized_force(&mut self, coordinate: usize, force: S) {
+        self.tau[self.q_of[coordinate]] += force;
+    }
+}
+
+impl<'a, 'b, S: Scalar> crate::path::UnitForces<S, GeneralizedForces<'b, S>> for UnitGeneralizedForces<'a, S> {
+    fn clear(&mut self) {
+        for t in self.tau.iter_mut() {
+            *t = S::zero();
+        }
+    }
+    fn apply_scaled(&self, factor: S, sink: &mut GeneralizedForces<'b, S>) {
+        for (t, u) in sink.tau.iter_mut().zip(self.tau.iter()) {
+            *t += *u * factor;
+        }
+    }
+}

@@ -82,6 +82,7 @@ pub struct StateWorkspace<S: Scalar> {
     pub sphere_force: Vec<[S; 3]>,
     /// Per ligament after an evaluation: torque (N·m).
     pub ligament_torque: Vec<S>,
+    tau_unit: Vec<S>,
 }
 
 impl StateEquation {
@@ -176,6 +177,7 @@ impl StateEquation {
             tendon_force: vec![z; nm],
             sphere_force: vec![[z; 3]; ns],
             ligament_torque: vec![z; self.model.ligaments.len()],
+            tau_unit: vec![z; n],
         }
     }
 
@@ -202,13 +204,14 @@ impl StateEquation {
         {
             let view = ModelView { mb: &self.multibody, ws: &ws.mb, q_of };
             let mut sink = GeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau };
+            let mut unit = crate::multibody::UnitGeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau_unit };
             self.apply_forces(laws, &view, &mut sink, lm, act, u, &mut xdot[2 * n..], Outputs {
                 mtu_length: &mut ws.mtu_length,
                 mtu_speed: &mut ws.mtu_speed,
                 tendon_force: &mut ws.tendon_force,
                 sphere_force: &mut ws.sphere_force,
                 ligament_torque: &mut ws.ligament_torque,
-            })?;
+            }, &mut unit)?;
         }
         self.multibody.forward_dynamics(&mut ws.mb, &ws.tau, &mut ws.qdd)?;
         xdot[..n].copy_from_slice(qd);
@@ -219,7 +222,7 @@ impl StateEquation {
     /// The forces of every element at the state `view` shows, into `sink`;
     /// muscle rates into `zdot` = [d l^M/dt, da/dt]. Shared by both backends.
     #[allow(clippy::too_many_arguments)]
-    pub fn apply_forces<S: Scalar, L: ForceLaws<S>, K: BodyKinematics<S>, F: ForceSink<S>>(
+    pub fn apply_forces<S: Scalar, L: ForceLaws<S>, K: BodyKinematics<S>, F: ForceSink<S>, U: crate::path::UnitForces<S, F>>(
         &self,
         laws: &L,
         view: &K,
@@ -229,6 +232,7 @@ impl StateEquation {
         u: &[S],
         zdot: &mut [S],
         out: Outputs<'_, S>,
+        unit: &mut U,
     ) -> Result<(), OdeError> {
         let nm = self.nm();
         // Passive joint torques.
@@ -252,10 +256,12 @@ impl StateEquation {
                 }
             }
         }
-        // Muscles.
+        // Muscles: one pass over each path gives its length, speed and the
+        // forces of a unit tension, replayed scaled by the tendon force.
         for (k, &mi) in self.muscles.iter().enumerate() {
             let muscle = &self.model.muscles[mi];
-            let pv = muscle.path.calc::<S, K, F>(view, self.smoothing, None);
+            unit.clear();
+            let pv = muscle.path.calc(view, self.smoothing, Some((S::one(), &mut *unit)));
             let rates = laws
                 .muscle(mi, act[k], lm[k], pv.length, pv.lengthening_speed, u[k])
                 .map_err(|reason| OdeError::Muscle { muscle: muscle.spec.name.clone(), reason })?;
@@ -264,8 +270,7 @@ impl StateEquation {
             out.tendon_force[k] = rates.tendon_force;
             zdot[k] = rates.fiber_velocity;
             zdot[nm + k] = rates.activation_rate;
-            let tension = rates.tendon_force * self.multiplicity[k];
-            muscle.path.calc(view, self.smoothing, Some((tension, &mut *sink)));
+            unit.apply_scaled(rates.tendon_force * self.multiplicity[k], sink);
         }
         Ok(())
     }
@@ -366,6 +371,7 @@ impl SimbodyStateEquation {
         let exc = excitation.clone();
         let eq = equation.clone();
         let mut buf = crate::simbody::ForceBuffer::default();
+        let mut unit = crate::path::CollectedForces::<f64>::default();
         let mut u = vec![0.0; nm];
         let ns = eq.model.contact.as_ref().map(|c| c.spheres.len()).unwrap_or(0);
         let (mut o1, mut o2, mut o3, mut o4, mut o5) = (vec![0.0; nm], vec![0.0; nm], vec![0.0; nm], vec![[0.0; 3]; ns], vec![0.0; eq.model.ligaments.len()]);
@@ -384,7 +390,7 @@ impl SimbodyStateEquation {
                     tendon_force: &mut o3,
                     sphere_force: &mut o4,
                     ligament_torque: &mut o5,
-                })
+                }, &mut unit)
                 .map_err(|e| e.to_string())?;
                 if let Some(e) = kin.error.into_inner() {
                     return Err(e);

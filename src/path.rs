@@ -311,7 +311,8 @@ impl GeometryPath {
             for j in 0..nc {
                 prod *= if mask & (1 << j) != 0 { w[j] } else { S::one() - w[j] };
             }
-            if prod.re() == 0.0 && smoothing == PathSmoothing::Exact {
+            // A saturated weight is exactly 0 with a zero derivative.
+            if prod.re() == 0.0 {
                 continue;
             }
             let sub = match sink.as_mut() {
@@ -370,5 +371,54 @@ impl GeometryPath {
             }
         }
         worst
+    }
+}
+
+/// Forces collected in memory (to be scaled and replayed into another sink).
+#[derive(Debug, Clone, Default)]
+pub struct CollectedForces<S> {
+    pub points: Vec<(usize, [S; 3], [S; 3])>,
+    pub generalized: Vec<(usize, S)>,
+}
+
+impl<S: Scalar> CollectedForces<S> {
+    pub fn clear(&mut self) {
+        self.points.clear();
+        self.generalized.clear();
+    }
+
+    /// Replay every force times `factor` into `sink`.
+    pub fn replay_scaled<F: ForceSink<S>>(&self, factor: S, sink: &mut F) {
+        for (b, loc, f) in &self.points {
+            sink.add_point_force(*b, *loc, [f[0] * factor, f[1] * factor, f[2] * factor]);
+        }
+        for (c, g) in &self.generalized {
+            sink.add_generalized_force(*c, *g * factor);
+        }
+    }
+}
+
+impl<S: Scalar> ForceSink<S> for CollectedForces<S> {
+    fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
+        self.points.push((body, loc, force));
+    }
+    fn add_generalized_force(&mut self, coordinate: usize, force: S) {
+        self.generalized.push((coordinate, force));
+    }
+}
+
+/// A sink for the forces of a unit tension along one path, which can then
+/// add them, scaled by the actual tension, into the real sink `F`.
+pub trait UnitForces<S: Scalar, F>: ForceSink<S> {
+    fn clear(&mut self);
+    fn apply_scaled(&self, factor: S, sink: &mut F);
+}
+
+impl<S: Scalar, F: ForceSink<S>> UnitForces<S, F> for CollectedForces<S> {
+    fn clear(&mut self) {
+        CollectedForces::clear(self)
+    }
+    fn apply_scaled(&self, factor: S, sink: &mut F) {
+        self.replay_scaled(factor, sink)
     }
 }
