@@ -458,6 +458,7 @@ std::unique_ptr<Integrator> make_integrator(MultibodySystem& system, std::int32_
         default: throw std::invalid_argument("integrator: unknown method " + std::to_string(method));
     }
     if (method != 4) integ->setAccuracy(accuracy);
+    else integ->setFixedStepSize(accuracy);  // explicit Euler: fixed step
     return integ;
 }
 
@@ -476,8 +477,10 @@ void SimbodySystem::integration_start(std::int32_t method, double accuracy, doub
     p->require_final("integration_start");
     p->stepper.reset();
     p->integ = make_integrator(p->system, method, accuracy);
-    if (min_step > 0 && method != 4) p->integ->setMinimumStepSize(min_step);
-    if (max_step > 0 && method != 4) p->integ->setMaximumStepSize(max_step);
+    if (method != 4) {
+        if (min_step > 0) p->integ->setMinimumStepSize(min_step);
+        if (max_step > 0) p->integ->setMaximumStepSize(max_step);
+    }
     p->integ->setAllowInterpolation(false);
     p->stepper.reset(new TimeStepper(p->system, *p->integ));
     p->stepper->initialize(p->state);
@@ -509,6 +512,7 @@ IntegratorStats SimbodySystem::integrate(std::int32_t method, double accuracy, d
         default: throw std::invalid_argument("integrate: unknown integrator " + std::to_string(method));
     }
     if (method != 4) integ->setAccuracy(accuracy);
+    else integ->setFixedStepSize(accuracy);
     TimeStepper ts(p->system, *integ);
     ts.initialize(p->state);
     ts.stepTo(t_final);
