@@ -239,8 +239,10 @@ fn clamp<S: Scalar>(x: S, lo: f64, hi: f64) -> S {
     }
 }
 
-/// Force on a sphere of radius `r` from the ground half-space (normal +y)
-/// and its point of application, for the contact law of `spec` (§4.2-§4.3).
+/// Force on a sphere of radius `r` (centre `p`) from the ground half-space
+/// (normal +y) and its point of application, for the contact law of `spec`
+/// (§4.2-§4.3); `v` is the velocity of the sphere's material point at the
+/// contact point (centre velocity plus ω × r: rolling does not slip).
 /// One contact element per sphere, so HuntCrossleyForce's "return" quirk
 /// across spheres does not arise.
 pub fn sphere_ground_force<S: Scalar>(spec: &ContactSpec, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {

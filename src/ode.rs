@@ -32,9 +32,10 @@ pub trait ForceLaws<S: Scalar> {
     /// Muscle `m` with activation `a`, fibre length `lm`, muscle-tendon
     /// length `lmt` and lengthening speed `vmt`, under excitation `u`.
     fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String>;
-    /// Contact sphere `k` with centre position and velocity in ground:
-    /// the force on the sphere and its point of application, in ground.
-    fn sphere(&self, k: usize, p_ground_centre: [S; 3], v_ground_centre: [S; 3]) -> ([S; 3], [S; 3]);
+    /// Contact sphere `k` with its centre at `p_ground_centre` and the
+    /// velocity (ground) of its material point at the contact point: the
+    /// force on the sphere and its point of application, in ground.
+    fn sphere(&self, k: usize, p_ground_centre: [S; 3], v_ground_contact: [S; 3]) -> ([S; 3], [S; 3]);
     /// Passive torque of ligament `l` at coordinate value `q` and speed `qd`.
     fn ligament(&self, l: usize, q: S, qd: S) -> S;
 }
@@ -247,7 +248,10 @@ impl StateEquation {
             for (k, sp) in contact.spheres.iter().enumerate() {
                 let loc = [S::from(sp.location[0]), S::from(sp.location[1]), S::from(sp.location[2])];
                 let p = view.position(sp.body, loc);
-                let v = view.velocity(sp.body, loc);
+                // Simbody's contact point is mid-overlap, R − δ/2 below the
+                // centre; its slip includes the foot's rotation.
+                let p_contact = [p[0], (p[1] - sp.radius) * 0.5, p[2]];
+                let v = view.velocity(sp.body, view.station_at(sp.body, p_contact));
                 let (f, at) = laws.sphere(k, p, v);
                 out.sphere_force[k] = f;
                 if f.iter().any(|c| c.re() != 0.0) {

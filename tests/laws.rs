@@ -94,9 +94,15 @@ fn hunt_crossley_closed_form() {
     assert_eq!(sphere_ground_force(&spec, r, [0.0, r - 1e-3, 0.0], [0.0, 3.0, 0.0]).0[1], 0.0);
 }
 
-/// model-equations.md §8.4: OpenSim 4.6 HuntCrossleyForce values.
+/// The Anderson & Pandy form, and OpenSim 4.6's ExpressionBasedCoordinateForce
+/// for the hip-flexion entry (model-equations.md §8.6).
 #[test]
 fn passive_torque_is_the_anderson_pandy_exponential() {
+    let hip = LigamentSpec { coordinate: "hip_flexion_r".into(), k1: -2.44, k2: 5.05, k3: 1.51, k4: -21.88, theta1: -0.6981, theta2: 1.81, damping: 0.1 };
+    for (q, qd, want) in [(-0.8, 0.0, 14.03678414), (-0.5, 1.0, -0.08022579784), (0.0, 0.0, -0.0002612991696), (1.0, -2.0, 0.1591766869), (1.9, 0.5, -3.893940604)] {
+        let t: f64 = passive_torque(&hip, q, qd);
+        assert!((t - want).abs() <= 1e-9 * want.abs().max(1e-3), "hip q={q}: {t} vs {want}");
+    }
     let l = LigamentSpec { coordinate: "knee_angle_r".into(), k1: -6.09, k2: 33.94, k3: 11.03, k4: -11.33, theta1: -2.4, theta2: 0.13, damping: 0.1 };
     // Sign check of model-data.md §9: at q = 0.13 the first term is −6.09 N·m.
     let t: f64 = passive_torque(&l, 0.13, 0.0);
@@ -104,4 +110,44 @@ fn passive_torque_is_the_anderson_pandy_exponential() {
     let t2: f64 = passive_torque(&l, -1.0, 2.0);
     let want = -6.09 * (33.94f64 * (-1.0 - 0.13)).exp() + 11.03 * (-11.33f64 * (-1.0 + 2.4)).exp() - 0.2;
     assert!((t2 - want).abs() < 1e-12);
+}
+
+/// model-equations.md §8.4: OpenSim 4.6's HuntCrossleyForce and
+/// SmoothSphereHalfSpaceForce on a spinning, sliding sphere.
+#[test]
+fn contact_laws_match_opensim_46_tables() {
+    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string("tests/data/contact_opensim46.json").unwrap()).unwrap();
+    let r = 0.05;
+    let mut checked = 0;
+    for case in data["cases"].as_array().unwrap() {
+        let law = if case["law"] == "HuntCrossleyForce" { ContactLaw::HuntCrossleyForce } else { ContactLaw::SmoothSphereHalfSpaceForce };
+        let g = |k: &str| case[k].as_f64().unwrap();
+        let spec = ContactSpec {
+            law,
+            stiffness: g("stiffness"),
+            dissipation: g("dissipation"),
+            static_friction: g("static_friction"),
+            dynamic_friction: g("dynamic_friction"),
+            viscous_friction: g("viscous_friction"),
+            transition_velocity: g("transition_velocity"),
+            hertz_smoothing: None,
+            hunt_crossley_smoothing: None,
+            derivative_smoothing: None,
+            spheres: vec![],
+        };
+        for row in case["rows"].as_array().unwrap() {
+            let v: Vec<f64> = row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            let (depth, vy, vx, w) = (v[0], v[1], v[2], v[3]);
+            let p = [0.0, r - depth, 0.0];
+            // Velocity of the sphere's material point at the mid-overlap contact point.
+            let arm = r - depth / 2.0;
+            let vc = [vx + w * arm, vy, 0.0];
+            let (f, _) = sphere_ground_force(&spec, r, p, vc);
+            let scale = v[4].abs().max(1e-9);
+            assert!((f[1] - v[4]).abs() <= 1e-8 * scale, "{:?} F_y {} vs {} ({v:?})", case["law"], f[1], v[4]);
+            assert!((f[0] - v[5]).abs() <= 1e-8 * scale, "{:?} F_x {} vs {} ({v:?})", case["law"], f[0], v[5]);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 24);
 }
