@@ -1,0 +1,227 @@
+#!/usr/bin/env python3
+"""Golden reference values for leap's force laws, computed by OpenSim 4.6,
+and a check that leap's output files load in OpenSim.
+
+Writes tests/data/opensim_forces.json with
+- Thelen2003Muscle tendon force, fibre velocity, force-velocity multiplier,
+  pennation angle and activation rate over a grid of muscle-tendon lengths,
+  lengthening speeds, fibre lengths, activations and excitations, for both
+  parameter sets (OpenSim defaults and the legacy 3.x values the jumper
+  carries) and two pennation angles; static equilibrium fibre lengths
+  (Model::equilibrateMuscles);
+- HuntCrossleyForce and SmoothSphereHalfSpaceForce on a sphere over a grid of
+  penetrations, velocities and spins, for two parameter sets;
+- the jumper's passive joint torques as ExpressionBasedCoordinateForces.
+
+With --check-results DIR it also loads DIR/jump_states.sto,
+DIR/jump_controls.sto (TimeSeriesTable and Storage) and DIR/jump_grf.mot
+(Storage), as written by `leap simulate --out DIR`, and records what loaded
+in tests/data/opensim_load_check.json (exit 1 if any file fails).
+
+    python3 -m venv .venv && .venv/bin/pip install opensim==4.6
+    cargo run --release -- simulate --out /tmp/leap-results
+    .venv/bin/python scripts/reference_opensim.py --check-results /tmp/leap-results
+"""
+import argparse
+import itertools
+import json
+import math
+import pathlib
+import sys
+
+import opensim as osim
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+DEFAULTS = dict(FmaxTendonStrain=0.04, KshapeActive=0.45, KshapePassive=5.0, Af=0.25, Flen=1.4, tau_act=0.015, tau_deact=0.05)
+LEGACY = dict(FmaxTendonStrain=0.033, KshapeActive=0.5, KshapePassive=4.0, Af=0.3, Flen=1.8, tau_act=0.01, tau_deact=0.04)
+
+
+def muscle_model(penn, p):
+    m = osim.Model()
+    m.setGravity(osim.Vec3(0))
+    b = osim.Body("block", 1.0, osim.Vec3(0), osim.Inertia(0.01))
+    m.addBody(b)
+    j = osim.SliderJoint("slider", m.getGround(), osim.Vec3(0), osim.Vec3(0), b, osim.Vec3(0), osim.Vec3(0))
+    m.addJoint(j)
+    mus = osim.Thelen2003Muscle("mus", 1000.0, 0.1, 0.2, penn)
+    mus.set_FmaxTendonStrain(p["FmaxTendonStrain"])
+    mus.set_KshapeActive(p["KshapeActive"])
+    mus.set_KshapePassive(p["KshapePassive"])
+    mus.set_Af(p["Af"])
+    mus.set_Flen(p["Flen"])
+    mus.set_activation_time_constant(p["tau_act"])
+    mus.set_deactivation_time_constant(p["tau_deact"])
+    mus.addNewPathPoint("o", m.updGround(), osim.Vec3(0))
+    mus.addNewPathPoint("i", b, osim.Vec3(0))
+    m.addForce(mus)
+    s = m.initSystem()
+    return m, s, mus, j.updCoordinate()
+
+
+def muscles():
+    out = []
+    for label, p in (("defaults", DEFAULTS), ("legacy", LEGACY)):
+        for penn in (0.0, 0.3):
+            m, s, mus, c = muscle_model(penn, p)
+            rows = []
+            for lmt, vmt, lm, a, u in itertools.product((0.27, 0.29, 0.30, 0.31, 0.33), (-1.0, 0.0, 0.6),
+                                                         (0.06, 0.09, 0.1, 0.12), (0.05, 0.5, 1.0), (0.02, 0.7)):
+                c.setValue(s, lmt, False)
+                c.setSpeedValue(s, vmt)
+                mus.setActivation(s, a)
+                mus.setFiberLength(s, lm)
+                m.realizeVelocity(s)
+                ctrl = m.updControls(s)
+                ctrl.set(0, u)
+                m.setControls(s, ctrl)
+                m.realizeAcceleration(s)
+                rows.append([lmt, vmt, lm, a, u, mus.getTendonForce(s), mus.getFiberVelocity(s),
+                             mus.getForceVelocityMultiplier(s), mus.getPennationAngle(s),
+                             mus.getStateVariableDerivativeValue(s, "activation")])
+            eq = []
+            for lmt, a in itertools.product((0.27, 0.28, 0.29, 0.30, 0.31, 0.32), (0.02, 0.3, 1.0)):
+                c.setValue(s, lmt, False)
+                c.setSpeedValue(s, 0.0)
+                mus.setActivation(s, a)
+                m.equilibrateMuscles(s)
+                m.realizeVelocity(s)
+                eq.append([lmt, a, mus.getFiberLength(s), mus.getTendonForce(s)])
+            out.append({"parameters": label, "params": p, "pennation_angle_at_optimal": penn,
+                        "columns": ["lmt", "vmt", "lm", "a", "u", "tendon_force", "fiber_velocity", "fv", "pennation", "adot"],
+                        "rows": rows, "equilibrium_columns": ["lmt", "a", "lm", "tendon_force"], "equilibrium": eq})
+    return out
+
+
+def contact_model(law, E, cdiss, us, ud, uv, vt, R):
+    m = osim.Model()
+    m.setGravity(osim.Vec3(0))
+    b = osim.Body("ball", 1.0, osim.Vec3(0), osim.Inertia(0.001))
+    m.addBody(b)
+    j = osim.PlanarJoint("pj", m.getGround(), osim.Vec3(0), osim.Vec3(0), b, osim.Vec3(0), osim.Vec3(0))
+    m.addJoint(j)
+    sph = osim.ContactSphere(R, osim.Vec3(0), b, "sph")
+    floor = osim.ContactHalfSpace(osim.Vec3(0), osim.Vec3(0, 0, -0.5 * math.pi), m.getGround(), "floor")
+    m.addContactGeometry(sph)
+    m.addContactGeometry(floor)
+    if law == "HuntCrossleyForce":
+        f = osim.HuntCrossleyForce()
+        f.setStiffness(E)
+        f.setDissipation(cdiss)
+        f.setStaticFriction(us)
+        f.setDynamicFriction(ud)
+        f.setViscousFriction(uv)
+        f.setTransitionVelocity(vt)
+        f.addGeometry("sph")
+        f.addGeometry("floor")
+    else:
+        f = osim.SmoothSphereHalfSpaceForce("f", sph, floor)
+        f.set_stiffness(E)
+        f.set_dissipation(cdiss)
+        f.set_static_friction(us)
+        f.set_dynamic_friction(ud)
+        f.set_viscous_friction(uv)
+        f.set_transition_velocity(vt)
+    m.addForce(f)
+    s = m.initSystem()
+    return m, s, f, j
+
+
+def contacts():
+    out = []
+    sets = [(1e6, 1.0, 0.9, 0.6, 0.1, 0.01), (3777162.0, 2.0, 0.8, 0.8, 0.5, 0.1)]
+    for law in ("HuntCrossleyForce", "SmoothSphereHalfSpaceForce"):
+        for E, cd, us, ud, uv, vt in sets:
+            R = 0.032
+            m, s, f, j = contact_model(law, E, cd, us, ud, uv, vt, R)
+            rows = []
+            for depth, vy, vx, w in itertools.product((-0.002, 0.0005, 0.002, 0.006), (-0.4, 0.0, 0.3), (-0.5, 0.0, 0.003, 0.2), (0.0, 4.0)):
+                j.getCoordinate(0).setValue(s, 0.0, False)
+                j.getCoordinate(1).setValue(s, 0.0, False)
+                j.getCoordinate(2).setValue(s, R - depth, False)
+                j.getCoordinate(0).setSpeedValue(s, w)
+                j.getCoordinate(1).setSpeedValue(s, vx)
+                j.getCoordinate(2).setSpeedValue(s, vy)
+                m.realizeDynamics(s)
+                la = f.getRecordLabels()
+                va = f.getRecordValues(s)
+                labels = [la.get(i) for i in range(la.getSize())]
+                vals = [va.get(i) for i in range(va.getSize())]
+                # The first six records are the force and torque (about the
+                # body origin = sphere centre) on the sphere's body.
+                assert labels[0].endswith("force.X") and labels[5].endswith("torque.Z"), labels
+                rows.append([depth, vy, vx, w, vals[0], vals[1], vals[5]])
+            out.append({"law": law, "radius": R, "stiffness": E, "dissipation": cd, "static_friction": us,
+                        "dynamic_friction": ud, "viscous_friction": uv, "transition_velocity": vt,
+                        "columns": ["depth", "vy", "vx", "omega_z", "fx_on_sphere", "fy_on_sphere", "torque_z_about_centre"], "rows": rows})
+    return out
+
+
+def ligaments():
+    model_json = json.loads((ROOT / "models" / "jumper.json").read_text())
+    out = []
+    for lig in model_json["forces"]["ligaments"]:
+        m = osim.Model()
+        b = osim.Body("b", 1.0, osim.Vec3(0), osim.Inertia(0.01))
+        m.addBody(b)
+        j = osim.PinJoint("pin", m.getGround(), osim.Vec3(0), osim.Vec3(0), b, osim.Vec3(0), osim.Vec3(0))
+        j.updCoordinate().setName("q")
+        m.addJoint(j)
+        e = "{k1}*exp({k2}*(q-({t2})))+{k3}*exp({k4}*(q-({t1})))-{d}*qdot".format(
+            k1=lig["k1"], k2=lig["k2"], k3=lig["k3"], k4=lig["k4"], t1=lig["theta1"], t2=lig["theta2"], d=lig["damping"])
+        f = osim.ExpressionBasedCoordinateForce("q", e)
+        m.addForce(f)
+        s = m.initSystem()
+        rows = []
+        for q, qd in itertools.product((-2.0, -1.2, -0.5, 0.0, 0.3, 1.0, 1.6), (-3.0, 0.0, 2.0)):
+            j.updCoordinate().setValue(s, q, False)
+            j.updCoordinate().setSpeedValue(s, qd)
+            m.realizeDynamics(s)
+            rows.append([q, qd, f.getForceMagnitude(s)])
+        out.append({"coordinate": lig["coordinate"], "expression": e, "rows": rows})
+    return out
+
+
+def check_results(d):
+    d = pathlib.Path(d)
+    record = {"opensim_version": osim.GetVersionAndDate(), "files": {}}
+    ok = True
+    for name in ("jump_states.sto", "jump_controls.sto", "jump_grf.mot"):
+        p = d / name
+        entry = {}
+        try:
+            st = osim.Storage(str(p))
+            entry["Storage_rows"] = st.getSize()
+            entry["Storage_columns"] = st.getColumnLabels().getSize()
+            if name.endswith(".sto"):
+                t = osim.TimeSeriesTable(str(p))
+                entry["TimeSeriesTable_rows"] = t.getNumRows()
+                entry["TimeSeriesTable_columns"] = t.getNumColumns()
+                entry["first_labels"] = [t.getColumnLabel(i) for i in range(min(3, t.getNumColumns()))]
+            entry["loaded"] = True
+        except Exception as e:  # noqa: BLE001 - report any OpenSim failure
+            entry["loaded"] = False
+            entry["error"] = str(e)
+            ok = False
+        record["files"][name] = entry
+    (ROOT / "tests" / "data" / "opensim_load_check.json").write_text(json.dumps(record, indent=1) + "\n")
+    print(json.dumps(record, indent=1))
+    return ok
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--check-results", help="a results directory written by leap simulate")
+    ap.add_argument("--skip-reference", action="store_true")
+    args = ap.parse_args()
+    if not args.skip_reference:
+        out = {"opensim_version": osim.GetVersionAndDate(), "thelen": muscles(), "contact": contacts(), "ligaments": ligaments()}
+        path = ROOT / "tests" / "data" / "opensim_forces.json"
+        path.write_text(json.dumps(out) + "\n")
+        print(f"wrote {path}")
+    if args.check_results:
+        return 0 if check_results(args.check_results) else 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
