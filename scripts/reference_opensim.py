@@ -92,6 +92,52 @@ def muscles():
     return out
 
 
+def degroote():
+    """DeGrooteFregly2016Muscle on the slider: OpenSim's state is the
+    normalised tendon force; it reports the fibre length and velocity that
+    leap's fibre-length formulation must reproduce."""
+    out = []
+    for penn in (0.0, 0.3):
+        m = osim.Model()
+        m.setGravity(osim.Vec3(0))
+        b = osim.Body("block", 1.0, osim.Vec3(0), osim.Inertia(0.01))
+        m.addBody(b)
+        j = osim.SliderJoint("slider", m.getGround(), osim.Vec3(0), osim.Vec3(0), b, osim.Vec3(0), osim.Vec3(0))
+        m.addJoint(j)
+        mus = osim.DeGrooteFregly2016Muscle()
+        mus.setName("mus")
+        mus.set_max_isometric_force(1000.0)
+        mus.set_optimal_fiber_length(0.1)
+        mus.set_tendon_slack_length(0.2)
+        mus.set_pennation_angle_at_optimal(penn)
+        mus.set_tendon_strain_at_one_norm_force(0.033)
+        mus.set_activation_time_constant(0.01)
+        mus.set_deactivation_time_constant(0.04)
+        mus.addNewPathPoint("o", m.updGround(), osim.Vec3(0))
+        mus.addNewPathPoint("i", b, osim.Vec3(0))
+        m.addForce(mus)
+        s = m.initSystem()
+        c = j.updCoordinate()
+        rows = []
+        for lmt, vmt, ftn, a, u in itertools.product((0.28, 0.3, 0.31), (-0.5, 0.0, 0.4), (0.1, 0.5, 1.0), (0.1, 0.6, 1.0), (0.0, 0.8)):
+            c.setValue(s, lmt, False)
+            c.setSpeedValue(s, vmt)
+            mus.setStateVariableValue(s, "activation", a)
+            mus.setStateVariableValue(s, "normalized_tendon_force", ftn)
+            m.realizeVelocity(s)
+            ctrl = m.updControls(s)
+            ctrl.set(0, u)
+            m.setControls(s, ctrl)
+            m.realizeAcceleration(s)
+            rows.append([lmt, vmt, a, u, mus.getFiberLength(s), mus.getFiberVelocity(s), mus.getTendonForce(s),
+                         mus.getPennationAngle(s), mus.getStateVariableDerivativeValue(s, "activation")])
+        out.append({"pennation_angle_at_optimal": penn, "tendon_strain_at_one_norm_force": 0.033,
+                    "activation_time_constant": 0.01, "deactivation_time_constant": 0.04,
+                    "columns": ["lmt", "vmt", "a", "u", "fiber_length", "fiber_velocity", "tendon_force", "pennation", "adot"],
+                    "rows": rows})
+    return out
+
+
 def contact_model(law, E, cdiss, us, ud, uv, vt, R):
     m = osim.Model()
     m.setGravity(osim.Vec3(0))
@@ -214,7 +260,7 @@ def main():
     ap.add_argument("--skip-reference", action="store_true")
     args = ap.parse_args()
     if not args.skip_reference:
-        out = {"opensim_version": osim.GetVersionAndDate(), "thelen": muscles(), "contact": contacts(), "ligaments": ligaments()}
+        out = {"opensim_version": osim.GetVersionAndDate(), "thelen": muscles(), "degroote": degroote(), "contact": contacts(), "ligaments": ligaments()}
         path = ROOT / "tests" / "data" / "opensim_forces.json"
         path.write_text(json.dumps(out) + "\n")
         print(f"wrote {path}")

@@ -302,10 +302,185 @@ pub fn passive_torque<S: Scalar>(l: &crate::model::LigamentSpec, q: S, qd: S) ->
     ((q - l.theta2) * l.k2).exp() * l.k1 + ((q - l.theta1) * l.k4).exp() * l.k3 - qd * l.damping
 }
 
+/// DeGrooteFregly2016Muscle's curves (De Groote et al., Ann. Biomed. Eng.
+/// 2016; constants as in OpenSim 4.6, model-equations.md §3.2) in leap's
+/// explicit fibre-length formulation: the tendon force follows from the
+/// tendon length, and the fibre velocity from the closed-form inverse of the
+/// force-velocity curve. `FmaxTendonStrain` and `FmaxMuscleStrain` play the
+/// roles of `tendon_strain_at_one_norm_force` and
+/// `passive_fiber_strain_at_one_norm_force`.
+#[derive(Debug, Clone)]
+pub struct DeGroote {
+    pub f0: f64,
+    pub lopt: f64,
+    pub lts: f64,
+    pub vmax: f64,
+    pub tau_act: f64,
+    pub tau_deact: f64,
+    /// `activation_dynamics_smoothing` b (OpenSim default 0.1).
+    pub smoothing: f64,
+    width: f64,
+    k_t: f64,
+    e0: f64,
+}
+
+const DG_B: [[f64; 4]; 3] = [
+    [0.8150671134243542, 1.055033428970575, 0.162384573599574, 0.063303448465465],
+    [0.433004984392647, 0.716775413397760, -0.029947116970696, 0.200356847296188],
+    [0.1, 1.0, 0.353553390593274, 0.0],
+];
+const DG_D: [f64; 4] = [-0.3211346127989808, -8.149, -0.374, 0.8825327733249912];
+const DG_KPE: f64 = 4.0;
+const DG_LMIN: f64 = 0.2;
+const DG_C: [f64; 3] = [0.2, 1.0, 0.2];
+
+impl DeGroote {
+    pub fn new(m: &MuscleSpec) -> Self {
+        DeGroote {
+            f0: m.max_isometric_force,
+            lopt: m.optimal_fiber_length,
+            lts: m.tendon_slack_length,
+            vmax: m.max_contraction_velocity,
+            tau_act: m.activation_time_constant,
+            tau_deact: m.deactivation_time_constant,
+            smoothing: 0.1,
+            width: m.optimal_fiber_length * m.pennation_angle_at_optimal.sin(),
+            k_t: ((1.0 + DG_C[2]) / DG_C[0]).ln() / (1.0 + m.FmaxTendonStrain - DG_C[1]),
+            e0: m.FmaxMuscleStrain,
+        }
+    }
+
+    /// Active force-length multiplier (three Gaussian-like terms).
+    pub fn fal<S: Scalar>(&self, ln: S) -> S {
+        let mut f = S::zero();
+        for b in DG_B {
+            let den = ln * b[3] + b[2];
+            let d = ln - b[1];
+            f += (d * d * -0.5 / (den * den)).exp() * b[0];
+        }
+        f
+    }
+
+    /// Passive force-length multiplier (zero at l̃ = 0.2).
+    pub fn fpe<S: Scalar>(&self, ln: S) -> S {
+        let e_min = (DG_KPE * (DG_LMIN - 1.0) / self.e0).exp();
+        (((ln - 1.0) * (DG_KPE / self.e0)).exp() - e_min) / (DG_KPE.exp() - e_min)
+    }
+
+    /// Force-velocity multiplier and its inverse.
+    pub fn fv<S: Scalar>(&self, v: S) -> S {
+        let t = v * DG_D[1] + DG_D[2];
+        (t + (t * t + 1.0).sqrt()).ln() * DG_D[0] + DG_D[3]
+    }
+    pub fn fv_inv<S: Scalar>(&self, f: S) -> S {
+        (((f - DG_D[3]) / DG_D[0]).sinh() - DG_D[2]) / DG_D[1]
+    }
+
+    /// Tendon force multiplier of the normalised tendon length.
+    pub fn ft<S: Scalar>(&self, lt_n: S) -> S {
+        ((lt_n - DG_C[1]) * self.k_t).exp() * DG_C[0] - DG_C[2]
+    }
+
+    /// De Groote's smooth activation dynamics (model-equations.md §1.2).
+    pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
+        let f = ((u - a) * self.smoothing).tanh() * 0.5;
+        let z = a * 1.5 + 0.5;
+        ((f + 0.5) / (z * self.tau_act) + (f * -1.0 + 0.5) * z / self.tau_deact) * (u - a)
+    }
+
+    /// State derivatives and outputs at (a, l_M, l_MT, u).
+    pub fn calc<S: Scalar>(&self, a: S, lm: S, lmt: S, u: S) -> ThelenInfo<S> {
+        let along = (lm * lm - self.width * self.width).sqrt();
+        let cos_phi = along / lm;
+        let lt = lmt - along;
+        let ft = self.ft(lt / self.lts);
+        let ln = lm / self.lopt;
+        let fal = self.fal(ln);
+        let fpe = self.fpe(ln);
+        let fv = (ft / cos_phi - fpe) / (a * fal);
+        let vn = self.fv_inv(fv);
+        ThelenInfo {
+            activation_rate: self.activation_rate(a, u),
+            fiber_velocity: vn * (self.vmax * self.lopt),
+            fiber_length: lm,
+            pennation_angle: (lm.recip() * self.width).asin(),
+            tendon_length: lt,
+            tendon_force: ft * self.f0,
+            active_fiber_force: a * fal * fv * self.f0,
+            passive_fiber_force: fpe * self.f0,
+            normalized_fiber_length: ln,
+            normalized_fiber_velocity: vn,
+            active_force_length_multiplier: fal,
+            force_velocity_multiplier: fv,
+            fiber_clamped: false,
+        }
+    }
+
+    /// Fibre length in static equilibrium: (a·f_al + f_pe)·cos φ = f_T.
+    pub fn equilibrium_fiber_length(&self, a: f64, lmt: f64) -> f64 {
+        let resid = |lm: f64| {
+            let along = (lm * lm - self.width * self.width).sqrt();
+            let ln = lm / self.lopt;
+            (a * self.fal(ln) + self.fpe(ln)) * along / lm - self.ft((lmt - along) / self.lts)
+        };
+        let mut lo = (self.width * (1.0 + 1e-9)).max(DG_LMIN * self.lopt);
+        let mut hi = lmt;
+        if resid(lo) > 0.0 {
+            return lo;
+        }
+        if resid(hi) < 0.0 {
+            return hi;
+        }
+        for _ in 0..200 {
+            let mid = 0.5 * (lo + hi);
+            if resid(mid) > 0.0 {
+                hi = mid;
+            } else {
+                lo = mid;
+            }
+            if hi - lo < 1e-15 * self.lopt {
+                break;
+            }
+        }
+        0.5 * (lo + hi)
+    }
+}
+
+/// One muscle's law.
+#[derive(Debug, Clone)]
+pub enum MuscleLaw {
+    Thelen(Thelen),
+    DeGroote(DeGroote),
+}
+
+impl MuscleLaw {
+    /// State derivatives and outputs (`vmt` only matters to Thelen's clamp).
+    pub fn calc<S: Scalar>(&self, a: S, lm: S, lmt: S, vmt: S, u: S) -> ThelenInfo<S> {
+        match self {
+            MuscleLaw::Thelen(t) => t.calc(a, lm, lmt, vmt, u),
+            MuscleLaw::DeGroote(d) => d.calc(a, lm, lmt, u),
+        }
+    }
+    /// Fibre length in static muscle-tendon equilibrium.
+    pub fn equilibrium_fiber_length(&self, a: f64, lmt: f64) -> f64 {
+        match self {
+            MuscleLaw::Thelen(t) => t.equilibrium_fiber_length(a, lmt),
+            MuscleLaw::DeGroote(d) => d.equilibrium_fiber_length(a, lmt),
+        }
+    }
+    /// The smallest excitation the law takes (OpenSim's min_control).
+    pub fn min_excitation(&self) -> f64 {
+        match self {
+            MuscleLaw::Thelen(_) => MIN_ACTIVATION,
+            MuscleLaw::DeGroote(_) => 0.0,
+        }
+    }
+}
+
 /// The laws a model file names, ready for the state equation.
 #[derive(Debug, Clone)]
 pub struct OpenSimLaws {
-    pub muscles: Vec<Thelen>,
+    pub muscles: Vec<MuscleLaw>,
     contact: Option<ContactSpec>,
     radii: Vec<f64>,
     ligaments: Vec<crate::model::LigamentSpec>,
@@ -318,15 +493,15 @@ pub struct UnsupportedLaw(pub String);
 
 impl OpenSimLaws {
     pub fn new(model: &Model) -> Result<Self, UnsupportedLaw> {
-        if model.muscle_model != MuscleModel::Thelen2003Muscle {
-            return Err(UnsupportedLaw(format!(
-                "{}: forces.muscle_model: {:?} is not available in the state equation yet; use Thelen2003Muscle",
-                model.file.display(),
-                model.muscle_model
-            )));
-        }
         Ok(OpenSimLaws {
-            muscles: model.muscles.iter().map(|m| Thelen::new(&m.spec)).collect(),
+            muscles: model
+                .muscles
+                .iter()
+                .map(|m| match model.muscle_model {
+                    MuscleModel::Thelen2003Muscle => MuscleLaw::Thelen(Thelen::new(&m.spec)),
+                    MuscleModel::DeGrooteFregly2016Muscle => MuscleLaw::DeGroote(DeGroote::new(&m.spec)),
+                })
+                .collect(),
             contact: model.contact.as_ref().map(|c| c.spec.clone()),
             radii: model.contact.as_ref().map(|c| c.spheres.iter().map(|s| s.radius).collect()).unwrap_or_default(),
             ligaments: model.ligaments.iter().map(|l| l.spec.clone()).collect(),

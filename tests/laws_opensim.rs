@@ -118,3 +118,79 @@ fn passive_torques_match_opensim() {
         }
     }
 }
+
+/// DeGrooteFregly2016Muscle: at OpenSim's fibre length for its tendon-force
+/// state, leap's fibre-length formulation gives OpenSim's fibre velocity,
+/// tendon force, pennation and activation rate.
+#[test]
+fn degroote_matches_opensim() {
+    use leap::laws::DeGroote;
+    let d = data();
+    let mut n = 0;
+    for set in d["degroote"].as_array().unwrap() {
+        let g = |k: &str| set[k].as_f64().unwrap();
+        let spec = MuscleSpec {
+            name: "mus".into(),
+            max_isometric_force: 1000.0,
+            optimal_fiber_length: 0.1,
+            tendon_slack_length: 0.2,
+            pennation_angle_at_optimal: g("pennation_angle_at_optimal"),
+            max_contraction_velocity: 10.0,
+            activation_time_constant: g("activation_time_constant"),
+            deactivation_time_constant: g("deactivation_time_constant"),
+            FmaxTendonStrain: g("tendon_strain_at_one_norm_force"),
+            FmaxMuscleStrain: 0.6,
+            KshapeActive: 0.5,
+            KshapePassive: 4.0,
+            Af: 0.3,
+            Flen: 1.8,
+            path: vec![],
+        };
+        let dg = DeGroote::new(&spec);
+        for r in rows(&set["rows"]) {
+            let info = dg.calc(r[2], r[4], r[0], r[3]);
+            let ctx = format!("φ0={} {r:?}", spec.pennation_angle_at_optimal);
+            check(&format!("fibre velocity {ctx}"), info.fiber_velocity, r[5], 1e-3);
+            check(&format!("tendon force {ctx}"), info.tendon_force, r[6], 1.0);
+            check(&format!("pennation {ctx}"), info.pennation_angle, r[7], 1e-3);
+            check(&format!("activation rate {ctx}"), info.activation_rate, r[8], 1e-3);
+            n += 1;
+        }
+    }
+    assert_eq!(n, 2 * 3 * 3 * 3 * 3 * 2);
+}
+
+/// model-equations.md §8.3: OpenSim 4.6's DeGroote curve values.
+#[test]
+fn degroote_curves_match_opensim_tables() {
+    use leap::laws::DeGroote;
+    let spec = MuscleSpec {
+        name: "m".into(),
+        max_isometric_force: 1.0,
+        optimal_fiber_length: 0.1,
+        tendon_slack_length: 0.2,
+        pennation_angle_at_optimal: 0.0,
+        max_contraction_velocity: 10.0,
+        activation_time_constant: 0.015,
+        deactivation_time_constant: 0.06,
+        FmaxTendonStrain: 0.049,
+        FmaxMuscleStrain: 0.6,
+        KshapeActive: 0.5,
+        KshapePassive: 4.0,
+        Af: 0.3,
+        Flen: 1.8,
+        path: vec![],
+    };
+    let dg = DeGroote::new(&spec);
+    for (l, fal, fpe) in [(0.2, 0.00773584584111433, 0.0), (0.5, 0.0541121530142743, 0.000565014953778408), (1.0, 1.0, 0.0182288238200715), (1.5, 0.22614862789744, 0.513374088168605), (1.8, 0.0312824712807337, 3.79391495216897)] {
+        check(&format!("f_al({l})"), dg.fal(l), fal, 1e-6);
+        check(&format!("f_pe({l})"), dg.fpe(l), fpe, 1e-6);
+    }
+    for (v, fv) in [(-1.0, 0.0), (-0.5, 0.234036393548804), (0.1, 1.20650867126025), (1.0, 1.79434296355532)] {
+        check(&format!("f_v({v})"), dg.fv(v), fv, 1e-6);
+        assert!((dg.fv_inv(fv) - v).abs() < 1e-12);
+    }
+    for (lt, ft) in [(1.01, 0.0882945107353039), (1.03, 0.399030766530781), (1.049, 1.0), (1.06, 1.59418929625228)] {
+        check(&format!("f_T({lt})"), dg.ft(lt), ft, 1e-6);
+    }
+}
