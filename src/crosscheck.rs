@@ -309,10 +309,20 @@ fn state_equation_error(model: &Model, symmetric: bool, samples: usize, rng: &mu
         if let Some(ty) = ty {
             x[ty] += rng.random_range(-0.03..=0.0);
         }
+        // Fibre lengths within ±0.5 % of muscle-tendon equilibrium at the
+        // state's activation, so that every law sees a physical tendon.
+        let lmt: Vec<f64> = {
+            use crate::multibody::{GeneralizedForces, ModelView};
+            let mut w = eq.multibody.workspace::<f64>();
+            eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
+            let view = ModelView { mb: &eq.multibody, ws: &w, q_of: &eq.system.q_of_model_coordinate };
+            eq.muscles.iter().map(|&m| model.muscles[m].path.calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None).length).collect()
+        };
         for k in 0..nm {
-            let lopt = model.muscles[eq.muscles[k]].spec.optimal_fiber_length;
-            x[2 * n + k] = lopt * rng.random_range(0.5..=1.5);
-            x[2 * n + nm + k] = rng.random_range(0.01..=1.0);
+            let a = rng.random_range(0.01..=1.0);
+            let lm = laws.muscles[eq.muscles[k]].equilibrium_fiber_length(a, lmt[k]);
+            x[2 * n + k] = lm * rng.random_range(0.995..=1.005);
+            x[2 * n + nm + k] = a;
         }
         let u: Vec<f64> = (0..nm).map(|_| rng.random_range(0.01..=1.0)).collect();
         let (mut fr, mut fs) = (vec![0.0; nx], vec![0.0; nx]);
