@@ -114,15 +114,44 @@ impl Thelen {
 
     /// Pennation angle at fibre length `lm` (already clamped to l_min).
     fn pennation<S: Scalar>(&self, lm: S) -> S {
+        let (s, _) = self.pennation_sin_cos(lm);
+        if s.re() == 0.0 {
+            S::zero()
+        } else if s.re() >= MAX_PENNATION.sin() {
+            c(MAX_PENNATION)
+        } else {
+            s.asin()
+        }
+    }
+
+    /// sin φ and cos φ at fibre length `lm` (already clamped), without trig.
+    #[inline]
+    fn pennation_sin_cos<S: Scalar>(&self, lm: S) -> (S, S) {
         if !self.pennated {
-            return S::zero();
+            return (S::zero(), S::one());
         }
         let s = lm.recip() * self.height;
         if lm.re() > self.min_fiber_length && s.re() < MAX_PENNATION.sin() {
-            s.asin()
+            (s, (s * s * -1.0 + 1.0).sqrt())
         } else {
-            c(MAX_PENNATION)
+            (c(MAX_PENNATION.sin()), c(MAX_PENNATION.cos()))
         }
+    }
+
+    /// The state derivatives and tendon force only (the hot path).
+    #[inline]
+    pub fn rates<S: Scalar>(&self, a: S, lm_state: S, lmt: S, u: S) -> MuscleRates<S> {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let lm = if lm_state.re() < self.min_fiber_length { c(self.min_fiber_length) } else { lm_state };
+        let (_, cos_phi) = self.pennation_sin_cos(lm);
+        let ln = lm / self.lopt;
+        let fse = self.fse((lmt - lm * cos_phi) / self.lts - 1.0);
+        let f = fse / cos_phi - self.fpe(ln);
+        let mut vn = self.dlce_n(ac, self.fal(ln), f);
+        if lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0 {
+            vn = S::zero();
+        }
+        MuscleRates { tendon_force: fse * self.f0, fiber_velocity: vn * (self.vmax * self.lopt), activation_rate: self.activation_rate(a, u) }
     }
 
     /// Normalised fibre velocity from Thelen's inverted force-velocity curve
@@ -163,7 +192,7 @@ impl Thelen {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
         let lm = if lm_state.re() < self.min_fiber_length { c(self.min_fiber_length) } else { lm_state };
         let phi = self.pennation(lm);
-        let cos_phi = phi.cos();
+        let (_, cos_phi) = self.pennation_sin_cos(lm);
         let lt = lmt - lm * cos_phi;
         let ln = lm / self.lopt;
         let fse = self.fse(lt / self.lts - 1.0);
@@ -200,10 +229,10 @@ impl Thelen {
     pub fn equilibrium_fiber_length(&self, a: f64, lmt: f64) -> f64 {
         let ac = a.clamp(MIN_ACTIVATION, 1.0);
         let resid = |lm: f64| {
-            let phi: f64 = self.pennation(lm);
-            let lt = lmt - lm * phi.cos();
+            let (_, cos_phi): (f64, f64) = self.pennation_sin_cos(lm);
+            let lt = lmt - lm * cos_phi;
             let ln = lm / self.lopt;
-            (ac * self.fal(ln) + self.fpe(ln)) * phi.cos() - self.fse(lt / self.lts - 1.0)
+            (ac * self.fal(ln) + self.fpe(ln)) * cos_phi - self.fse(lt / self.lts - 1.0)
         };
         // Residual rises with l_M (the tendon shortens): bracket and bisect.
         let mut lo = self.min_fiber_length.max(1e-6 * self.lopt);
@@ -511,11 +540,17 @@ impl OpenSimLaws {
 
 impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
     fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
-        let info = self.muscles[m].calc(a, lm, lmt, vmt, u);
-        if !info.fiber_velocity.re().is_finite() || !info.tendon_force.re().is_finite() {
+        let r = match &self.muscles[m] {
+            MuscleLaw::Thelen(t) => t.rates(a, lm, lmt, u),
+            law => {
+                let info = law.calc(a, lm, lmt, vmt, u);
+                MuscleRates { tendon_force: info.tendon_force, fiber_velocity: info.fiber_velocity, activation_rate: info.activation_rate }
+            }
+        };
+        if !r.fiber_velocity.re().is_finite() || !r.tendon_force.re().is_finite() {
             return Err(format!("non-finite fibre velocity or tendon force (a = {}, l_M = {}, l_MT = {})", a.re(), lm.re(), lmt.re()));
         }
-        Ok(MuscleRates { tendon_force: info.tendon_force, fiber_velocity: info.fiber_velocity, activation_rate: info.activation_rate })
+        Ok(r)
     }
     fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
         match &self.contact {

@@ -93,6 +93,17 @@ pub trait ForceSink<S: Scalar> {
     fn add_generalized_force(&mut self, coordinate: usize, force: S);
 }
 
+/// A path point's kinematics at one state.
+#[derive(Debug, Clone, Copy)]
+struct PointState<S> {
+    i: usize,
+    p: [S; 3],
+    v: [S; 3],
+    loc: [S; 3],
+    slide: [S; 3],
+    coord: Option<usize>,
+}
+
 /// The path's configuration-level results at one state.
 #[derive(Debug, Clone, Copy)]
 pub struct PathValue<S> {
@@ -180,21 +191,24 @@ impl GeometryPath {
         }
     }
 
-    /// Position and velocity in ground of point `i`.
+    /// Ground position and velocity of point `i`, its body-frame location,
+    /// and (moving points) its coordinate and the ground direction in which
+    /// it slides per unit of that coordinate.
     #[inline]
-    fn point<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, i: usize) -> ([S; 3], [S; 3]) {
+    fn point<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, i: usize) -> PointState<S> {
         let (loc, dloc, coord) = self.local(k, i);
         let body = self.points[i].body;
         let p = k.position(body, loc);
         let mut v = k.velocity(body, loc);
+        let mut slide = [S::zero(); 3];
         if let Some(cd) = coord {
             let (_, qd) = k.coordinate(cd);
-            let g = k.to_ground(body, dloc);
+            slide = k.to_ground(body, dloc);
             for d in 0..3 {
-                v[d] += g[d] * qd;
+                v[d] += slide[d] * qd;
             }
         }
-        (p, v)
+        PointState { i, p, v, loc, slide, coord }
     }
 
     /// Weight of each conditional point (1 = active) under `smoothing`,
@@ -232,7 +246,7 @@ impl GeometryPath {
                 None => true,
             }
         };
-        let mut prev: Option<(usize, [S; 3], [S; 3])> = None;
+        let mut prev: Option<PointState<S>> = None;
         let mut sink = tension;
         let mut prev_dir: Option<[S; 3]> = None;
         let n = self.points.len();
@@ -240,47 +254,46 @@ impl GeometryPath {
             if !active(i) {
                 continue;
             }
-            let (p, v) = self.point(k, i);
+            let cur = self.point(k, i);
             let mut dir_out = None;
-            if let Some((_, pp, pv)) = prev {
-                let d = [p[0] - pp[0], p[1] - pp[1], p[2] - pp[2]];
+            if let Some(pp) = &prev {
+                let d = [cur.p[0] - pp.p[0], cur.p[1] - pp.p[1], cur.p[2] - pp.p[2]];
                 let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 let e = [d[0] / len, d[1] / len, d[2] / len];
                 length += len;
-                speed += e[0] * (v[0] - pv[0]) + e[1] * (v[1] - pv[1]) + e[2] * (v[2] - pv[2]);
+                speed += e[0] * (cur.v[0] - pp.v[0]) + e[1] * (cur.v[1] - pp.v[1]) + e[2] * (cur.v[2] - pp.v[2]);
                 dir_out = Some(e);
-            }
-            // Force on the previous point: tension toward this one.
-            if let (Some((t, sink)), Some(e), Some((pi, _, _))) = (sink.as_mut(), dir_out, prev) {
-                let pull_prev = [e[0] * *t, e[1] * *t, e[2] * *t];
-                self.apply(k, pi, pull_prev, prev_dir, *sink, *t);
+                // Force on the previous point: tension toward this one.
+                if let Some((t, sink)) = sink.as_mut() {
+                    let pull_prev = [e[0] * *t, e[1] * *t, e[2] * *t];
+                    self.apply(pp, pull_prev, prev_dir, *sink, *t);
+                }
             }
             prev_dir = dir_out;
-            prev = Some((i, p, v));
+            prev = Some(cur);
         }
         // Last point: pulled back toward its predecessor.
-        if let (Some((t, sink)), Some((li, _, _)), Some(e)) = (sink.as_mut(), prev, prev_dir) {
+        if let (Some((t, sink)), Some(last), Some(e)) = (sink.as_mut(), &prev, prev_dir) {
             let pull = [e[0] * -*t, e[1] * -*t, e[2] * -*t];
-            self.apply(k, li, pull, None, *sink, *t);
+            self.apply(last, pull, None, *sink, *t);
         }
         PathValue { length, lengthening_speed: speed }
     }
 
-    /// Apply the force on point `i`: `pull` toward its successor plus, if
+    /// Apply the force on a point: `pull` toward its successor plus, if
     /// `incoming` (unit vector from its predecessor) is given, `−T·incoming`.
-    fn apply<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(&self, k: &K, i: usize, pull: [S; 3], incoming: Option<[S; 3]>, sink: &mut F, t: S) {
+    #[inline]
+    fn apply<S: Scalar, F: ForceSink<S>>(&self, pt: &PointState<S>, pull: [S; 3], incoming: Option<[S; 3]>, sink: &mut F, t: S) {
         let mut f = pull;
         if let Some(e) = incoming {
             for d in 0..3 {
                 f[d] -= e[d] * t;
             }
         }
-        let (loc, dloc, coord) = self.local(k, i);
-        let body = self.points[i].body;
-        sink.add_point_force(body, loc, f);
-        if let Some(cd) = coord {
+        sink.add_point_force(self.points[pt.i].body, pt.loc, f);
+        if let Some(cd) = pt.coord {
             // The moving point slides in its body as its coordinate changes.
-            let g = k.to_ground(body, dloc);
+            let g = pt.slide;
             sink.add_generalized_force(cd, f[0] * g[0] + f[1] * g[1] + f[2] * g[2]);
         }
     }
