@@ -275,12 +275,21 @@ fn clamp<S: Scalar>(x: S, lo: f64, hi: f64) -> S {
 /// One contact element per sphere, so HuntCrossleyForce's "return" quirk
 /// across spheres does not arise.
 pub fn sphere_ground_force<S: Scalar>(spec: &ContactSpec, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+    sphere_ground_force_k(spec, hertz_k(spec.stiffness), r, p, v)
+}
+
+/// Simbody stores E^(2/3); two equal surfaces combine to k = ½·E^(2/3).
+pub fn hertz_k(stiffness: f64) -> f64 {
+    0.5 * stiffness.cbrt() * stiffness.cbrt()
+}
+
+/// [`sphere_ground_force`] with the combined Hertz constant `k` precomputed.
+#[inline]
+pub fn sphere_ground_force_k<S: Scalar>(spec: &ContactSpec, k: f64, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
     let depth = p[1] * -1.0 + r;
     // v_n: penetration rate (the sphere moving into the ground).
     let vn = v[1] * -1.0;
     let (mus, mud, muv, vt) = (spec.static_friction, spec.dynamic_friction, spec.viscous_friction, spec.transition_velocity);
-    // Simbody stores E^(2/3); two equal surfaces combine to ½·E^(2/3).
-    let k = 0.5 * spec.stiffness.cbrt() * spec.stiffness.cbrt();
     let point = [p[0], p[1] - (depth * -0.5 + r), p[2]];
     match spec.law {
         ContactLaw::HuntCrossleyForce => {
@@ -511,6 +520,7 @@ impl MuscleLaw {
 pub struct OpenSimLaws {
     pub muscles: Vec<MuscleLaw>,
     contact: Option<ContactSpec>,
+    contact_k: f64,
     radii: Vec<f64>,
     ligaments: Vec<crate::model::LigamentSpec>,
 }
@@ -532,6 +542,7 @@ impl OpenSimLaws {
                 })
                 .collect(),
             contact: model.contact.as_ref().map(|c| c.spec.clone()),
+            contact_k: model.contact.as_ref().map(|c| hertz_k(c.spec.stiffness)).unwrap_or(0.0),
             radii: model.contact.as_ref().map(|c| c.spheres.iter().map(|s| s.radius).collect()).unwrap_or_default(),
             ligaments: model.ligaments.iter().map(|l| l.spec.clone()).collect(),
         })
@@ -554,7 +565,7 @@ impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
     }
     fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
         match &self.contact {
-            Some(spec) => sphere_ground_force(spec, self.radii[k], p, v),
+            Some(spec) => sphere_ground_force_k(spec, self.contact_k, self.radii[k], p, v),
             None => ([S::zero(); 3], p),
         }
     }
