@@ -185,3 +185,45 @@ pub fn evaluate(eq: &StateEquation, laws: &OpenSimLaws, x: &[f64], u: &[f64]) ->
         com_velocity: eq.multibody.com_velocity(mbw),
     })
 }
+
+/// A length jump of an exact (OpenSim) path where a conditional point
+/// switches, which the smooth option removes.
+#[derive(Debug, Clone, Serialize)]
+pub struct SwitchJump {
+    pub muscle: String,
+    /// Path point number (1-based, as in OpenSim's P1, P2, ...).
+    pub point: usize,
+    pub coordinate: String,
+    /// Coordinate value where the point switches (rad).
+    pub at: f64,
+    /// L(point on) − L(point off) at the switch (m).
+    pub jump_m: f64,
+}
+
+/// Every switch of every carried muscle's conditional points inside the
+/// coordinate ranges, with the other coordinates at `pose` (model values).
+pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
+    let model = &eq.model;
+    let mut out = Vec::new();
+    let mut ws = eq.multibody.workspace::<f64>();
+    for &mi in &eq.muscles {
+        let m = &model.muscles[mi];
+        for (j, (pi, coord, range)) in m.path.conditional_points().into_iter().enumerate() {
+            let [lo, hi] = model.coordinates[coord].range;
+            for edge in range {
+                if edge < lo || edge > hi {
+                    continue;
+                }
+                let mut mq = pose.to_vec();
+                mq[coord] = edge;
+                let q = eq.system.q_from_model(&mq);
+                eq.multibody.set_state(&mut ws, &q, &vec![0.0; q.len()]);
+                let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &eq.system.q_of_model_coordinate };
+                let on: f64 = m.path.length_with(&view, j, true);
+                let off: f64 = m.path.length_with(&view, j, false);
+                out.push(SwitchJump { muscle: m.spec.name.clone(), point: pi + 1, coordinate: model.coordinates[coord].name.clone(), at: edge, jump_m: on - off });
+            }
+        }
+    }
+    out
+}

@@ -82,6 +82,18 @@ enum Command {
         #[arg(long)]
         full: bool,
     },
+    /// The length jumps of the exact muscle paths where conditional path
+    /// points switch (what the smooth option removes), other coordinates
+    /// at a pose of the model.
+    Paths {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        /// Pose of the other coordinates (a pose name of the model file).
+        #[arg(long, default_value = "squat")]
+        pose: String,
+        #[arg(long)]
+        json: bool,
+    },
     /// Benchmarks that print tables (medians of repeated batches).
     Bench {
         #[command(subcommand)]
@@ -175,6 +187,24 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     let fy: f64 = r.contact_forces.values().map(|f| f[1]).sum();
                     println!("total vertical contact force: {fy:.2} N");
                 }
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Paths { model, pose, json } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
+            let q = m.poses.get(&pose).cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: no pose '{pose}' (have: {})", model.display(), m.poses.keys().cloned().collect::<Vec<_>>().join(", ")))?;
+            let jumps = leap::eval::switch_jumps(&eq, &q);
+            let largest = jumps.iter().map(|j| j.jump_m.abs()).fold(0.0, f64::max);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&serde_json::json!({"pose": pose, "largest_jump_m": largest, "switches": jumps}))?);
+            } else {
+                let mut t = comfy_table::Table::new();
+                t.set_header(["muscle", "point", "coordinate", "switch at (rad)", "length jump (mm)"]);
+                for j in &jumps {
+                    t.add_row([j.muscle.clone(), format!("P{}", j.point), j.coordinate.clone(), format!("{:.6}", j.at), format!("{:+.4}", 1e3 * j.jump_m)]);
+                }
+                println!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
             }
             Ok(ExitCode::SUCCESS)
         }

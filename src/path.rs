@@ -174,6 +174,34 @@ impl GeometryPath {
         self.conditional.len()
     }
 
+    /// Length of the exact (OpenSim) path with conditional point `j`
+    /// (index among the conditional points) forced on or off, the others as
+    /// their coordinates say.
+    pub fn length_with<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, j: usize, on: bool) -> S {
+        let nc = self.conditional.len();
+        let mut w = [S::zero(); 8];
+        let mut dw = [S::zero(); 8];
+        self.weights(k, PathSmoothing::Exact, &mut w[..nc], &mut dw[..nc]);
+        let mut mask = (0..nc).fold(0u32, |m, i| if w[i].re() > 0.5 { m | (1 << i) } else { m });
+        if on {
+            mask |= 1 << j;
+        } else {
+            mask &= !(1 << j);
+        }
+        self.subpath::<S, K, CollectedForces<S>>(k, mask, None).length
+    }
+
+    /// The conditional points: (point index, coordinate, range).
+    pub fn conditional_points(&self) -> Vec<(usize, usize, [f64; 2])> {
+        self.conditional
+            .iter()
+            .filter_map(|&i| match &self.points[i].kind {
+                PointKind::Conditional { coordinate, range } => Some((i, *coordinate, *range)),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Location in the body frame and its derivative with respect to the
     /// point's coordinate (zero unless moving).
     #[inline]
@@ -356,34 +384,6 @@ impl GeometryPath {
             }
         }
         total
-    }
-
-    /// The largest length jump (m) of the exact path when each conditional
-    /// point switches at its range ends, with the other coordinates as `k`
-    /// has them and the switching coordinate set by `at(coordinate, value)`.
-    pub fn largest_switch_jump<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(
-        &self,
-        kinematics_at: &mut dyn FnMut(usize, f64) -> K,
-    ) -> f64 {
-        let mut worst: f64 = 0.0;
-        for &ci in &self.conditional {
-            let PointKind::Conditional { coordinate, range } = &self.points[ci].kind else { continue };
-            for &edge in range {
-                let k = kinematics_at(*coordinate, edge);
-                let j = self.conditional.iter().position(|&x| x == ci).unwrap_or(0);
-                let base: u32 = {
-                    let mut w = [S::zero(); 8];
-                    let mut dw = [S::zero(); 8];
-                    let nc = self.conditional.len();
-                    self.weights(&k, PathSmoothing::Exact, &mut w[..nc], &mut dw[..nc]);
-                    (0..nc).fold(0u32, |m, i| if w[i].re() > 0.5 { m | (1 << i) } else { m })
-                };
-                let on = self.subpath::<S, K, F>(&k, base | (1 << j), None).length.re();
-                let off = self.subpath::<S, K, F>(&k, base & !(1 << j), None).length.re();
-                worst = worst.max((on - off).abs());
-            }
-        }
-        worst
     }
 }
 

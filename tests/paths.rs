@@ -104,3 +104,44 @@ fn lengthening_speed_is_the_time_derivative_of_length() {
         assert!((v.lengthening_speed - fd).abs() < 1e-7, "{}: {} vs {}", m.spec.name, v.lengthening_speed, fd);
     }
 }
+
+/// The length jumps of the exact paths at conditional-point switches, with
+/// the other coordinates at 0, against model-data.md §10's list (computed
+/// independently by the reference author, quoted to 0.01 mm or better).
+#[test]
+fn switch_jumps_match_model_data() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let eq = leap::ode::StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
+    let mut pose: Vec<f64> = vec![0.0; model.coordinates.len()];
+    pose[model.coordinate_index("pelvis_ty").unwrap()] = 0.94387;
+    let jumps = leap::eval::switch_jumps(&eq, &pose);
+    let find = |m: &str, at: f64| jumps.iter().find(|j| j.muscle == m && (j.at - at).abs() < 1e-9).unwrap().jump_m.abs() * 1e3;
+    for (m, at, mm, tol) in [
+        ("iliacus_r", 0.785398, 0.56, 0.005),
+        ("psoas_r", 0.785398, 0.011, 0.0005),
+        ("med_gas_r", -0.785398, 0.36, 0.005),
+        ("lat_gas_r", -0.785398, 0.03, 0.005),
+        ("vas_med_r", -1.78006, 0.023, 0.0005),
+        ("iliacus_r", -1.5708, 22.7, 0.05),
+        ("med_gas_r", 0.174533, 6.7, 0.05),
+    ] {
+        let got = find(m, at);
+        assert!((got - mm).abs() <= tol, "{m} at {at}: {got} mm vs {mm} mm");
+    }
+    // The smooth option has no jump: its length is continuous across a switch.
+    let sys = model.system(true).unwrap();
+    let mb = Multibody::new(&model, &sys);
+    let ili = model.muscles.iter().position(|m| m.spec.name == "iliacus_r").unwrap();
+    let length = |hip: f64, sm: PathSmoothing| {
+        let mut q = pose.clone();
+        q[model.coordinate_index("hip_flexion_r").unwrap()] = hip;
+        let mut ws = mb.workspace::<f64>();
+        mb.set_state(&mut ws, &sys.q_from_model(&q), &[0.0; 7]);
+        let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
+        model.muscles[ili].path.calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None).length
+    };
+    let sm = PathSmoothing::Smooth { delta: 0.02 };
+    let d_exact = (length(0.785398 + 1e-9, PathSmoothing::Exact) - length(0.785398 - 1e-9, PathSmoothing::Exact)).abs();
+    let d_smooth = (length(0.785398 + 1e-9, sm) - length(0.785398 - 1e-9, sm)).abs();
+    assert!(d_exact > 5e-4 && d_smooth < 1e-9, "exact jump {d_exact}, smooth {d_smooth}");
+}
