@@ -642,18 +642,31 @@ impl<'a, S: Scalar> crate::path::ForceSink<S> for GeneralizedForces<'a, S> {
 }
 
 /// Generalized forces of a unit tension (the moment arms), added scaled into
-/// a [`GeneralizedForces`] sink: the Rust backend's fast muscle path.
+/// a [`GeneralizedForces`] sink: the Rust backend's fast muscle path. Point
+/// forces are summed per body into a wrench (force and moment about the body
+/// origin) and mapped to generalized forces once per body.
 pub struct UnitGeneralizedForces<'a, S: Scalar> {
     pub mb: &'a Multibody,
     pub ws: &'a Workspace<S>,
     pub q_of: &'a [usize],
+    /// Generalized forces added directly (moving points sliding).
     pub tau: &'a mut [S],
+    /// Per composite body: [Fx, Fy, Mz about the origin].
+    pub wrench: &'a mut [[S; 3]],
+    /// Bit i set: body i has a wrench.
+    pub touched: u64,
 }
 
 impl<'a, S: Scalar> crate::path::ForceSink<S> for UnitGeneralizedForces<'a, S> {
+    #[inline]
     fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
         let (ci, off) = self.mb.frame_of_model_body(body);
-        self.mb.add_point_force_s(self.ws, ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]], force, self.tau);
+        let s = rot(self.ws.cos[ci], self.ws.sin[ci], [loc[0] + off[0], loc[1] + off[1]]);
+        let w = &mut self.wrench[ci];
+        w[0] += force[0];
+        w[1] += force[1];
+        w[2] += s[0] * force[1] - s[1] * force[0];
+        self.touched |= 1 << ci;
     }
     fn add_generalized_force(&mut self, coordinate: usize, force: S) {
         self.tau[self.q_of[coordinate]] += force;
@@ -665,10 +678,34 @@ impl<'a, 'b, S: Scalar> crate::path::UnitForces<S, GeneralizedForces<'b, S>> for
         for t in self.tau.iter_mut() {
             *t = S::zero();
         }
+        let mut bits = self.touched;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            self.wrench[i] = [S::zero(); 3];
+            bits &= bits - 1;
+        }
+        self.touched = 0;
     }
     fn apply_scaled(&self, factor: S, sink: &mut GeneralizedForces<'b, S>) {
         for (t, u) in sink.tau.iter_mut().zip(self.tau.iter()) {
             *t += *u * factor;
+        }
+        let mut bits = self.touched;
+        while bits != 0 {
+            let i = bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let w = self.wrench[i];
+            let (f, m) = ([w[0] * factor, w[1] * factor], w[2] * factor);
+            let b = &self.mb.bodies[i];
+            let o = i * self.mb.dmax;
+            for k in 0..b.dofs.len() {
+                let j = self.ws.jp[o + k];
+                let mut g = j[0] * f[0] + j[1] * f[1];
+                if b.rot[k] {
+                    g += m;
+                }
+                sink.tau[b.dofs[k]] += g;
+            }
         }
     }
 }

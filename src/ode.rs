@@ -84,6 +84,7 @@ pub struct StateWorkspace<S: Scalar> {
     /// Per ligament after an evaluation: torque (N·m).
     pub ligament_torque: Vec<S>,
     tau_unit: Vec<S>,
+    wrench: Vec<[S; 3]>,
 }
 
 impl StateEquation {
@@ -91,6 +92,9 @@ impl StateEquation {
     pub fn new(model: &Model, symmetric: bool, smoothing: PathSmoothing) -> Result<Self, OdeError> {
         let system = model.system(symmetric)?;
         let multibody = Multibody::new(model, &system);
+        if multibody.num_composite_bodies() > 64 {
+            return Err(OdeError::Symmetry(format!("{}: more than 64 moving bodies are not supported", model.file.display())));
+        }
         let mut muscles = Vec::new();
         let mut multiplicity = Vec::new();
         for (i, m) in model.muscles.iter().enumerate() {
@@ -179,6 +183,7 @@ impl StateEquation {
             sphere_force: vec![[z; 3]; ns],
             ligament_torque: vec![z; self.model.ligaments.len()],
             tau_unit: vec![z; n],
+            wrench: vec![[z; 3]; self.multibody.num_composite_bodies()],
         }
     }
 
@@ -205,7 +210,7 @@ impl StateEquation {
         {
             let view = ModelView { mb: &self.multibody, ws: &ws.mb, q_of };
             let mut sink = GeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau };
-            let mut unit = crate::multibody::UnitGeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau_unit };
+            let mut unit = crate::multibody::UnitGeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau_unit, wrench: &mut ws.wrench, touched: all_bodies(self.multibody.num_composite_bodies()) };
             self.apply_forces(laws, &view, &mut sink, lm, act, u, &mut xdot[2 * n..], Outputs {
                 mtu_length: &mut ws.mtu_length,
                 mtu_speed: &mut ws.mtu_speed,
@@ -277,6 +282,15 @@ impl StateEquation {
             unit.apply_scaled(rates.tendon_force * self.multiplicity[k], sink);
         }
         Ok(())
+    }
+}
+
+/// Bit mask of the first `n` (≤ 64) bodies.
+fn all_bodies(n: usize) -> u64 {
+    if n >= 64 {
+        u64::MAX
+    } else {
+        (1u64 << n) - 1
     }
 }
 
