@@ -502,28 +502,12 @@ IntegratorStats SimbodySystem::integrate(std::int32_t method, double accuracy, d
     p->require_final("integrate");
     if (!(accuracy > 0)) throw std::invalid_argument("integrate: accuracy must be positive");
     if (!(t_final >= p->state.getTime())) throw std::invalid_argument("integrate: t_final is before the current time");
-    std::unique_ptr<Integrator> integ;
-    switch (method) {
-        case 0: integ.reset(new RungeKuttaMersonIntegrator(p->system)); break;
-        case 1: integ.reset(new RungeKuttaFeldbergIntegrator(p->system)); break;
-        case 2: integ.reset(new RungeKutta3Integrator(p->system)); break;
-        case 3: integ.reset(new CPodesIntegrator(p->system, CPodes::BDF, CPodes::Newton)); break;
-        case 4: integ.reset(new ExplicitEulerIntegrator(p->system, accuracy)); break;
-        default: throw std::invalid_argument("integrate: unknown integrator " + std::to_string(method));
-    }
-    if (method != 4) integ->setAccuracy(accuracy);
-    else integ->setFixedStepSize(accuracy);
+    std::unique_ptr<Integrator> integ = make_integrator(p->system, method, accuracy);
     TimeStepper ts(p->system, *integ);
     ts.initialize(p->state);
     ts.stepTo(t_final);
     p->state = integ->getState();
-    IntegratorStats s;
-    s.steps_taken = integ->getNumStepsTaken();
-    s.steps_attempted = integ->getNumStepsAttempted();
-    s.realizations = integ->getNumRealizations();
-    s.error_test_failures = integ->getNumErrorTestFailures();
-    s.final_time = p->state.getTime();
-    return s;
+    return stats_of(*integ, p->state.getTime());
 }
 
 void SimbodySystem::throw_for_test(std::int32_t kind) {

@@ -234,28 +234,33 @@ impl Thelen {
             let ln = lm / self.lopt;
             (ac * self.fal(ln) + self.fpe(ln)) * cos_phi - self.fse(lt / self.lts - 1.0)
         };
-        // Residual rises with l_M (the tendon shortens): bracket and bisect.
-        let mut lo = self.min_fiber_length.max(1e-6 * self.lopt);
-        let mut hi = lmt.max(lo * 2.0);
-        if resid(lo) > 0.0 {
-            return lo;
-        }
-        if resid(hi) < 0.0 {
-            return hi;
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if resid(mid) > 0.0 {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-            if hi - lo < 1e-15 * self.lopt {
-                break;
-            }
-        }
-        0.5 * (lo + hi)
+        let lo = self.min_fiber_length.max(1e-6 * self.lopt);
+        bisect_increasing(resid, lo, lmt.max(lo * 2.0), 1e-15 * self.lopt)
     }
+}
+
+/// The root of an increasing residual in [lo, hi] by bisection (the fibre
+/// length of muscle-tendon equilibrium: the residual rises with l_M as the
+/// tendon shortens); an end if the root lies outside.
+fn bisect_increasing(resid: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, tol: f64) -> f64 {
+    if resid(lo) > 0.0 {
+        return lo;
+    }
+    if resid(hi) < 0.0 {
+        return hi;
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if resid(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+        if hi - lo < tol {
+            break;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 fn clamp<S: Scalar>(x: S, lo: f64, hi: f64) -> S {
@@ -461,26 +466,8 @@ impl DeGroote {
             let ln = lm / self.lopt;
             (a * self.fal(ln) + self.fpe(ln)) * along / lm - self.ft((lmt - along) / self.lts)
         };
-        let mut lo = (self.width * (1.0 + 1e-9)).max(DG_LMIN * self.lopt);
-        let mut hi = lmt;
-        if resid(lo) > 0.0 {
-            return lo;
-        }
-        if resid(hi) < 0.0 {
-            return hi;
-        }
-        for _ in 0..200 {
-            let mid = 0.5 * (lo + hi);
-            if resid(mid) > 0.0 {
-                hi = mid;
-            } else {
-                lo = mid;
-            }
-            if hi - lo < 1e-15 * self.lopt {
-                break;
-            }
-        }
-        0.5 * (lo + hi)
+        let lo = (self.width * (1.0 + 1e-9)).max(DG_LMIN * self.lopt);
+        bisect_increasing(resid, lo, lmt, 1e-15 * self.lopt)
     }
 }
 

@@ -169,6 +169,24 @@ fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 12] 
     out
 }
 
+/// COM position and velocity at state x.
+fn com_at(eq: &StateEquation, x: &[f64]) -> ([f64; 3], [f64; 3]) {
+    let n = eq.nq();
+    let mut w = eq.multibody.workspace::<f64>();
+    eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
+    (eq.multibody.com_position(&w), eq.multibody.com_velocity(&w))
+}
+
+/// Lift-off time, COM velocity and height, and the apex: the highest COM
+/// seen, or the ballistic rise from lift-off (closed form in flight).
+fn liftoff_and_apex(eq: &StateEquation, liftoff: &Option<(f64, Vec<f64>)>, seen: f64) -> (Option<f64>, Option<f64>, Option<f64>, f64) {
+    let Some((t, xl)) = liftoff else { return (None, None, None, seen) };
+    let (c, v) = com_at(eq, xl);
+    let g = eq.model.gravity[1].abs();
+    let rise = v[1].max(0.0) * v[1].max(0.0) / (2.0 * g);
+    (Some(*t), Some(v[1]), Some(c[1]), seen.max(c[1] + rise))
+}
+
 /// Options of a Rust-native forward simulation.
 #[derive(Debug, Clone, Copy)]
 pub struct SimulateOptions {
@@ -193,7 +211,6 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
     opts: SimulateOptions,
 ) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
     let start = std::time::Instant::now();
-    let n = eq.nq();
     let nm = eq.nm();
     let mut sys = Rhs { eq, laws, exc, ws: eq.workspace(), u: vec![0.0; nm] };
     let mut traj = Trajectory::default();
@@ -219,11 +236,7 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
     };
     let mut in_contact = peak_fy > 0.0;
     let mut liftoff: Option<(f64, Vec<f64>)> = None;
-    let com = |x: &[f64]| -> ([f64; 3], [f64; 3]) {
-        let mut w = eq.multibody.workspace::<f64>();
-        eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
-        (eq.multibody.com_position(&w), eq.multibody.com_velocity(&w))
-    };
+    let com = |x: &[f64]| com_at(eq, x);
     let mut apex = f64::NEG_INFINITY;
     loop {
         let t = match ig.step(&mut sys, opts.t_max) {
@@ -279,18 +292,7 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
             break;
         }
     }
-    let (lt, lv, lh) = match &liftoff {
-        Some((t, xl)) => {
-            let (c, v) = com(xl);
-            (Some(*t), Some(v[1]), Some(c[1]))
-        }
-        None => (None, None, None),
-    };
-    // In flight the COM rises ballistically: apex from lift-off in closed form.
-    let g = eq.model.gravity[1].abs();
-    if let (Some(h), Some(v)) = (lh, lv) {
-        apex = apex.max(h + v.max(0.0) * v.max(0.0) / (2.0 * g));
-    }
+    let (lt, lv, lh, apex) = liftoff_and_apex(eq, &liftoff, apex);
     let summary = JumpSummary {
         jump_height_m: apex - standing_com_height,
         liftoff_time_s: lt,
@@ -408,11 +410,7 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
     let mut liftoff: Option<(f64, Vec<f64>)> = None;
     let mut stats = crate::simbody::IntegratorStats::default();
     let mut extra = crate::simbody::IntegratorStats::default();
-    let com = |x: &[f64]| -> ([f64; 3], [f64; 3]) {
-        let mut w = eq.multibody.workspace::<f64>();
-        eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
-        (eq.multibody.com_position(&w), eq.multibody.com_velocity(&w))
-    };
+    let com = |x: &[f64]| com_at(eq, x);
     let mut apex = f64::NEG_INFINITY;
     while t < t_max {
         let t_next = (t + report_interval).min(t_max);
@@ -492,17 +490,7 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
             apex = apex.max(c[1]);
         }
     }
-    let (lt, lv, lh) = match &liftoff {
-        Some((t, xl)) => {
-            let (c, v) = com(xl);
-            (Some(*t), Some(v[1]), Some(c[1]))
-        }
-        None => (None, None, None),
-    };
-    let g = eq.model.gravity[1].abs();
-    if let (Some(h), Some(v)) = (lh, lv) {
-        apex = apex.max(h + v.max(0.0) * v.max(0.0) / (2.0 * g));
-    }
+    let (lt, lv, lh, apex) = liftoff_and_apex(eq, &liftoff, apex);
     let steps = (stats.steps_taken + extra.steps_taken) as usize;
     let attempted = (stats.steps_attempted + extra.steps_attempted) as usize;
     let summary = JumpSummary {
