@@ -1,9 +1,7 @@
-//! `cargo bench --bench dynamics`: time per q̈ evaluation of the jumper
-//! skeleton, Rust-native against Simbody, as a table (same as
-//! `leap bench dynamics`).
+//! `cargo bench --bench dynamics`: the tables of `leap bench dynamics`,
+//! `leap bench state-equation` and `leap bench integrators` for the jumper.
 
 fn main() {
-    // cargo bench passes flags such as --bench; the model is fixed.
     let model = match leap::model::Model::from_file("models/jumper.json") {
         Ok(m) => m,
         Err(e) => {
@@ -12,10 +10,16 @@ fn main() {
         }
     };
     match leap::bench::dynamics(&model) {
-        Ok(report) => println!("{}", report.table()),
-        Err(e) => {
-            eprintln!("error: {e}");
-            std::process::exit(2);
-        }
+        Ok(report) => println!("{}\n", report.table()),
+        Err(e) => eprintln!("error: {e}"),
+    }
+    match leap::bench::state_equation(&model) {
+        Ok(report) => println!("{}\n", report.table()),
+        Err(e) => eprintln!("error: {e}"),
+    }
+    let cases = [("RungeKuttaMerson", 1e-5), ("RungeKuttaFeldberg", 1e-5), ("CPodes", 1e-5), ("DormandPrince", 1e-5)];
+    match leap::bench::integrators(&model, &cases) {
+        Ok(rows) => println!("{}", leap::bench::integrator_table(&rows)),
+        Err(e) => eprintln!("error: {e}"),
     }
 }
