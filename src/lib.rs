@@ -1,9 +1,9 @@
 //! leap: predicting human movement by optimal control.
 //!
 //! Data flows one way: [`model`] (files and validation) → [`multibody`]
-//! (Rust-native dynamics) and [`simbody`] (the Simbody bridge) → force
-//! elements ([`muscle`], [`contact`], [`ligament`]) → the optimizer
-//! ([`nlp`], [`sqp`]) → output ([`io`]).
+//! (Rust-native dynamics) and [`simbody`] (the Simbody bridge) → [`path`]
+//! and the force laws ([`laws`]) → the state equation ([`ode`]) → forward
+//! simulation ([`simulate`], [`squat`]) → output ([`io`]).
 
 // Index loops mirror the equations they implement.
 #![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
@@ -23,8 +23,3 @@ pub mod laws;
 pub mod simulate;
 pub mod squat;
 pub mod eval;
-pub mod muscle;
-pub mod contact;
-pub mod ligament;
-pub mod nlp;
-pub mod sqp;

@@ -14,7 +14,8 @@
 //! [`PathSmoothing::Smooth`] option blends the path with and without each
 //! conditional point by a smooth step of the coordinate,
 //! `L = Σ_S Π_i w_i^{[i∈S]}(1 − w_i)^{[i∉S]} L(S)`, with
-//! `w(q) = ½(1 + tanh((q − lo)/δ))·½(1 + tanh((hi − q)/δ))`.
+//! `w(q) = s((q − lo)/δ)·s((hi − q)/δ)` and `s` the quintic (C²) smoothstep
+//! from 0 at −1 to 1 at +1, so the path is exact more than δ from a switch.
 
 use crate::scalar::{c, Scalar};
 use crate::spline::{SimmSpline, SplineData};
@@ -54,6 +55,8 @@ pub struct GeometryPath {
     pub points: Vec<PathPoint>,
     /// Indices (into `points`) of the conditional points.
     conditional: Vec<usize>,
+    /// For each point, its index among the conditional points.
+    conditional_of: Vec<Option<u32>>,
 }
 
 /// How conditional path points switch.
@@ -91,6 +94,22 @@ pub trait BodyKinematics<S: Scalar> {
 pub trait ForceSink<S: Scalar> {
     fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]);
     fn add_generalized_force(&mut self, coordinate: usize, force: S);
+}
+
+/// The quintic smoothstep of x ∈ [−1, 1] mapped to [0, 1], and its
+/// derivative with respect to x.
+#[inline]
+fn smoothstep<S: Scalar>(x: S) -> (S, S) {
+    let u = x * 0.5 + 0.5;
+    if u.re() <= 0.0 {
+        (S::zero(), S::zero())
+    } else if u.re() >= 1.0 {
+        (S::one(), S::zero())
+    } else {
+        let u2 = u * u;
+        let one_minus = S::one() - u;
+        ((u * 6.0 - 15.0) * u2 * u2 + u2 * u * 10.0, u2 * one_minus * one_minus * 15.0)
+    }
 }
 
 /// A path point's kinematics at one state.
@@ -165,8 +184,9 @@ impl GeometryPath {
             };
             out.push(pp);
         }
-        let conditional = out.iter().enumerate().filter(|(_, p)| matches!(p.kind, PointKind::Conditional { .. })).map(|(i, _)| i).collect();
-        Ok(GeometryPath { points: out, conditional })
+        let conditional: Vec<usize> = out.iter().enumerate().filter(|(_, p)| matches!(p.kind, PointKind::Conditional { .. })).map(|(i, _)| i).collect();
+        let conditional_of = (0..out.len()).map(|i| conditional.iter().position(|&c| c == i).map(|j| j as u32)).collect();
+        Ok(GeometryPath { points: out, conditional, conditional_of })
     }
 
     /// Number of conditional points.
@@ -252,12 +272,12 @@ impl GeometryPath {
                     dw[j] = S::zero();
                 }
                 PathSmoothing::Smooth { delta } => {
-                    let a = ((q - range[0]) / delta).tanh();
-                    let b = ((q * -1.0 + range[1]) / delta).tanh();
-                    let (sa, sb) = ((a + 1.0) * 0.5, (b + 1.0) * 0.5);
+                    // Quintic smoothstep over [edge − δ, edge + δ]: C², and
+                    // exactly 0 or 1 outside the window.
+                    let (sa, da) = smoothstep((q - range[0]) / delta);
+                    let (sb, db) = smoothstep((q * -1.0 + range[1]) / delta);
                     w[j] = sa * sb;
-                    // d/dq: ½(1 − a²)/δ·sb − sa·½(1 − b²)/δ
-                    dw[j] = (a * a * -1.0 + 1.0) * (0.5 / delta) * sb - sa * (b * b * -1.0 + 1.0) * (0.5 / delta);
+                    dw[j] = (da * sb - sa * db) / delta;
                 }
             }
         }
@@ -269,7 +289,7 @@ impl GeometryPath {
         let mut length = S::zero();
         let mut speed = S::zero();
         let active = |i: usize| -> bool {
-            match self.conditional.iter().position(|&ci| ci == i) {
+            match self.conditional_of[i] {
                 Some(j) => mask & (1 << j) != 0,
                 None => true,
             }
