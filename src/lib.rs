@@ -23,3 +23,5 @@ pub mod laws;
 pub mod simulate;
 pub mod squat;
 pub mod eval;
+pub mod nlp;
+pub mod sqp;

@@ -1,0 +1,894 @@
+//! A sparse SQP method whose QP subproblems clarabel solves.
+//!
+//! Each iteration linearises the constraints and models the Lagrangian with
+//! a positive semidefinite, partially separable Hessian B (one block per
+//! [`Element`] of the problem), solves the QP of [`qp`] for a step d and
+//! multipliers, and takes a step along d that decreases the ℓ₁ merit
+//! function φ(x; ν) = f(x) + ν ‖viol c(x)‖₁ (Nocedal & Wright 2006,
+//! Algorithm 18.3; Han 1977; Powell 1978), with a second-order correction
+//! when the full step is rejected while the constraints got worse
+//! (Maratos effect).
+//!
+//! * Hessian: [`HessianMode::ExactConvexified`] takes each element's exact
+//!   Lagrangian Hessian and replaces its eigenvalues μ by max(|μ|, δ);
+//!   [`HessianMode::PartitionedBfgs`] keeps one damped BFGS matrix per
+//!   element (Griewank & Toint 1982; Powell's damping keeps it positive
+//!   definite).
+//! * Feasibility: when the linearised constraints are inconsistent, the QP
+//!   is re-solved in elastic mode (ℓ₁-penalised slacks p, n ≥ 0 on every
+//!   constraint row, as SNOPT does), so every iteration gets a step. A
+//!   point where the elastic QP cannot reduce the linearised infeasibility
+//!   even without the objective is a stationary point of the infeasibility:
+//!   status [`SqpStatus::Infeasible`].
+//! * Step bound: |d_j| ≤ Δ (enlarged ×10 whenever a full step reaches it),
+//!   so every QP is bounded; an objective below `unbounded_objective` at a
+//!   feasible point gives [`SqpStatus::Unbounded`].
+//! * Termination, with Moco's setting names: primal infeasibility (largest
+//!   constraint violation) ≤ `optim_constraint_tolerance` and scaled dual
+//!   infeasibility and complementarity (IPOPT's scaling, s_max = 100) ≤
+//!   `optim_convergence_tolerance`; or, with `paper_criterion`, the change
+//!   of the objective below 1e-6 with constraints within 1e-3 (Porsa et al.
+//!   2016).
+
+pub mod qp;
+
+use crate::nlp::{check_elements, Element, EvalError, Nlp, INFINITE_BOUND};
+use nalgebra::{DMatrix, SymmetricEigen};
+use qp::{Qp, QpOutcome};
+use serde::Serialize;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// How the QP's Hessian is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HessianMode {
+    /// Exact element Hessians with eigenvalues μ → max(|μ|, δ).
+    ExactConvexified,
+    /// One damped BFGS matrix per element.
+    PartitionedBfgs,
+}
+
+impl std::str::FromStr for HessianMode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "exact" | "exact_convexified" => Ok(HessianMode::ExactConvexified),
+            "bfgs" | "partitioned_bfgs" => Ok(HessianMode::PartitionedBfgs),
+            _ => Err(format!("unknown Hessian mode '{s}' (expected 'exact' or 'bfgs')")),
+        }
+    }
+}
+
+/// Settings of [`solve`]; names follow Moco where it has one.
+#[derive(Debug, Clone)]
+pub struct SqpSettings {
+    /// Scaled dual infeasibility and complementarity tolerance.
+    pub optim_convergence_tolerance: f64,
+    /// Largest constraint violation allowed at a solution.
+    pub optim_constraint_tolerance: f64,
+    pub max_iterations: usize,
+    /// Default: exact convexified when the problem has a Hessian, BFGS
+    /// otherwise.
+    pub hessian: Option<HessianMode>,
+    /// Stop when |Δf| < 1e-6 (1 + |f|) with the constraints within 1e-3,
+    /// the criterion of Porsa et al. (2016).
+    pub paper_criterion: bool,
+    /// "Acceptable" levels (IPOPT's acceptable_tol): met for
+    /// `acceptable_iterations` consecutive iterations, or when no further
+    /// progress is possible, the solve ends as [`SqpStatus::Acceptable`].
+    pub acceptable_convergence_tolerance: f64,
+    pub acceptable_constraint_tolerance: f64,
+    pub acceptable_iterations: usize,
+    /// Initial step bound Δ (times max(1, ‖x₀‖∞)).
+    pub initial_step_bound: f64,
+    /// An objective below this at a feasible point means unbounded.
+    pub unbounded_objective: f64,
+    /// Relative accuracy of the QP solves.
+    pub qp_tolerance: f64,
+    /// Second-order correction of rejected full steps.
+    pub second_order_correction: bool,
+    /// Print the iteration log to standard error.
+    pub verbose: bool,
+    /// Directory where a failing QP is written (clarabel JSON).
+    pub qp_dump_dir: Option<PathBuf>,
+}
+
+impl Default for SqpSettings {
+    fn default() -> Self {
+        SqpSettings {
+            optim_convergence_tolerance: 1e-8,
+            optim_constraint_tolerance: 1e-8,
+            max_iterations: 3000,
+            hessian: None,
+            paper_criterion: false,
+            acceptable_convergence_tolerance: 1e-5,
+            acceptable_constraint_tolerance: 1e-6,
+            acceptable_iterations: 15,
+            initial_step_bound: 1e3,
+            unbounded_objective: -1e20,
+            qp_tolerance: 1e-9,
+            second_order_correction: true,
+            verbose: false,
+            qp_dump_dir: None,
+        }
+    }
+}
+
+/// How a solve ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SqpStatus {
+    /// Converged to the requested tolerances.
+    Solved,
+    /// Converged to the acceptable tolerances only.
+    Acceptable,
+    IterationLimit,
+    /// A (local) minimiser of the constraint violation that violates the
+    /// constraints: the problem is (locally) infeasible.
+    Infeasible,
+    /// The objective decreased without bound at feasible points.
+    Unbounded,
+    /// No step decreased the merit function at an infeasible point.
+    RestorationFailed,
+    /// No step decreased the merit function at a feasible point that is
+    /// not a solution.
+    LineSearchFailed,
+    /// The QP solver failed, or evaluations are not finite at the start.
+    NumericalError,
+    /// The problem's evaluation returned an error.
+    EvaluationError,
+    /// The problem is malformed (bounds, elements, dimensions).
+    InvalidProblem,
+}
+
+impl SqpStatus {
+    /// Solved or acceptable.
+    pub fn success(self) -> bool {
+        matches!(self, SqpStatus::Solved | SqpStatus::Acceptable)
+    }
+}
+
+/// One iteration, as logged.
+#[derive(Debug, Clone, Serialize, Default)]
+pub struct IterationRecord {
+    pub iter: usize,
+    pub objective: f64,
+    /// Largest constraint violation.
+    pub inf_pr: f64,
+    /// Scaled dual infeasibility ‖∇f + Jᵀλ + ζ‖∞ / s_d.
+    pub inf_du: f64,
+    /// Scaled complementarity.
+    pub complementarity: f64,
+    /// ‖d‖∞ of the accepted step.
+    pub step_norm: f64,
+    pub alpha: f64,
+    pub ls_trials: usize,
+    pub qp_iterations: u32,
+    /// "ok", "elastic", "soc", "failed".
+    pub qp_mode: String,
+    pub penalty: f64,
+    pub merit: f64,
+    pub hessian_skips: usize,
+    pub derivatives_s: f64,
+    pub qp_s: f64,
+    pub line_search_s: f64,
+    pub hessian_s: f64,
+    pub time_s: f64,
+}
+
+/// Where the time of a solve went (seconds).
+#[derive(Debug, Clone, Copy, Serialize, Default)]
+pub struct TimeSplit {
+    pub derivatives_s: f64,
+    pub hessian_s: f64,
+    pub qp_s: f64,
+    pub line_search_s: f64,
+    pub other_s: f64,
+    pub total_s: f64,
+}
+
+/// The outcome of [`solve`]: status, last iterate and history.
+#[derive(Debug, Clone, Serialize)]
+pub struct SqpResult {
+    pub status: SqpStatus,
+    pub message: String,
+    pub x: Vec<f64>,
+    /// Constraint multipliers λ (L = f + λᵀc; positive at an active upper
+    /// bound).
+    pub lambda: Vec<f64>,
+    /// Bound multipliers ζ.
+    pub zeta: Vec<f64>,
+    pub objective: f64,
+    pub constraint_violation: f64,
+    pub dual_infeasibility: f64,
+    pub iterations: usize,
+    pub qp_iterations: u64,
+    pub hessian: HessianMode,
+    pub time: TimeSplit,
+    pub history: Vec<IterationRecord>,
+}
+
+impl SqpResult {
+    /// Write the iteration history as CSV.
+    pub fn write_history_csv(&self, path: &std::path::Path) -> std::io::Result<()> {
+        write_history_csv(&self.history, path)
+    }
+}
+
+/// Write iteration records as CSV (one header line, one row each).
+pub fn write_history_csv(history: &[IterationRecord], path: &std::path::Path) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s")?;
+    for r in history {
+        writeln!(
+            f,
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e}",
+            r.iter, r.objective, r.inf_pr, r.inf_du, r.complementarity, r.step_norm, r.alpha, r.ls_trials, r.qp_iterations, r.qp_mode, r.penalty, r.merit, r.hessian_skips, r.derivatives_s, r.qp_s, r.line_search_s, r.hessian_s, r.time_s
+        )?;
+    }
+    f.flush()
+}
+
+/// The problem's data fixed for a solve.
+struct Problem {
+    n: usize,
+    m: usize,
+    xl: Vec<f64>,
+    xu: Vec<f64>,
+    cl: Vec<f64>,
+    cu: Vec<f64>,
+    jac: Vec<(usize, usize)>,
+    elements: Vec<Element>,
+    /// Element of each constraint row.
+    owner: Vec<usize>,
+    objective_element: Option<usize>,
+}
+
+impl Problem {
+    fn read<N: Nlp + ?Sized>(nlp: &N) -> Result<Problem, String> {
+        let (n, m) = (nlp.num_variables(), nlp.num_constraints());
+        let (mut xl, mut xu) = (vec![0.0; n], vec![0.0; n]);
+        nlp.variable_bounds(&mut xl, &mut xu);
+        let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
+        nlp.constraint_bounds(&mut cl, &mut cu);
+        for j in 0..n {
+            if xl[j].is_nan() || xu[j].is_nan() || xl[j] > xu[j] || xl[j] >= INFINITE_BOUND || xu[j] <= -INFINITE_BOUND {
+                return Err(format!("variable {}: bounds [{}, {}] are not a non-empty interval", nlp.variable_name(j), xl[j], xu[j]));
+            }
+        }
+        for i in 0..m {
+            if cl[i].is_nan() || cu[i].is_nan() || cl[i] > cu[i] || cl[i] >= INFINITE_BOUND || cu[i] <= -INFINITE_BOUND {
+                return Err(format!("constraint {}: bounds [{}, {}] are not a non-empty interval", nlp.constraint_name(i), cl[i], cu[i]));
+            }
+        }
+        let jac = nlp.jacobian_structure();
+        let mut seen = std::collections::HashSet::with_capacity(jac.len());
+        for &(i, j) in &jac {
+            if i >= m || j >= n {
+                return Err(format!("Jacobian entry ({i}, {j}) is outside {m}×{n}"));
+            }
+            if !seen.insert((i, j)) {
+                return Err(format!("Jacobian entry ({i}, {j}) is listed twice"));
+            }
+        }
+        let elements = nlp.elements();
+        check_elements(&elements, n, m)?;
+        let mut owner = vec![0; m];
+        for (e, el) in elements.iter().enumerate() {
+            for &i in &el.constraints {
+                owner[i] = e;
+            }
+        }
+        for &(i, j) in &jac {
+            if elements[owner[i]].variables.binary_search(&j).is_err() {
+                return Err(format!("Jacobian entry ({}, {}) lies outside the variables of element {}", nlp.constraint_name(i), nlp.variable_name(j), owner[i]));
+            }
+        }
+        let objective_element = elements.iter().position(|e| e.objective);
+        Ok(Problem { n, m, xl, xu, cl, cu, jac, elements, owner, objective_element })
+    }
+
+    fn violation(&self, c: &[f64]) -> (f64, f64) {
+        let (mut l1, mut inf) = (0.0f64, 0.0f64);
+        for i in 0..self.m {
+            let v = (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0);
+            l1 += v;
+            inf = inf.max(v);
+        }
+        (l1, inf)
+    }
+}
+
+/// The iterate's evaluations.
+struct Point {
+    x: Vec<f64>,
+    f: f64,
+    c: Vec<f64>,
+    g: Vec<f64>,
+    jv: Vec<f64>,
+}
+
+fn eval_fc<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], c: &mut [f64]) -> Result<f64, EvalError> {
+    let f = nlp.objective(x)?;
+    nlp.constraints(x, c)?;
+    if !f.is_finite() {
+        return Err(EvalError::new("objective", format!("not finite ({f})")));
+    }
+    if let Some(i) = c.iter().position(|v| !v.is_finite()) {
+        return Err(EvalError::new("constraints", format!("{}: not finite ({})", nlp.constraint_name(i), c[i])));
+    }
+    Ok(f)
+}
+
+fn eval_derivatives<N: Nlp + ?Sized>(nlp: &mut N, p: &mut Point) -> Result<(), EvalError> {
+    nlp.gradient(&p.x, &mut p.g)?;
+    nlp.jacobian_values(&p.x, &mut p.jv)?;
+    if let Some(j) = p.g.iter().position(|v| !v.is_finite()) {
+        return Err(EvalError::new("gradient", format!("{}: not finite", nlp.variable_name(j))));
+    }
+    if p.jv.iter().any(|v| !v.is_finite()) {
+        return Err(EvalError::new("jacobian", "an entry is not finite"));
+    }
+    Ok(())
+}
+
+/// Gradients of every element's part of the Lagrangian, σ∇f (objective
+/// element) + Σ_{i∈e} λ_i ∇c_i, over the element's variables: O(nnz + Σk).
+fn all_element_gradients(pb: &Problem, g: &[f64], jv: &[f64], lambda: &[f64], out: &mut [Vec<f64>]) {
+    for (e, el) in pb.elements.iter().enumerate() {
+        out[e].iter_mut().for_each(|v| *v = 0.0);
+        if pb.objective_element == Some(e) {
+            for (a, &j) in el.variables.iter().enumerate() {
+                out[e][a] = g[j];
+            }
+        }
+    }
+    for (k, &(i, j)) in pb.jac.iter().enumerate() {
+        let e = pb.owner[i];
+        if let Ok(a) = pb.elements[e].variables.binary_search(&j) {
+            out[e][a] += lambda[i] * jv[k];
+        }
+    }
+}
+
+/// Replace the eigenvalues μ of a symmetric k×k matrix by max(|μ|, δ).
+fn convexify(h: &mut [f64], k: usize, delta: f64) {
+    if k == 0 {
+        return;
+    }
+    let m = DMatrix::from_row_slice(k, k, h);
+    let m = (&m + m.transpose()) * 0.5;
+    let eig = SymmetricEigen::new(m);
+    let scale = eig.eigenvalues.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1.0);
+    let vals = eig.eigenvalues.map(|v| v.abs().max(delta * scale));
+    let r = &eig.eigenvectors * DMatrix::from_diagonal(&vals) * eig.eigenvectors.transpose();
+    for a in 0..k {
+        for b in 0..k {
+            h[a * k + b] = r[(a, b)];
+        }
+    }
+}
+
+/// Damped BFGS update of B (k×k row-major) with step s and gradient
+/// change y (Powell 1978). Returns false when skipped.
+fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
+    let k = s.len();
+    let ss: f64 = s.iter().map(|v| v * v).sum();
+    if ss < 1e-300 {
+        return false;
+    }
+    let sy: f64 = s.iter().zip(y).map(|(a, b)| a * b).sum();
+    if *first {
+        // Scale the initial identity to the curvature seen (Shanno & Phua).
+        let yy: f64 = y.iter().map(|v| v * v).sum();
+        if sy > 1e-12 * ss.sqrt() * yy.sqrt() && sy > 0.0 {
+            let gamma = (yy / sy).clamp(1e-6, 1e6);
+            for a in 0..k {
+                for c in 0..k {
+                    b[a * k + c] = if a == c { gamma } else { 0.0 };
+                }
+            }
+            *first = false;
+        }
+    }
+    let mut bs = vec![0.0; k];
+    for a in 0..k {
+        bs[a] = (0..k).map(|c| b[a * k + c] * s[c]).sum();
+    }
+    let sbs: f64 = s.iter().zip(&bs).map(|(a, b)| a * b).sum();
+    if sbs <= 1e-300 {
+        return false;
+    }
+    let theta = if sy >= 0.2 * sbs { 1.0 } else { 0.8 * sbs / (sbs - sy) };
+    let r: Vec<f64> = (0..k).map(|a| theta * y[a] + (1.0 - theta) * bs[a]).collect();
+    let sr: f64 = s.iter().zip(&r).map(|(a, b)| a * b).sum();
+    if sr <= 1e-300 {
+        return false;
+    }
+    for a in 0..k {
+        for c in 0..k {
+            b[a * k + c] += r[a] * r[c] / sr - bs[a] * bs[c] / sbs;
+        }
+    }
+    true
+}
+
+fn norm_inf(v: &[f64]) -> f64 {
+    v.iter().fold(0.0, |a, x| a.max(x.abs()))
+}
+
+struct Measures {
+    inf_du: f64,
+    compl: f64,
+}
+
+/// Scaled dual infeasibility and complementarity at p with (λ, ζ).
+fn measures(pb: &Problem, p: &Point, lambda: &[f64], zeta: &[f64]) -> Measures {
+    let mut r = p.g.clone();
+    for (k, &(i, j)) in pb.jac.iter().enumerate() {
+        r[j] += lambda[i] * p.jv[k];
+    }
+    for j in 0..pb.n {
+        r[j] += zeta[j];
+    }
+    let s_max = 100.0;
+    let sum: f64 = lambda.iter().chain(zeta.iter()).map(|v| v.abs()).sum();
+    let s_d = (sum / ((pb.n + pb.m).max(1) as f64)).max(s_max) / s_max;
+    let mut compl = 0.0f64;
+    for i in 0..pb.m {
+        if pb.cl[i] == pb.cu[i] {
+            continue;
+        }
+        let l = lambda[i];
+        let slack = if l > 0.0 { pb.cu[i] - p.c[i] } else { p.c[i] - pb.cl[i] };
+        if slack.is_finite() {
+            compl = compl.max((l * slack).abs());
+        }
+    }
+    for j in 0..pb.n {
+        if pb.xl[j] == pb.xu[j] {
+            continue;
+        }
+        let z = zeta[j];
+        let slack = if z > 0.0 { pb.xu[j] - p.x[j] } else { p.x[j] - pb.xl[j] };
+        if slack.is_finite() && slack.abs() < INFINITE_BOUND {
+            compl = compl.max((z * slack).abs());
+        }
+    }
+    Measures { inf_du: norm_inf(&r) / s_d, compl: compl / s_d }
+}
+
+/// Solve `nlp` from its initial point.
+pub fn solve<N: Nlp + ?Sized>(nlp: &mut N, settings: &SqpSettings) -> SqpResult {
+    let mut x0 = vec![0.0; nlp.num_variables()];
+    nlp.initial_point(&mut x0);
+    solve_from(nlp, &x0, settings)
+}
+
+/// Solve `nlp` from `x0` (projected into the variable bounds).
+pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettings) -> SqpResult {
+    let start = Instant::now();
+    let hessian = settings.hessian.unwrap_or(if nlp.has_hessian() { HessianMode::ExactConvexified } else { HessianMode::PartitionedBfgs });
+    let mut result = SqpResult {
+        status: SqpStatus::InvalidProblem,
+        message: String::new(),
+        x: x0.to_vec(),
+        lambda: vec![0.0; nlp.num_constraints()],
+        zeta: vec![0.0; nlp.num_variables()],
+        objective: f64::NAN,
+        constraint_violation: f64::NAN,
+        dual_infeasibility: f64::NAN,
+        iterations: 0,
+        qp_iterations: 0,
+        hessian,
+        time: TimeSplit::default(),
+        history: Vec::new(),
+    };
+    let pb = match Problem::read(nlp) {
+        Ok(pb) => pb,
+        Err(e) => {
+            result.message = e;
+            return result;
+        }
+    };
+    if x0.len() != pb.n {
+        result.message = format!("initial point has {} entries, the problem {} variables", x0.len(), pb.n);
+        return result;
+    }
+    if hessian == HessianMode::ExactConvexified && !nlp.has_hessian() {
+        result.message = "exact Hessian requested but the problem provides none".into();
+        return result;
+    }
+    let mut solver = Solver::new(pb, hessian, settings);
+    solver.run(nlp, x0, &mut result, start);
+    result
+}
+
+struct Solver<'s> {
+    pb: Problem,
+    mode: HessianMode,
+    settings: &'s SqpSettings,
+    /// Element Hessian blocks (row-major).
+    blocks: Vec<Vec<f64>>,
+    bfgs_first: Vec<bool>,
+    qp: Option<Qp>,
+    qp_elastic: Option<Qp>,
+}
+
+impl<'s> Solver<'s> {
+    fn new(pb: Problem, mode: HessianMode, settings: &'s SqpSettings) -> Self {
+        let blocks: Vec<Vec<f64>> = pb
+            .elements
+            .iter()
+            .map(|el| {
+                let k = el.variables.len();
+                let mut b = vec![0.0; k * k];
+                for a in 0..k {
+                    b[a * k + a] = 1.0;
+                }
+                b
+            })
+            .collect();
+        let bfgs_first = vec![true; pb.elements.len()];
+        Solver { pb, mode, settings, blocks, bfgs_first, qp: None, qp_elastic: None }
+    }
+
+    fn dump(&self, elastic: bool, iter: usize, what: &str) -> String {
+        let Some(dir) = &self.settings.qp_dump_dir else { return String::new() };
+        let qp = if elastic { &self.qp_elastic } else { &self.qp };
+        let Some(qp) = qp else { return String::new() };
+        if let Err(e) = std::fs::create_dir_all(dir) {
+            return format!(" (QP not written: {}: {e})", dir.display());
+        }
+        let path = dir.join(format!("qp_iter{iter}_{what}.json"));
+        match qp.dump(&path) {
+            Ok(()) => format!(" (QP written to {})", path.display()),
+            Err(e) => format!(" (QP not written: {e})"),
+        }
+    }
+
+    /// Set the QP's vectors and matrices and solve; `c` stands for the
+    /// constraint values (the second-order correction passes others).
+    #[allow(clippy::too_many_arguments)]
+    fn solve_qp(&mut self, elastic: bool, p: &Point, c: &[f64], g_override: Option<&[f64]>, delta: f64, rho: f64, refresh_matrices: bool) -> Result<QpOutcome, String> {
+        let Solver { pb, blocks, qp, qp_elastic, settings, .. } = self;
+        let slot = if elastic { qp_elastic } else { qp };
+        let qp = slot.get_or_insert_with(|| Qp::new(&pb.xl, &pb.xu, &pb.cl, &pb.cu, &pb.jac, &pb.elements, elastic, settings.qp_tolerance));
+        if refresh_matrices {
+            qp.set_hessian(blocks, &pb.elements, 0.0);
+            qp.set_jacobian(&p.jv);
+        }
+        qp.set_vectors(g_override.unwrap_or(&p.g), c, &p.x, &pb.xl, &pb.xu, &pb.cl, &pb.cu, delta, rho);
+        qp.solve()
+    }
+
+    fn update_hessian<N: Nlp + ?Sized>(&mut self, nlp: &mut N, p: &Point, lambda: &[f64], prev: Option<(&Point, &[Vec<f64>])>, skips: &mut usize) -> Result<(), EvalError> {
+        match self.mode {
+            HessianMode::ExactConvexified => {
+                for (e, el) in self.pb.elements.iter().enumerate() {
+                    let k = el.variables.len();
+                    let b = &mut self.blocks[e];
+                    nlp.element_hessian(&p.x, e, 1.0, lambda, b)?;
+                    if b.iter().any(|v| !v.is_finite()) {
+                        return Err(EvalError::new("hessian", format!("element {e}: an entry is not finite")));
+                    }
+                    convexify(b, k, 1e-8);
+                }
+            }
+            HessianMode::PartitionedBfgs => {
+                let Some((old, old_grads)) = prev else { return Ok(()) };
+                let mut new_grads: Vec<Vec<f64>> = self.pb.elements.iter().map(|el| vec![0.0; el.variables.len()]).collect();
+                all_element_gradients(&self.pb, &p.g, &p.jv, lambda, &mut new_grads);
+                for (e, el) in self.pb.elements.iter().enumerate() {
+                    let s: Vec<f64> = el.variables.iter().map(|&j| p.x[j] - old.x[j]).collect();
+                    let y: Vec<f64> = new_grads[e].iter().zip(&old_grads[e]).map(|(a, b)| a - b).collect();
+                    if !bfgs_update(&mut self.blocks[e], &s, &y, &mut self.bfgs_first[e]) {
+                        *skips += 1;
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn run<N: Nlp + ?Sized>(&mut self, nlp: &mut N, x0: &[f64], result: &mut SqpResult, start: Instant) {
+        let (n, m) = (self.pb.n, self.pb.m);
+        let st = self.settings;
+        let mut x: Vec<f64> = x0.iter().enumerate().map(|(j, &v)| v.clamp(self.pb.xl[j], self.pb.xu[j])).collect();
+        if x.iter().any(|v| !v.is_finite()) {
+            result.status = SqpStatus::InvalidProblem;
+            result.message = "the initial point is not finite".into();
+            return;
+        }
+        let mut p = Point { x: std::mem::take(&mut x), f: 0.0, c: vec![0.0; m], g: vec![0.0; n], jv: vec![0.0; self.pb.jac.len()] };
+        let mut time = TimeSplit::default();
+        let t = Instant::now();
+        match eval_fc(nlp, &p.x, &mut p.c) {
+            Ok(f) => p.f = f,
+            Err(e) => {
+                result.status = SqpStatus::EvaluationError;
+                result.message = format!("at the initial point: {e}");
+                result.x = p.x;
+                return;
+            }
+        }
+        time.line_search_s += t.elapsed().as_secs_f64();
+        let mut lambda = vec![0.0; m];
+        let mut zeta = vec![0.0; n];
+        let mut nu = 0.0f64; // merit penalty
+        let scale_x = norm_inf(&p.x).max(1.0);
+        let mut delta = st.initial_step_bound * scale_x;
+        let mut prev: Option<(Point, Vec<Vec<f64>>)> = None;
+        let mut acceptable_count = 0usize;
+        let mut last_f = f64::NAN;
+        let mut skips = 0usize;
+        let finish = |result: &mut SqpResult, status: SqpStatus, msg: String, p: &Point, lambda: &[f64], zeta: &[f64], time: &mut TimeSplit, pb: &Problem| {
+            result.status = status;
+            result.message = msg;
+            result.x = p.x.clone();
+            result.lambda = lambda.to_vec();
+            result.zeta = zeta.to_vec();
+            result.objective = p.f;
+            result.constraint_violation = pb.violation(&p.c).1;
+            time.total_s = start.elapsed().as_secs_f64();
+            time.other_s = (time.total_s - time.derivatives_s - time.hessian_s - time.qp_s - time.line_search_s).max(0.0);
+            result.time = *time;
+        };
+        for iter in 0..=st.max_iterations {
+            let mut rec = IterationRecord { iter, ..Default::default() };
+            // Derivatives at the iterate.
+            let t = Instant::now();
+            if let Err(e) = eval_derivatives(nlp, &mut p) {
+                let dt = t.elapsed().as_secs_f64();
+                time.derivatives_s += dt;
+                finish(result, SqpStatus::EvaluationError, e.to_string(), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            rec.derivatives_s = t.elapsed().as_secs_f64();
+            time.derivatives_s += rec.derivatives_s;
+            // Optimality at (x, λ, ζ).
+            let (viol1, inf_pr) = self.pb.violation(&p.c);
+            let ms = measures(&self.pb, &p, &lambda, &zeta);
+            rec.objective = p.f;
+            rec.inf_pr = inf_pr;
+            rec.inf_du = ms.inf_du;
+            rec.complementarity = ms.compl;
+            result.dual_infeasibility = ms.inf_du;
+            result.iterations = iter;
+            let solved = iter > 0 && inf_pr <= st.optim_constraint_tolerance && ms.inf_du <= st.optim_convergence_tolerance && ms.compl <= st.optim_convergence_tolerance;
+            let paper = st.paper_criterion && iter > 0 && inf_pr <= 1e-3 && (p.f - last_f).abs() < 1e-6 * (1.0 + p.f.abs());
+            let acceptable = iter > 0 && inf_pr <= st.acceptable_constraint_tolerance && ms.inf_du <= st.acceptable_convergence_tolerance && ms.compl <= st.acceptable_convergence_tolerance;
+            acceptable_count = if acceptable { acceptable_count + 1 } else { 0 };
+            last_f = p.f;
+            if solved || paper {
+                self.log(&rec, start, result);
+                let msg = if solved { "optimal solution found" } else { "objective change below 1e-6 with constraints within 1e-3 (Porsa et al. 2016)" };
+                finish(result, SqpStatus::Solved, msg.into(), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            if acceptable_count >= st.acceptable_iterations.max(1) {
+                self.log(&rec, start, result);
+                finish(result, SqpStatus::Acceptable, format!("acceptable level met for {acceptable_count} consecutive iterations"), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            if inf_pr <= st.optim_constraint_tolerance && p.f < st.unbounded_objective {
+                self.log(&rec, start, result);
+                finish(result, SqpStatus::Unbounded, format!("objective {:e} below {:e} at a feasible point", p.f, st.unbounded_objective), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            if iter == st.max_iterations {
+                self.log(&rec, start, result);
+                finish(result, SqpStatus::IterationLimit, format!("{} iterations", st.max_iterations), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            // Hessian model.
+            let t = Instant::now();
+            let old_grads = prev.as_ref().map(|(o, g)| (o, g.as_slice()));
+            if let Err(e) = self.update_hessian(nlp, &p, &lambda, old_grads, &mut skips) {
+                time.hessian_s += t.elapsed().as_secs_f64();
+                finish(result, SqpStatus::EvaluationError, e.to_string(), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            rec.hessian_s = t.elapsed().as_secs_f64();
+            time.hessian_s += rec.hessian_s;
+            rec.hessian_skips = skips;
+            // QP: plain, then elastic when inconsistent.
+            let t = Instant::now();
+            let rho = (nu * 10.0).max(10.0 * (1.0 + norm_inf(&p.g)));
+            let mut elastic = false;
+            let mut outcome = self.solve_qp(false, &p, &p.c, None, delta, rho, true);
+            let mut qp_its = self.qp.as_ref().map_or(0, |q| q.iterations);
+            if matches!(outcome, Ok(QpOutcome::Infeasible) | Ok(QpOutcome::Failed(_))) {
+                elastic = true;
+                outcome = self.solve_qp(true, &p, &p.c, None, delta, rho, true);
+                qp_its += self.qp_elastic.as_ref().map_or(0, |q| q.iterations);
+            }
+            rec.qp_s = t.elapsed().as_secs_f64();
+            time.qp_s += rec.qp_s;
+            rec.qp_iterations = qp_its;
+            result.qp_iterations += qp_its as u64;
+            rec.qp_mode = if elastic { "elastic".into() } else { "ok".into() };
+            match outcome {
+                Ok(QpOutcome::Solved) => {}
+                Ok(other) => {
+                    let dump = self.dump(elastic, iter, "failed");
+                    rec.qp_mode = "failed".into();
+                    self.log(&rec, start, result);
+                    finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {other:?}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                    return;
+                }
+                Err(e) => {
+                    let dump = self.dump(elastic, iter, "failed");
+                    rec.qp_mode = "failed".into();
+                    self.log(&rec, start, result);
+                    finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {e}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                    return;
+                }
+            }
+            let qp = if elastic { self.qp_elastic.as_ref() } else { self.qp.as_ref() }.expect("solved above");
+            let d = qp.d.clone();
+            let (lam_qp, zeta_qp) = (qp.lambda.clone(), qp.zeta.clone());
+            let slack_sum = qp.slack_sum;
+            // Infeasibility: the elastic QP cannot reduce the linearised
+            // violation. Check without the objective before concluding.
+            if elastic && viol1 > st.optim_constraint_tolerance {
+                let reduction = viol1 - slack_sum;
+                if reduction <= 1e-9 * viol1.max(1.0) {
+                    let zero = vec![0.0; n];
+                    let t = Instant::now();
+                    let feas = self.solve_qp(true, &p, &p.c, Some(&zero), delta, 1.0, false);
+                    time.qp_s += t.elapsed().as_secs_f64();
+                    let stuck = match feas {
+                        Ok(QpOutcome::Solved) => {
+                            let q = self.qp_elastic.as_ref().expect("solved");
+                            viol1 - q.slack_sum <= 1e-9 * viol1.max(1.0)
+                        }
+                        _ => true,
+                    };
+                    if stuck {
+                        self.log(&rec, start, result);
+                        finish(result, SqpStatus::Infeasible, format!("converged to a point of locally minimal constraint violation {inf_pr:e} (largest row)"), &p, &lambda, &zeta, &mut time, &self.pb);
+                        return;
+                    }
+                }
+            }
+            // Merit penalty: ν ≥ ‖λ‖∞ with a margin, never decreased.
+            let lam_max = norm_inf(&lam_qp);
+            if nu < 1.1 * lam_max + 1e-8 {
+                nu = (1.5 * lam_max).max(nu * 1.5).max(1e-6);
+            }
+            let gd: f64 = p.g.iter().zip(&d).map(|(a, b)| a * b).sum();
+            let lin_viol = if elastic { slack_sum } else { 0.0 };
+            let mut dphi = gd - nu * (viol1 - lin_viol);
+            if dphi > 0.0 {
+                // The QP step is not a descent direction of φ (only with
+                // very inexact QPs); use a small multiple as Armijo slope.
+                dphi = -1e-12 * (1.0 + p.f.abs());
+            }
+            let phi0 = p.f + nu * viol1;
+            rec.penalty = nu;
+            // Line search on φ with backtracking and one second-order
+            // correction.
+            let t = Instant::now();
+            let mut alpha = 1.0;
+            let mut trials = 0;
+            let mut accepted: Option<(Vec<f64>, f64, Vec<f64>)> = None;
+            let mut trial_c = vec![0.0; m];
+            let mut trial_x = vec![0.0; n];
+            let mut soc_tried = false;
+            let dnorm = norm_inf(&d);
+            let bound_hit = dnorm >= 0.999 * delta;
+            let mut soc_used = false;
+            while alpha > 1e-12 {
+                trials += 1;
+                for j in 0..n {
+                    trial_x[j] = (p.x[j] + alpha * d[j]).clamp(self.pb.xl[j], self.pb.xu[j]);
+                }
+                match eval_fc(nlp, &trial_x, &mut trial_c) {
+                    Ok(f) => {
+                        let (v1, _) = self.pb.violation(&trial_c);
+                        let phi = f + nu * v1;
+                        // Armijo with IPOPT's round-off allowance 10 ε |φ|.
+                        if phi <= phi0 + 1e-4 * alpha * dphi + 10.0 * f64::EPSILON * phi0.abs() {
+                            accepted = Some((trial_x.clone(), f, trial_c.clone()));
+                            break;
+                        }
+                        // Second-order correction (Nocedal & Wright §18.3)
+                        // when the full step made the constraints worse.
+                        if alpha == 1.0 && st.second_order_correction && !soc_tried && v1 > viol1 && !elastic {
+                            soc_tried = true;
+                            // c_soc = c(x + d) − J d, so the QP's rows read
+                            // J d̂ + c(x+d) − J d within bounds.
+                            let mut jd = vec![0.0; m];
+                            for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
+                                jd[i] += p.jv[k] * d[j];
+                            }
+                            let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
+                            let tq = Instant::now();
+                            let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
+                            let dq = tq.elapsed().as_secs_f64();
+                            time.qp_s += dq;
+                            rec.qp_s += dq;
+                            if let Ok(QpOutcome::Solved) = soc {
+                                let q = self.qp.as_ref().expect("solved");
+                                let d2 = q.d.clone();
+                                let soc_x: Vec<f64> = (0..n).map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j])).collect();
+                                let mut soc_c = vec![0.0; m];
+                                if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
+                                    let (v2, _) = self.pb.violation(&soc_c);
+                                    if f2 + nu * v2 <= phi0 + 1e-4 * dphi {
+                                        accepted = Some((soc_x, f2, soc_c));
+                                        soc_used = true;
+                                        break;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    Err(_) => {} // not finite there: shorten the step
+                }
+                alpha *= 0.5;
+            }
+            rec.line_search_s = t.elapsed().as_secs_f64();
+            time.line_search_s += rec.line_search_s;
+            rec.ls_trials = trials;
+            rec.step_norm = dnorm * alpha;
+            rec.alpha = alpha;
+            rec.merit = phi0;
+            if soc_used {
+                rec.qp_mode = "soc".into();
+            }
+            let Some((xn, fn_, cn)) = accepted else {
+                self.log(&rec, start, result);
+                // No decrease possible along d.
+                let (status, msg) = if dnorm <= 1e-12 * scale_x && inf_pr <= st.acceptable_constraint_tolerance {
+                    (SqpStatus::Acceptable, "step below 1e-12 at a feasible point".to_string())
+                } else if acceptable {
+                    (SqpStatus::Acceptable, "no further progress; acceptable level met".to_string())
+                } else if inf_pr > st.optim_constraint_tolerance {
+                    (SqpStatus::RestorationFailed, format!("line search failed at an infeasible point (violation {inf_pr:e})"))
+                } else {
+                    (SqpStatus::LineSearchFailed, "line search failed at a feasible point".to_string())
+                };
+                finish(result, status, msg, &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            };
+            self.log(&rec, start, result);
+            // Step bound grows when a full step reached it.
+            if bound_hit && alpha == 1.0 {
+                delta *= 10.0;
+            }
+            // Multipliers: the QP's (a short step does not make the QP's
+            // estimate worse, and blending slows the dual convergence).
+            lambda.copy_from_slice(&lam_qp);
+            zeta.copy_from_slice(&zeta_qp);
+            // Element gradients at the old point with the new λ, for BFGS.
+            let grads = if self.mode == HessianMode::PartitionedBfgs {
+                let mut g: Vec<Vec<f64>> = self.pb.elements.iter().map(|el| vec![0.0; el.variables.len()]).collect();
+                all_element_gradients(&self.pb, &p.g, &p.jv, &lambda, &mut g);
+                g
+            } else {
+                Vec::new()
+            };
+            let old = std::mem::replace(&mut p, Point { x: xn, f: fn_, c: cn, g: vec![0.0; n], jv: vec![0.0; self.pb.jac.len()] });
+            prev = Some((old, grads));
+        }
+    }
+
+    fn log(&self, rec: &IterationRecord, start: Instant, result: &mut SqpResult) {
+        let mut rec = rec.clone();
+        rec.time_s = start.elapsed().as_secs_f64();
+        if self.settings.verbose {
+            if rec.iter % 10 == 0 {
+                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||    alpha  ls  qp_it  qp_mode   penalty  time_s");
+            }
+            eprintln!(
+                "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:3} {:6} {:8} {:8.2e} {:7.2}",
+                rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, rec.penalty, rec.time_s
+            );
+        }
+        result.history.push(rec);
+    }
+}

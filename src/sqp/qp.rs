@@ -1,0 +1,380 @@
+//! The QP subproblem of one SQP iteration, in clarabel's form
+//!
+//! ```text
+//!   minimise ½ dᵀ B d + gᵀ d  [+ ρ Σ (p_i + n_i)]
+//!   subject to  c_L − c ≤ J d [+ p − n] ≤ c_U − c,
+//!               max(x_L − x, −Δ) ≤ d ≤ min(x_U − x, Δ),   p, n ≥ 0,
+//! ```
+//!
+//! (the bracketed elastic slacks only in elastic mode), written as
+//! `A z + s = b, s ∈ {0}^{m_eq} × R₊^{m_in}`. The pattern of P (upper
+//! triangle of the union of the element blocks, plus the diagonal) and of A
+//! is fixed when the QP is built; each iteration only refills values and
+//! calls clarabel's in-place updates (presolve off, structural zeros kept),
+//! so the solver object is created once per solve.
+
+use crate::nlp::{Element, INFINITE_BOUND};
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT, ZeroConeT};
+use std::path::Path;
+
+/// What a row of A stands for.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Row {
+    /// J_i d (+ p − n) = c_L − c.
+    Equality(usize),
+    /// −J_i d (− p + n) ≤ c − c_L.
+    Lower(usize),
+    /// J_i d (+ p − n) ≤ c_U − c.
+    Upper(usize),
+    /// d_j = 0 (fixed variable).
+    Fixed(usize),
+    /// −d_j ≤ min(x_j − x_L, Δ).
+    VarLower(usize),
+    /// d_j ≤ min(x_U − x_j, Δ).
+    VarUpper(usize),
+    /// −(slack column k) ≤ 0.
+    Slack(usize),
+}
+
+/// A QP solve's outcome.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum QpOutcome {
+    Solved,
+    Infeasible,
+    Failed(SolverStatus),
+}
+
+/// The fixed-pattern QP of an SQP solve.
+pub(crate) struct Qp {
+    pub n: usize,
+    pub m: usize,
+    pub elastic: bool,
+    /// Number of QP variables (n, or n + 2 m_c in elastic mode).
+    pub nz: usize,
+    pub rows: Vec<Row>,
+    num_eq: usize,
+    p: CscMatrix<f64>,
+    /// For element e, the P entry of each local (a, b), a ≤ b, row-major
+    /// over the upper triangle.
+    p_elem: Vec<Vec<usize>>,
+    p_diag: Vec<usize>,
+    a: CscMatrix<f64>,
+    /// For Jacobian entry k, the A entries it fills and their signs.
+    a_jac: Vec<[(usize, f64); 2]>,
+    pub q: Vec<f64>,
+    pub b: Vec<f64>,
+    /// Slack columns of each constraint (elastic mode): (p, n) column.
+    pub slack_of: Vec<Option<usize>>,
+    solver: Option<DefaultSolver<f64>>,
+    settings: DefaultSettings<f64>,
+    /// Solution: d (length n), multipliers of the constraints (λ, length m)
+    /// and of the bounds (ζ, length n), slacks p − n per constraint.
+    pub d: Vec<f64>,
+    pub lambda: Vec<f64>,
+    pub zeta: Vec<f64>,
+    pub slack_sum: f64,
+    pub iterations: u32,
+}
+
+/// Sparse matrix from entries (row, col), returning the nz index of each.
+fn csc(nrows: usize, ncols: usize, entries: &[(usize, usize)]) -> (CscMatrix<f64>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..entries.len()).collect();
+    order.sort_by_key(|&k| (entries[k].1, entries[k].0));
+    let mut colptr = vec![0usize; ncols + 1];
+    let mut rowval = Vec::with_capacity(entries.len());
+    let mut index = vec![0usize; entries.len()];
+    for (nz, &k) in order.iter().enumerate() {
+        let (r, c) = entries[k];
+        colptr[c + 1] += 1;
+        rowval.push(r);
+        index[k] = nz;
+    }
+    for c in 0..ncols {
+        colptr[c + 1] += colptr[c];
+    }
+    let nzval = vec![0.0; entries.len()];
+    (CscMatrix::new(nrows, ncols, colptr, rowval, nzval), index)
+}
+
+impl Qp {
+    /// Lay out the QP of a problem with these bounds, Jacobian pattern and
+    /// elements.
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        x_lower: &[f64],
+        x_upper: &[f64],
+        c_lower: &[f64],
+        c_upper: &[f64],
+        jac: &[(usize, usize)],
+        elements: &[Element],
+        elastic: bool,
+        tolerance: f64,
+    ) -> Qp {
+        let (n, m) = (x_lower.len(), c_lower.len());
+        let finite = |v: f64| v.abs() < INFINITE_BOUND;
+        // Rows: equalities first (clarabel's zero cone), then inequalities.
+        let mut rows = Vec::new();
+        for i in 0..m {
+            if c_lower[i] == c_upper[i] {
+                rows.push(Row::Equality(i));
+            }
+        }
+        for j in 0..n {
+            if x_lower[j] == x_upper[j] {
+                rows.push(Row::Fixed(j));
+            }
+        }
+        let num_eq = rows.len();
+        let mut slack_of = vec![None; m];
+        let mut nz = n;
+        for i in 0..m {
+            let active = c_lower[i] == c_upper[i] || finite(c_lower[i]) || finite(c_upper[i]);
+            if elastic && active {
+                slack_of[i] = Some(nz);
+                nz += 2;
+            }
+            if c_lower[i] != c_upper[i] {
+                if finite(c_lower[i]) {
+                    rows.push(Row::Lower(i));
+                }
+                if finite(c_upper[i]) {
+                    rows.push(Row::Upper(i));
+                }
+            }
+        }
+        for j in 0..n {
+            if x_lower[j] != x_upper[j] {
+                rows.push(Row::VarLower(j));
+                rows.push(Row::VarUpper(j));
+            }
+        }
+        for k in n..nz {
+            rows.push(Row::Slack(k));
+        }
+        // Where each constraint's rows are.
+        let mut rows_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+        let mut entries = Vec::new();
+        let mut fixed_entries = Vec::new(); // (entry index, value)
+        for (r, row) in rows.iter().enumerate() {
+            match *row {
+                Row::Equality(i) | Row::Upper(i) => rows_of[i].push((r, 1.0)),
+                Row::Lower(i) => rows_of[i].push((r, -1.0)),
+                Row::Fixed(j) | Row::VarUpper(j) => {
+                    fixed_entries.push((entries.len(), 1.0));
+                    entries.push((r, j));
+                }
+                Row::VarLower(j) => {
+                    fixed_entries.push((entries.len(), -1.0));
+                    entries.push((r, j));
+                }
+                Row::Slack(k) => {
+                    fixed_entries.push((entries.len(), -1.0));
+                    entries.push((r, k));
+                }
+            }
+        }
+        let mut a_jac_entry = Vec::with_capacity(jac.len());
+        for &(i, j) in jac {
+            let mut slots = [(usize::MAX, 0.0); 2];
+            for (s, &(r, sign)) in rows_of[i].iter().enumerate() {
+                slots[s] = (entries.len(), sign);
+                entries.push((r, j));
+            }
+            a_jac_entry.push(slots);
+        }
+        for i in 0..m {
+            if let Some(k) = slack_of[i] {
+                for &(r, sign) in &rows_of[i] {
+                    fixed_entries.push((entries.len(), sign));
+                    entries.push((r, k));
+                    fixed_entries.push((entries.len(), -sign));
+                    entries.push((r, k + 1));
+                }
+            }
+        }
+        let (mut a, index) = csc(rows.len(), nz, &entries);
+        for &(e, v) in &fixed_entries {
+            a.nzval[index[e]] = v;
+        }
+        let a_jac = a_jac_entry
+            .iter()
+            .map(|slots| slots.map(|(e, s)| if e == usize::MAX { (usize::MAX, 0.0) } else { (index[e], s) }))
+            .collect();
+        // P: the diagonal, then each element's upper triangle (merged).
+        let mut p_entries: Vec<(usize, usize)> = (0..n).map(|j| (j, j)).collect();
+        let mut lookup = std::collections::HashMap::new();
+        for j in 0..n {
+            lookup.insert((j, j), j);
+        }
+        let mut p_elem = Vec::with_capacity(elements.len());
+        for el in elements {
+            let k = el.variables.len();
+            let mut map = Vec::with_capacity(k * (k + 1) / 2);
+            for a_ in 0..k {
+                for b_ in a_..k {
+                    let key = (el.variables[a_], el.variables[b_]);
+                    let next = p_entries.len();
+                    let e = *lookup.entry(key).or_insert_with(|| {
+                        p_entries.push(key);
+                        next
+                    });
+                    map.push(e);
+                }
+            }
+            p_elem.push(map);
+        }
+        let (p, pindex) = csc(nz, nz, &p_entries);
+        let p_diag = (0..n).map(|j| pindex[j]).collect();
+        let p_elem = p_elem.into_iter().map(|map| map.into_iter().map(|e| pindex[e]).collect()).collect();
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .max_threads(1)
+            .presolve_enable(false)
+            .input_sparse_dropzeros(false)
+            .direct_solve_method("qdldl".into())
+            .tol_gap_abs(tolerance)
+            .tol_gap_rel(tolerance)
+            .tol_feas(tolerance)
+            .tol_ktratio(tolerance.sqrt().min(1e-6))
+            .max_iter(200)
+            .build()
+            .expect("valid clarabel settings");
+        let nrows = rows.len();
+        Qp {
+            n,
+            m,
+            elastic,
+            nz,
+            rows,
+            num_eq,
+            p,
+            p_elem,
+            p_diag,
+            a,
+            a_jac,
+            q: vec![0.0; nz],
+            b: vec![0.0; nrows],
+            slack_of,
+            solver: None,
+            settings,
+            d: vec![0.0; n],
+            lambda: vec![0.0; m],
+            zeta: vec![0.0; n],
+            slack_sum: 0.0,
+            iterations: 0,
+        }
+    }
+
+    /// Number of non-zeros of P (upper triangle) and A.
+    pub fn nnz(&self) -> (usize, usize) {
+        (self.p.nzval.len(), self.a.nzval.len())
+    }
+
+    /// Fill P from the element matrices (row-major k×k, both triangles),
+    /// plus `diagonal` on every variable's diagonal.
+    pub fn set_hessian(&mut self, blocks: &[Vec<f64>], elements: &[Element], diagonal: f64) {
+        self.p.nzval.iter_mut().for_each(|v| *v = 0.0);
+        for (e, el) in elements.iter().enumerate() {
+            let k = el.variables.len();
+            let mut t = 0;
+            for a in 0..k {
+                for b in a..k {
+                    self.p.nzval[self.p_elem[e][t]] += blocks[e][a * k + b];
+                    t += 1;
+                }
+            }
+        }
+        for &i in &self.p_diag {
+            self.p.nzval[i] += diagonal;
+        }
+    }
+
+    /// Fill A's Jacobian entries.
+    pub fn set_jacobian(&mut self, values: &[f64]) {
+        for (k, slots) in self.a_jac.iter().enumerate() {
+            for &(nz, sign) in slots {
+                if nz != usize::MAX {
+                    self.a.nzval[nz] = sign * values[k];
+                }
+            }
+        }
+    }
+
+    /// Fill q and b: gradient `g`, constraint values `c` (or their
+    /// second-order-correction substitute), bounds, step bound `delta`,
+    /// elastic penalty `rho`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn set_vectors(&mut self, g: &[f64], c: &[f64], x: &[f64], x_lower: &[f64], x_upper: &[f64], c_lower: &[f64], c_upper: &[f64], delta: f64, rho: f64) {
+        self.q[..self.n].copy_from_slice(g);
+        for v in &mut self.q[self.n..] {
+            *v = rho;
+        }
+        for (r, row) in self.rows.iter().enumerate() {
+            self.b[r] = match *row {
+                Row::Equality(i) => c_lower[i] - c[i],
+                Row::Lower(i) => c[i] - c_lower[i],
+                Row::Upper(i) => c_upper[i] - c[i],
+                Row::Fixed(_) | Row::Slack(_) => 0.0,
+                Row::VarLower(j) => (x[j] - x_lower[j]).min(delta).max(0.0),
+                Row::VarUpper(j) => (x_upper[j] - x[j]).min(delta).max(0.0),
+            };
+        }
+    }
+
+    /// Solve with the current values (creating the solver on first use).
+    pub fn solve(&mut self) -> Result<QpOutcome, String> {
+        match &mut self.solver {
+            Some(s) => {
+                s.update_P(&self.p.nzval).map_err(|e| e.to_string())?;
+                s.update_A(&self.a.nzval).map_err(|e| e.to_string())?;
+                s.update_q(&self.q).map_err(|e| e.to_string())?;
+                s.update_b(&self.b).map_err(|e| e.to_string())?;
+            }
+            None => {
+                let cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(self.num_eq), NonnegativeConeT(self.rows.len() - self.num_eq)];
+                let s = DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &cones, self.settings.clone()).map_err(|e| e.to_string())?;
+                self.solver = Some(s);
+            }
+        }
+        let s = self.solver.as_mut().expect("created above");
+        s.solve();
+        self.iterations = s.solution.iterations;
+        let status = s.solution.status;
+        match status {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => {}
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Ok(QpOutcome::Infeasible),
+            other => {
+                // An inaccurate solution may still be usable: the caller
+                // decides from the residuals; report the failure.
+                if !(s.solution.x.iter().all(|v| v.is_finite()) && s.solution.r_prim < 1e-6 && s.solution.r_dual < 1e-6) {
+                    return Ok(QpOutcome::Failed(other));
+                }
+            }
+        }
+        let (x, z) = (&s.solution.x, &s.solution.z);
+        self.d.copy_from_slice(&x[..self.n]);
+        self.lambda.iter_mut().for_each(|v| *v = 0.0);
+        self.zeta.iter_mut().for_each(|v| *v = 0.0);
+        for (r, row) in self.rows.iter().enumerate() {
+            match *row {
+                Row::Equality(i) | Row::Upper(i) => self.lambda[i] += z[r],
+                Row::Lower(i) => self.lambda[i] -= z[r],
+                Row::Fixed(j) | Row::VarUpper(j) => self.zeta[j] += z[r],
+                Row::VarLower(j) => self.zeta[j] -= z[r],
+                Row::Slack(_) => {}
+            }
+        }
+        self.slack_sum = x[self.n..].iter().map(|v| v.max(0.0)).sum();
+        Ok(QpOutcome::Solved)
+    }
+
+    /// Write the QP with its current values as clarabel JSON.
+    pub fn dump(&self, path: &Path) -> Result<(), String> {
+        use clarabel::solver::SolverJSONReadWrite;
+        let cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(self.num_eq), NonnegativeConeT(self.rows.len() - self.num_eq)];
+        let s = DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &cones, self.settings.clone()).map_err(|e| e.to_string())?;
+        let mut f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        s.save_to_file(&mut f).map_err(|e| format!("{}: {e}", path.display()))
+    }
+}
