@@ -25,3 +25,4 @@ pub mod squat;
 pub mod eval;
 pub mod nlp;
 pub mod sqp;
+pub mod testset;

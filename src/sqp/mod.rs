@@ -97,7 +97,7 @@ pub struct SqpSettings {
 impl Default for SqpSettings {
     fn default() -> Self {
         SqpSettings {
-            optim_convergence_tolerance: 1e-8,
+            optim_convergence_tolerance: 1e-6,
             optim_constraint_tolerance: 1e-8,
             max_iterations: 3000,
             hessian: None,
@@ -105,9 +105,9 @@ impl Default for SqpSettings {
             acceptable_convergence_tolerance: 1e-5,
             acceptable_constraint_tolerance: 1e-6,
             acceptable_iterations: 15,
-            initial_step_bound: 1e3,
+            initial_step_bound: 10.0,
             unbounded_objective: -1e20,
-            qp_tolerance: 1e-9,
+            qp_tolerance: 1e-8,
             second_order_correction: true,
             verbose: false,
             qp_dump_dir: None,
@@ -353,7 +353,8 @@ fn all_element_gradients(pb: &Problem, g: &[f64], jv: &[f64], lambda: &[f64], ou
     }
 }
 
-/// Replace the eigenvalues μ of a symmetric k×k matrix by max(|μ|, δ).
+/// Replace the eigenvalues μ of a symmetric k×k matrix by
+/// max(|μ|, δ·max(1, max|μ|)).
 fn convexify(h: &mut [f64], k: usize, delta: f64) {
     if k == 0 {
         return;
@@ -413,6 +414,15 @@ fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
         }
     }
     true
+}
+
+/// The failure message of a QP outcome, if it failed.
+fn qp_failure(outcome: &Result<QpOutcome, String>) -> Option<String> {
+    match outcome {
+        Ok(QpOutcome::Solved) => None,
+        Ok(other) => Some(format!("{other:?}")),
+        Err(e) => Some(e.clone()),
+    }
 }
 
 fn norm_inf(v: &[f64]) -> f64 {
@@ -615,9 +625,11 @@ impl<'s> Solver<'s> {
             }
         }
         time.line_search_s += t.elapsed().as_secs_f64();
+        let f_first = p.f;
         let mut lambda = vec![0.0; m];
         let mut zeta = vec![0.0; n];
         let mut nu = 0.0f64; // merit penalty
+        let mut rho = 0.0f64; // elastic weight, set from the first gradient
         let scale_x = norm_inf(&p.x).max(1.0);
         let mut delta = st.initial_step_bound * scale_x;
         let mut prev: Option<(Point, Vec<Vec<f64>>)> = None;
@@ -673,7 +685,7 @@ impl<'s> Solver<'s> {
                 finish(result, SqpStatus::Acceptable, format!("acceptable level met for {acceptable_count} consecutive iterations"), &p, &lambda, &zeta, &mut time, &self.pb);
                 return;
             }
-            if inf_pr <= st.optim_constraint_tolerance && p.f < st.unbounded_objective {
+            if inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0) && p.f < st.unbounded_objective {
                 self.log(&rec, start, result);
                 finish(result, SqpStatus::Unbounded, format!("objective {:e} below {:e} at a feasible point", p.f, st.unbounded_objective), &p, &lambda, &zeta, &mut time, &self.pb);
                 return;
@@ -696,7 +708,10 @@ impl<'s> Solver<'s> {
             rec.hessian_skips = skips;
             // QP: plain, then elastic when inconsistent.
             let t = Instant::now();
-            let rho = (nu * 10.0).max(10.0 * (1.0 + norm_inf(&p.g)));
+            if rho == 0.0 {
+                rho = 10.0 * (1.0 + norm_inf(&p.g));
+            }
+            rho = rho.max(nu);
             let mut elastic = false;
             let mut outcome = self.solve_qp(false, &p, &p.c, None, delta, rho, true);
             let mut qp_its = self.qp.as_ref().map_or(0, |q| q.iterations);
@@ -707,61 +722,89 @@ impl<'s> Solver<'s> {
             }
             rec.qp_s = t.elapsed().as_secs_f64();
             time.qp_s += rec.qp_s;
+            rec.qp_mode = if elastic { "elastic".into() } else { "ok".into() };
+            if let Some(msg) = qp_failure(&outcome) {
+                // A QP that fails at a huge step bound after the objective
+                // kept falling at feasible points: diverging iterates.
+                let diverging = delta >= 1e6 * scale_x && inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0) && p.f < f_first - 1e6 * (1.0 + f_first.abs()) * f64::EPSILON.sqrt();
+                if diverging {
+                    rec.qp_mode = "failed".into();
+                    rec.qp_iterations = qp_its;
+                    self.log(&rec, start, result);
+                    finish(result, SqpStatus::Unbounded, format!("diverging iterates: f = {:e} falling at feasible points, step bound {delta:e}, QP {msg}", p.f), &p, &lambda, &zeta, &mut time, &self.pb);
+                    return;
+                }
+                let dump = self.dump(elastic, iter, "failed");
+                rec.qp_mode = "failed".into();
+                rec.qp_iterations = qp_its;
+                self.log(&rec, start, result);
+                finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {msg}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                return;
+            }
+            // Elastic mode: the slacks must take up only what the
+            // linearisation cannot satisfy. Compare with the least
+            // linearised violation (objective dropped); equal and no
+            // reduction means a stationary point of the infeasibility;
+            // otherwise raise ρ until the step reduces the violation
+            // by a fair share of what is possible (SNOPT's elastic
+            // weight rule).
+            if elastic && viol1 > st.optim_constraint_tolerance {
+                let t = Instant::now();
+                let zero = vec![0.0; n];
+                let feas = self.solve_qp(true, &p, &p.c, Some(&zero), delta, 1.0, false);
+                let least = match feas {
+                    Ok(QpOutcome::Solved) => self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum),
+                    // No verdict without a solved feasibility QP.
+                    _ => f64::NAN,
+                };
+                let possible = viol1 - least;
+                if possible <= 1e-9 * viol1.max(1.0) {
+                    time.qp_s += t.elapsed().as_secs_f64();
+                    self.log(&rec, start, result);
+                    finish(result, SqpStatus::Infeasible, format!("converged to a point of locally minimal constraint violation {inf_pr:e} (largest row)"), &p, &lambda, &zeta, &mut time, &self.pb);
+                    return;
+                }
+                if possible.is_finite() {
+                    let mut tries = 0;
+                    loop {
+                        let outcome = self.solve_qp(true, &p, &p.c, None, delta, rho, false);
+                        qp_its += self.qp_elastic.as_ref().map_or(0, |q| q.iterations);
+                        if let Some(msg) = qp_failure(&outcome) {
+                            time.qp_s += t.elapsed().as_secs_f64();
+                            let dump = self.dump(true, iter, "failed");
+                            self.log(&rec, start, result);
+                            finish(result, SqpStatus::NumericalError, format!("elastic QP subproblem at iteration {iter}: {msg}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                            return;
+                        }
+                        let got = viol1 - self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum);
+                        tries += 1;
+                        if got >= 0.1 * possible || tries >= 8 {
+                            break;
+                        }
+                        rho *= 10.0;
+                    }
+                }
+                let dt = t.elapsed().as_secs_f64();
+                time.qp_s += dt;
+                rec.qp_s += dt;
+            }
             rec.qp_iterations = qp_its;
             result.qp_iterations += qp_its as u64;
-            rec.qp_mode = if elastic { "elastic".into() } else { "ok".into() };
-            match outcome {
-                Ok(QpOutcome::Solved) => {}
-                Ok(other) => {
-                    let dump = self.dump(elastic, iter, "failed");
-                    rec.qp_mode = "failed".into();
-                    self.log(&rec, start, result);
-                    finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {other:?}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
-                    return;
-                }
-                Err(e) => {
-                    let dump = self.dump(elastic, iter, "failed");
-                    rec.qp_mode = "failed".into();
-                    self.log(&rec, start, result);
-                    finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {e}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
-                    return;
-                }
-            }
             let qp = if elastic { self.qp_elastic.as_ref() } else { self.qp.as_ref() }.expect("solved above");
             let d = qp.d.clone();
             let (lam_qp, zeta_qp) = (qp.lambda.clone(), qp.zeta.clone());
-            let slack_sum = qp.slack_sum;
-            // Infeasibility: the elastic QP cannot reduce the linearised
-            // violation. Check without the objective before concluding.
-            if elastic && viol1 > st.optim_constraint_tolerance {
-                let reduction = viol1 - slack_sum;
-                if reduction <= 1e-9 * viol1.max(1.0) {
-                    let zero = vec![0.0; n];
-                    let t = Instant::now();
-                    let feas = self.solve_qp(true, &p, &p.c, Some(&zero), delta, 1.0, false);
-                    time.qp_s += t.elapsed().as_secs_f64();
-                    let stuck = match feas {
-                        Ok(QpOutcome::Solved) => {
-                            let q = self.qp_elastic.as_ref().expect("solved");
-                            viol1 - q.slack_sum <= 1e-9 * viol1.max(1.0)
-                        }
-                        _ => true,
-                    };
-                    if stuck {
-                        self.log(&rec, start, result);
-                        finish(result, SqpStatus::Infeasible, format!("converged to a point of locally minimal constraint violation {inf_pr:e} (largest row)"), &p, &lambda, &zeta, &mut time, &self.pb);
-                        return;
-                    }
-                }
-            }
-            // Merit penalty: ν ≥ ‖λ‖∞ with a margin, never decreased.
-            let lam_max = norm_inf(&lam_qp);
-            if nu < 1.1 * lam_max + 1e-8 {
-                nu = (1.5 * lam_max).max(nu * 1.5).max(1e-6);
+            let slack_sum = if elastic { qp.slack_sum } else { 0.0 };
+            // Merit penalty ν ≥ ‖λ‖∞ with a margin; lowered again when the
+            // multipliers fall well below it, so one bad iterate does not
+            // freeze the merit function on feasibility.
+            let needed = 1.1 * norm_inf(&lam_qp) + 1e-6;
+            if nu < needed {
+                nu = (1.5 * needed).max(1.5 * nu);
+            } else if nu > 100.0 * needed {
+                nu = (nu / 10.0).max(1.5 * needed);
             }
             let gd: f64 = p.g.iter().zip(&d).map(|(a, b)| a * b).sum();
-            let lin_viol = if elastic { slack_sum } else { 0.0 };
-            let mut dphi = gd - nu * (viol1 - lin_viol);
+            let mut dphi = gd - nu * (viol1 - slack_sum);
             if dphi > 0.0 {
                 // The QP step is not a descent direction of φ (only with
                 // very inexact QPs); use a small multiple as Armijo slope.
@@ -856,9 +899,15 @@ impl<'s> Solver<'s> {
                 return;
             };
             self.log(&rec, start, result);
-            // Step bound grows when a full step reached it.
-            if bound_hit && alpha == 1.0 {
-                delta *= 10.0;
+            // The step bound acts as a box trust region: it grows when a
+            // full step reached it and shrinks to twice the accepted step
+            // when the line search had to cut the step short.
+            if alpha == 1.0 {
+                if bound_hit {
+                    delta *= 4.0;
+                }
+            } else {
+                delta = (2.0 * alpha * dnorm).max(1e-3 * scale_x).min(delta);
             }
             // Multipliers: the QP's (a short step does not make the QP's
             // estimate worse, and blending slows the dual convergence).

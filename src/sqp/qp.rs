@@ -64,6 +64,8 @@ pub(crate) struct Qp {
     a_jac: Vec<[(usize, f64); 2]>,
     pub q: Vec<f64>,
     pub b: Vec<f64>,
+    /// Whether a bound row's right-hand side is the variable bound (not Δ).
+    b_is_bound: Vec<bool>,
     /// Slack columns of each constraint (elastic mode): (p, n) column.
     pub slack_of: Vec<Option<usize>>,
     solver: Option<DefaultSolver<f64>>,
@@ -255,6 +257,7 @@ impl Qp {
             a_jac,
             q: vec![0.0; nz],
             b: vec![0.0; nrows],
+            b_is_bound: vec![true; nrows],
             slack_of,
             solver: None,
             settings,
@@ -319,6 +322,11 @@ impl Qp {
                 Row::VarLower(j) => (x[j] - x_lower[j]).min(delta).max(0.0),
                 Row::VarUpper(j) => (x_upper[j] - x[j]).min(delta).max(0.0),
             };
+            self.b_is_bound[r] = match *row {
+                Row::VarLower(j) => x[j] - x_lower[j] <= delta,
+                Row::VarUpper(j) => x_upper[j] - x[j] <= delta,
+                _ => true,
+            };
         }
     }
 
@@ -344,24 +352,33 @@ impl Qp {
         match status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Ok(QpOutcome::Infeasible),
-            other => {
-                // An inaccurate solution may still be usable: the caller
-                // decides from the residuals; report the failure.
-                if !(s.solution.x.iter().all(|v| v.is_finite()) && s.solution.r_prim < 1e-6 && s.solution.r_dual < 1e-6) {
-                    return Ok(QpOutcome::Failed(other));
-                }
+            other => return Ok(QpOutcome::Failed(other)),
+        }
+        let (x, z, sl) = (&s.solution.x, &s.solution.z, &s.solution.s);
+        self.d.copy_from_slice(&x[..self.n]);
+        // An interior-point solution stops just inside active bounds; put
+        // the step exactly on a bound whose multiplier dominates its slack
+        // (strict complementarity), as an active-set QP would.
+        for (r, row) in self.rows.iter().enumerate() {
+            let active = z[r] > 1e3 * sl[r].max(0.0) && sl[r] < 1e-7 * (1.0 + self.b[r].abs());
+            match *row {
+                Row::VarUpper(j) if active => self.d[j] = self.b[r],
+                Row::VarLower(j) if active => self.d[j] = -self.b[r],
+                _ => {}
             }
         }
-        let (x, z) = (&s.solution.x, &s.solution.z);
-        self.d.copy_from_slice(&x[..self.n]);
         self.lambda.iter_mut().for_each(|v| *v = 0.0);
         self.zeta.iter_mut().for_each(|v| *v = 0.0);
         for (r, row) in self.rows.iter().enumerate() {
             match *row {
                 Row::Equality(i) | Row::Upper(i) => self.lambda[i] += z[r],
                 Row::Lower(i) => self.lambda[i] -= z[r],
-                Row::Fixed(j) | Row::VarUpper(j) => self.zeta[j] += z[r],
-                Row::VarLower(j) => self.zeta[j] -= z[r],
+                // Rows at the step bound Δ rather than at a variable bound
+                // carry trust-region multipliers, not bound multipliers.
+                Row::Fixed(j) => self.zeta[j] += z[r],
+                Row::VarUpper(j) if self.b_is_bound[r] => self.zeta[j] += z[r],
+                Row::VarLower(j) if self.b_is_bound[r] => self.zeta[j] -= z[r],
+                Row::VarUpper(_) | Row::VarLower(_) => {}
                 Row::Slack(_) => {}
             }
         }
