@@ -294,3 +294,82 @@ pub fn integrator_table(rows: &[IntegratorRow]) -> String {
     }
     format!("forward jump from the static squat, default bang-bang excitations\n{t}")
 }
+
+/// One Hessian mode on the whole Hock–Schittkowski test set.
+#[derive(Debug, Clone, Serialize)]
+pub struct SqpTestSetRow {
+    pub hessian: crate::sqp::HessianMode,
+    pub problems: usize,
+    /// Status solved with the book's f* within 1e-6 relative.
+    pub at_published_optimum: usize,
+    pub solved_or_acceptable: usize,
+    pub iterations: usize,
+    pub qp_iterations: u64,
+    /// Median over `repeats` runs of the whole set (s).
+    pub wall_time_s: f64,
+    pub derivatives_s: f64,
+    pub hessian_s: f64,
+    pub qp_s: f64,
+    pub line_search_s: f64,
+    pub other_s: f64,
+}
+
+/// Solve the whole Hock–Schittkowski set once per Hessian mode, `repeats`
+/// times, and report the median wall time with the time split of the
+/// median run.
+pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
+    use crate::sqp::{solve, HessianMode, SqpSettings};
+    let mut rows = Vec::new();
+    for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
+        let settings = SqpSettings { hessian: Some(mode), ..Default::default() };
+        let mut runs = Vec::new();
+        for _ in 0..repeats.max(1) {
+            let mut row = SqpTestSetRow { hessian: mode, problems: 0, at_published_optimum: 0, solved_or_acceptable: 0, iterations: 0, qp_iterations: 0, wall_time_s: 0.0, derivatives_s: 0.0, hessian_s: 0.0, qp_s: 0.0, line_search_s: 0.0, other_s: 0.0 };
+            let t = Instant::now();
+            for p in crate::testset::hock_schittkowski() {
+                let f_star = p.f_star;
+                let r = solve(&mut crate::nlp::AdNlp::new(p), &settings);
+                row.problems += 1;
+                row.iterations += r.iterations;
+                row.qp_iterations += r.qp_iterations;
+                row.solved_or_acceptable += usize::from(r.status.success());
+                if r.status == crate::sqp::SqpStatus::Solved && (r.objective - f_star).abs() <= 1e-6 * f_star.abs().max(1.0) {
+                    row.at_published_optimum += 1;
+                }
+                row.derivatives_s += r.time.derivatives_s;
+                row.hessian_s += r.time.hessian_s;
+                row.qp_s += r.time.qp_s;
+                row.line_search_s += r.time.line_search_s;
+                row.other_s += r.time.other_s;
+            }
+            row.wall_time_s = t.elapsed().as_secs_f64();
+            runs.push(row);
+        }
+        runs.sort_by(|a, b| a.wall_time_s.total_cmp(&b.wall_time_s));
+        rows.push(runs.swap_remove(runs.len() / 2));
+    }
+    rows
+}
+
+/// The test-set rows as a table.
+pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
+    let mut t = comfy_table::Table::new();
+    t.set_header(vec!["Hessian", "problems", "at f* (solved)", "solved/acceptable", "iterations", "QP iterations", "wall s (median)", "derivatives s", "Hessian s", "QP s", "line search s", "other s"]);
+    for r in rows {
+        t.add_row(vec![
+            format!("{:?}", r.hessian),
+            r.problems.to_string(),
+            r.at_published_optimum.to_string(),
+            r.solved_or_acceptable.to_string(),
+            r.iterations.to_string(),
+            r.qp_iterations.to_string(),
+            format!("{:.3}", r.wall_time_s),
+            format!("{:.3}", r.derivatives_s),
+            format!("{:.3}", r.hessian_s),
+            format!("{:.3}", r.qp_s),
+            format!("{:.3}", r.line_search_s),
+            format!("{:.3}", r.other_s),
+        ]);
+    }
+    t.to_string()
+}

@@ -118,6 +118,15 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// The SQP on the Hock–Schittkowski test set per Hessian mode: problems
+    /// at the published optimum, iterations, median wall time and its split.
+    Sqp {
+        /// Runs of the whole set per mode (the median is reported).
+        #[arg(long, default_value_t = 5)]
+        repeats: usize,
+        #[arg(long)]
+        json: bool,
+    },
     /// One forward jump per integrator and accuracy: steps, rejected steps,
     /// f evaluations, wall time.
     Integrators {
@@ -249,6 +258,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 println!("{}", serde_json::to_string_pretty(&rows)?);
             } else {
                 println!("{}", leap::bench::integrator_table(&rows));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench { which: BenchCommand::Sqp { repeats, json } } => {
+            let rows = leap::bench::sqp_test_set(repeats);
+            if json {
+                println!("{}", serde_json::to_string_pretty(&rows)?);
+            } else {
+                println!("{}", leap::bench::sqp_table(&rows));
             }
             Ok(ExitCode::SUCCESS)
         }

@@ -88,3 +88,78 @@ fn rosenbrock_both_hessians() {
         assert!((r.x[0] - 1.0).abs() < 1e-5 && (r.x[1] - 1.0).abs() < 1e-5);
     }
 }
+
+#[test]
+fn iteration_history_as_csv() {
+    let r = run(Hs071, HessianMode::PartitionedBfgs);
+    let dir = std::env::temp_dir().join(format!("leap_sqp_history_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("history.csv");
+    r.write_history_csv(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("iter,objective,inf_pr,inf_du"));
+    assert_eq!(lines.len(), r.history.len() + 1);
+    assert_eq!(r.history.len(), r.iterations + 1);
+    // The last record is the converged iterate.
+    let last: Vec<&str> = lines.last().unwrap().split(',').collect();
+    assert!((last[1].parse::<f64>().unwrap() - r.objective).abs() < 1e-12);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_problems_get_a_status_not_a_panic() {
+    // Inverted bounds.
+    struct Inverted;
+    impl AdProblem for Inverted {
+        fn name(&self) -> String {
+            "inverted".into()
+        }
+        fn num_variables(&self) -> usize {
+            1
+        }
+        fn num_constraints(&self) -> usize {
+            0
+        }
+        fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+            l[0] = 1.0;
+            u[0] = 0.0;
+        }
+        fn constraint_bounds(&self, _l: &mut [f64], _u: &mut [f64]) {}
+        fn initial_point(&self, x: &mut [f64]) {
+            x[0] = 0.5;
+        }
+        fn eval<D: Scalar>(&self, x: &[D], _c: &mut [D]) -> D {
+            x[0]
+        }
+    }
+    let r = run(Inverted, HessianMode::PartitionedBfgs);
+    assert_eq!(r.status, SqpStatus::InvalidProblem);
+    assert!(r.message.contains("x[0]") && r.message.contains("bounds"), "{}", r.message);
+    // NaN at the start.
+    struct NanStart;
+    impl AdProblem for NanStart {
+        fn name(&self) -> String {
+            "nan".into()
+        }
+        fn num_variables(&self) -> usize {
+            1
+        }
+        fn num_constraints(&self) -> usize {
+            0
+        }
+        fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+            l[0] = f64::NEG_INFINITY;
+            u[0] = f64::INFINITY;
+        }
+        fn constraint_bounds(&self, _l: &mut [f64], _u: &mut [f64]) {}
+        fn initial_point(&self, x: &mut [f64]) {
+            x[0] = -1.0;
+        }
+        fn eval<D: Scalar>(&self, x: &[D], _c: &mut [D]) -> D {
+            x[0].sqrt()
+        }
+    }
+    let r = run(NanStart, HessianMode::PartitionedBfgs);
+    assert_eq!(r.status, SqpStatus::EvaluationError, "{}", r.message);
+}

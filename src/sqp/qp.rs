@@ -48,8 +48,6 @@ pub enum QpOutcome {
 /// The fixed-pattern QP of an SQP solve.
 pub(crate) struct Qp {
     pub n: usize,
-    pub m: usize,
-    pub elastic: bool,
     /// Number of QP variables (n, or n + 2 m_c in elastic mode).
     pub nz: usize,
     pub rows: Vec<Row>,
@@ -66,8 +64,6 @@ pub(crate) struct Qp {
     pub b: Vec<f64>,
     /// Whether a bound row's right-hand side is the variable bound (not Δ).
     b_is_bound: Vec<bool>,
-    /// Slack columns of each constraint (elastic mode): (p, n) column.
-    pub slack_of: Vec<Option<usize>>,
     solver: Option<DefaultSolver<f64>>,
     settings: DefaultSettings<f64>,
     /// Solution: d (length n), multipliers of the constraints (λ, length m)
@@ -245,8 +241,6 @@ impl Qp {
         let nrows = rows.len();
         Qp {
             n,
-            m,
-            elastic,
             nz,
             rows,
             num_eq,
@@ -258,7 +252,6 @@ impl Qp {
             q: vec![0.0; nz],
             b: vec![0.0; nrows],
             b_is_bound: vec![true; nrows],
-            slack_of,
             solver: None,
             settings,
             d: vec![0.0; n],
@@ -269,9 +262,9 @@ impl Qp {
         }
     }
 
-    /// Number of non-zeros of P (upper triangle) and A.
-    pub fn nnz(&self) -> (usize, usize) {
-        (self.p.nzval.len(), self.a.nzval.len())
+    /// Variables, rows, non-zeros of P (upper triangle) and of A.
+    pub fn size(&self) -> (usize, usize, usize, usize) {
+        (self.nz, self.rows.len(), self.p.nzval.len(), self.a.nzval.len())
     }
 
     /// Fill P from the element matrices (row-major k×k, both triangles),
