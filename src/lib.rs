@@ -26,3 +26,5 @@ pub mod eval;
 pub mod nlp;
 pub mod sqp;
 pub mod testset;
+pub mod ocp;
+pub mod transcription;

@@ -91,6 +91,10 @@ pub struct SqpSettings {
     pub verbose: bool,
     /// Directory where a failing QP is written (clarabel JSON).
     pub qp_dump_dir: Option<PathBuf>,
+    /// Gradient-based scaling of the objective and constraints at the
+    /// starting point (IPOPT's default); tolerances apply to the scaled
+    /// problem.
+    pub nlp_scaling: bool,
 }
 
 impl Default for SqpSettings {
@@ -110,6 +114,7 @@ impl Default for SqpSettings {
             second_order_correction: true,
             verbose: false,
             qp_dump_dir: None,
+            nlp_scaling: true,
         }
     }
 }
@@ -512,9 +517,132 @@ pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         result.message = "exact Hessian requested but the problem provides none".into();
         return result;
     }
+    if !settings.nlp_scaling {
+        let mut solver = Solver::new(pb, hessian, settings);
+        solver.run(nlp, x0, &mut result, start);
+        return result;
+    }
+    let x0p: Vec<f64> = x0.iter().enumerate().map(|(j, &v)| v.clamp(pb.xl[j], pb.xu[j])).collect();
+    let mut scaled = GradientScaled::new(nlp, &x0p, pb.jac.clone());
+    let pb = match Problem::read(&scaled) {
+        Ok(pb) => pb,
+        Err(e) => {
+            result.message = e;
+            return result;
+        }
+    };
     let mut solver = Solver::new(pb, hessian, settings);
-    solver.run(nlp, x0, &mut result, start);
+    solver.run(&mut scaled, x0, &mut result, start);
+    // Back to the problem's units (the log stays in scaled units, as
+    // IPOPT's does).
+    let (sf, sc) = (scaled.sf, scaled.sc.clone());
+    result.objective /= sf;
+    for (l, s) in result.lambda.iter_mut().zip(&sc) {
+        *l *= s / sf;
+    }
+    for z in result.zeta.iter_mut() {
+        *z /= sf;
+    }
+    let mut c = vec![0.0; sc.len()];
+    if nlp.constraints(&result.x, &mut c).is_ok() {
+        let (mut cl, mut cu) = (vec![0.0; c.len()], vec![0.0; c.len()]);
+        nlp.constraint_bounds(&mut cl, &mut cu);
+        result.constraint_violation = (0..c.len()).map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0)).fold(0.0, f64::max);
+    }
     result
+}
+
+/// IPOPT's gradient-based scaling (`nlp_scaling_method gradient-based`,
+/// `nlp_scaling_max_gradient` 100): the objective and each constraint row
+/// are multiplied by min(1, 100/‖∇‖∞) taken at the starting point, so no
+/// gradient exceeds 100 there.
+struct GradientScaled<'a, N: Nlp + ?Sized> {
+    inner: &'a mut N,
+    sf: f64,
+    sc: Vec<f64>,
+    jac_rows: Vec<usize>,
+    lambda: Vec<f64>,
+}
+
+impl<'a, N: Nlp + ?Sized> GradientScaled<'a, N> {
+    fn new(inner: &'a mut N, x0: &[f64], jac: Vec<(usize, usize)>) -> Self {
+        let (n, m) = (inner.num_variables(), inner.num_constraints());
+        let factor = |max: f64| if max.is_finite() && max > 100.0 { (100.0 / max).max(1e-8) } else { 1.0 };
+        let mut g = vec![0.0; n];
+        let sf = if inner.gradient(x0, &mut g).is_ok() { factor(norm_inf(&g)) } else { 1.0 };
+        let mut jv = vec![0.0; jac.len()];
+        let mut row_max = vec![0.0f64; m];
+        if inner.jacobian_values(x0, &mut jv).is_ok() {
+            for (k, &(i, _)) in jac.iter().enumerate() {
+                row_max[i] = row_max[i].max(jv[k].abs());
+            }
+        }
+        let sc = row_max.into_iter().map(factor).collect();
+        GradientScaled { inner, sf, sc, jac_rows: jac.into_iter().map(|(i, _)| i).collect(), lambda: vec![0.0; m] }
+    }
+}
+
+impl<N: Nlp + ?Sized> Nlp for GradientScaled<'_, N> {
+    fn num_variables(&self) -> usize {
+        self.inner.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.inner.num_constraints()
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.variable_bounds(lower, upper)
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.constraint_bounds(lower, upper);
+        for i in 0..lower.len() {
+            lower[i] *= self.sc[i];
+            upper[i] *= self.sc[i];
+        }
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.inner.initial_point(x)
+    }
+    fn objective(&mut self, x: &[f64]) -> Result<f64, EvalError> {
+        Ok(self.inner.objective(x)? * self.sf)
+    }
+    fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.gradient(x, g)?;
+        g.iter_mut().for_each(|v| *v *= self.sf);
+        Ok(())
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.constraints(x, c)?;
+        c.iter_mut().zip(&self.sc).for_each(|(v, s)| *v *= s);
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.inner.jacobian_structure()
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.inner.jacobian_values(x, values)?;
+        for (v, &i) in values.iter_mut().zip(&self.jac_rows) {
+            *v *= self.sc[i];
+        }
+        Ok(())
+    }
+    fn elements(&self) -> Vec<Element> {
+        self.inner.elements()
+    }
+    fn has_hessian(&self) -> bool {
+        self.inner.has_hessian()
+    }
+    fn element_hessian(&mut self, x: &[f64], e: usize, sigma: f64, lambda: &[f64], h: &mut [f64]) -> Result<(), EvalError> {
+        for i in 0..lambda.len() {
+            self.lambda[i] = lambda[i] * self.sc[i];
+        }
+        self.inner.element_hessian(x, e, sigma * self.sf, &self.lambda, h)
+    }
+    fn variable_name(&self, i: usize) -> String {
+        self.inner.variable_name(i)
+    }
+    fn constraint_name(&self, i: usize) -> String {
+        self.inner.constraint_name(i)
+    }
 }
 
 struct Solver<'s> {

@@ -1,0 +1,1451 @@
+//! Direct collocation of the jump problem ([`crate::ocp::JumpOcp`]) as a
+//! sparse nonlinear program ([`crate::nlp::Nlp`]), after Porsa, Lin & Pandy
+//! (2016, eq. 7).
+//!
+//! **Mesh.** N uniform intervals (Moco's `num_mesh_intervals`, default 28)
+//! on [0, t_f], nodes t_k = k·h, h = t_f/N, k = 0..N. Node 0 is the fixed
+//! static squat and carries no variables.
+//!
+//! **Variables** (n = N·(n_x + n_u) + 1 = 2,409 for the paper's problem):
+//! `[x_1, u_1, x_2, u_2, …, x_N, u_N, t_f]` with x_k the 62 states and u_k
+//! the 24 excitations of node k.
+//!
+//! **Constraints** (m = N·n_x + n_cm + 1 = 1,744):
+//! - defects of interval k = 1..N (equalities, N·62 = 1,736 rows), see
+//!   [`Scheme`]:
+//!   - midpoint Euler (eq. 7, default):
+//!     d_k = x_k − x_{k−1} − h·f((x_{k−1} + x_k)/2, (u_{k−1} + u_k)/2);
+//!   - trapezoidal: d_k = x_k − x_{k−1} − (h/2)·(f(x_{k−1}, u_{k−1}) + f(x_k, u_k));
+//!   - Hermite–Simpson (compressed): d_k = x_k − x_{k−1} − (h/6)·(f_{k−1} + 4 f_c + f_k);
+//! - no countermovement (eq. 4), row j = 0..n_cm−1:
+//!   Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0 (Ÿ_C from q, q̇ and q̈ = f(x, u) at the node);
+//! - lift-off: F_y(t_f)/(m g) ≤ ε (or = ε), see [`crate::ocp::LiftOff`].
+//!
+//! **Objective**: −J = −(Y_C(t_f) + Ẏ_C(t_f)²/(2g)) (eq. 3).
+//!
+//! **Derivatives.** Exact, from forward dual numbers (num-dual
+//! `DualSVec64<8>`, 8 directions per pass) through the Rust-native state
+//! equation. Each defect block depends only on its two nodes and t_f:
+//!
+//! ```text
+//!   ∂d_k/∂(x,u)_{k−1} = −[I 0] − (h/2)·F,   ∂d_k/∂(x,u)_k = [I 0] − (h/2)·F,
+//!   ∂d_k/∂t_f = −f/N   (trapezoidal: −(f_{k−1} + f_k)/(2N), F at each node)
+//! ```
+//!
+//! with F = ∂f/∂(x, u) at the midpoint (or node), whose sparsity
+//! ([`StatePattern`]) is a structural superset found once per problem:
+//! q̇ rows are the identity on q̇; q̈ rows are dense over q, q̇ and every fibre
+//! length (the mass matrix couples all coordinates); a fibre-length row
+//! depends on the muscle's own l^M and a and on the coordinates its path
+//! spans; an activation row on a_i and u_i; united with every entry found
+//! above roundoff at random states in and out of ground contact. For the
+//! jumper that is 399 of the 5,332 entries (Porsa et al. count 406; the
+//! difference is which coordinates the 24 paths span), 874 non-zeros per
+//! midpoint or trapezoidal defect block (2·(382 + 24) node columns + 62 in
+//! the t_f column) and 24,574 in the whole Jacobian. The columns of F are
+//! compressed by a greedy colouring (columns that share no row share a dual
+//! direction; Curtis, Powell & Reid 1974): 38 directions instead of 86,
+//! since the q̈ rows need q, q̇ and l^M apart while every a_i and u_i fits
+//! beside them.
+//!
+//! **Threads.** The Jacobian's point evaluations (28 midpoints plus the
+//! nodes of the path rows) are split between [`TranscriptionOptions::threads`]
+//! scoped threads; constraint values run on the calling thread.
+
+use crate::nlp::{Element, EvalError, Nlp};
+use crate::ocp::JumpOcp;
+use crate::ode::StateWorkspace;
+use crate::scalar::Dual64;
+use crate::simulate::{JumpSummary, SimulationFailure};
+use num_dual::DualSVec64;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::sync::Arc;
+
+/// Dual directions per pass of the Jacobian evaluation (see
+/// [`time_point_jacobian`] for the measurements behind the choice).
+pub const LANES: usize = 8;
+
+/// The collocation scheme of the defects.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Scheme {
+    /// x_k − x_{k−1} − h·f(x̄, ū) with x̄, ū the interval means (Porsa et al. eq. 7).
+    MidpointEuler,
+    /// x_k − x_{k−1} − (h/2)·(f_{k−1} + f_k).
+    Trapezoidal,
+    /// Hermite–Simpson in compressed form (the centre state eliminated, the
+    /// centre excitations the mean, as Moco's `hermite-simpson` with
+    /// `interpolate_control_mesh_interior_points`):
+    /// x_k − x_{k−1} − (h/6)·(f_{k−1} + 4 f_c + f_k), f_c = f(x_c, u_c),
+    /// x_c = (x_{k−1} + x_k)/2 + (h/8)·(f_{k−1} − f_k), u_c = (u_{k−1} + u_k)/2.
+    HermiteSimpson,
+}
+
+/// Settings of the transcription.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct TranscriptionOptions {
+    /// Mesh intervals N (Moco's name); N + 1 nodes.
+    pub num_mesh_intervals: usize,
+    pub scheme: Scheme,
+    /// Threads of the Jacobian evaluation (its points are split between
+    /// them); constraint values always run on the calling thread.
+    pub threads: usize,
+    /// Compress the columns of ∂f/∂(x, u) by colouring (exact given a
+    /// complete pattern); false evaluates every column separately.
+    pub compress_columns: bool,
+    /// Random states at which the pattern of ∂f/∂(x, u) is sampled.
+    pub pattern_samples: usize,
+    pub pattern_seed: u64,
+}
+
+impl Default for TranscriptionOptions {
+    fn default() -> Self {
+        TranscriptionOptions { num_mesh_intervals: 28, scheme: Scheme::MidpointEuler, threads: 2, compress_columns: true, pattern_samples: 60, pattern_seed: 1 }
+    }
+}
+
+/// The transcription could not be built, or a guess not made.
+#[derive(Debug, thiserror::Error)]
+pub enum TranscriptionError {
+    #[error("transcription: {0}")]
+    Invalid(String),
+    #[error("transcription: sparsity of ∂f/∂(x, u): {0}")]
+    Pattern(String),
+    #[error("initial guess: {0}")]
+    Guess(String),
+    #[error("initial guess: bang-bang jump: {0}")]
+    Simulation(Box<SimulationFailure>),
+}
+
+/// The sparsity of the node outputs g(x, u) = (f(x, u), Ÿ_C, F_y/(m g))
+/// with respect to (x, u): rows 0..n_x are f, row n_x is Ÿ_C, row n_x + 1
+/// the lift-off force; columns 0..n_x are x, then u.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StatePattern {
+    pub nx: usize,
+    pub nu: usize,
+    /// Per output row, its columns (increasing).
+    pub rows: Vec<Vec<usize>>,
+    /// Sample states evaluated, and those the model rejected.
+    pub samples_used: usize,
+    pub samples_rejected: usize,
+}
+
+impl StatePattern {
+    /// Entries of ∂f/∂(x, u) (the 62 rows of f only; the paper's count).
+    pub fn nnz_f(&self) -> usize {
+        self.rows[..self.nx].iter().map(|r| r.len()).sum()
+    }
+
+    /// Whether output row `r` may depend on input column `c`.
+    pub fn contains(&self, r: usize, c: usize) -> bool {
+        self.rows[r].binary_search(&c).is_ok()
+    }
+
+    /// The pattern of `ocp`'s state equation: the structural part (see the
+    /// module documentation; a fibre-length row gets every coordinate its
+    /// muscle-tendon length depends on at any sample) united with every
+    /// entry above [`ROUNDOFF`] in exact dual Jacobians at `samples` random
+    /// states (seed `seed`): a third anywhere inside the bounds (speeds up
+    /// to 5) with the feet placed from 1 cm above to 1 cm into the ground, a
+    /// third with random heights and full speeds, a third near the static
+    /// squat (in contact). [`StatePattern::violations`] checks the result at
+    /// fresh states.
+    pub fn detect(ocp: &JumpOcp, samples: usize, seed: u64) -> Result<Self, TranscriptionError> {
+        let (n, nm) = (ocp.nq(), ocp.nm());
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let (nin, nout) = (nx + nu, nx + 2);
+        if samples < 3 {
+            return Err(TranscriptionError::Pattern(format!(
+                "pattern_samples = {samples}: at least 3 sample states are needed (the coordinates each muscle path spans are found at them)"
+            )));
+        }
+        let mut found = vec![vec![false; nin]; nout];
+        // Structural part.
+        for i in 0..n {
+            found[i][n + i] = true;
+            for c in 0..2 * n + nm {
+                found[n + i][c] = true;
+            }
+        }
+        for k in 0..nm {
+            found[2 * n + k][2 * n + k] = true;
+            found[2 * n + k][2 * n + nm + k] = true;
+            found[2 * n + nm + k][2 * n + nm + k] = true;
+            found[2 * n + nm + k][nx + k] = true;
+        }
+        for c in 0..2 * n {
+            found[nx][c] = true;
+            found[nx + 1][c] = true;
+        }
+        // Sampled part: dense dual Jacobians.
+        let dense = Compiled::new(&vec![(0..nin).collect::<Vec<_>>(); nout], nin, false, LANES);
+        let mut w = Worker::<LANES>::new(ocp);
+        let mut out = vec![0.0; nout];
+        let mut jac = vec![0.0; dense.entries.len()];
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let (mut used, mut rejected) = (0, 0);
+        for s in 0..samples {
+            sample_state(ocp, s % 3, &mut rng, &mut w.x, &mut w.u);
+            match eval_jac(ocp, &dense, &mut w, &mut out, &mut jac, Some(&mut found)) {
+                Ok(()) => used += 1,
+                Err(_) => {
+                    rejected += 1;
+                    continue;
+                }
+            }
+            mark_significant(&dense, &jac, nin, |r, c, _| found[r][c] = true);
+        }
+        if used == 0 {
+            return Err(TranscriptionError::Pattern(format!("the model rejected all {samples} sample states")));
+        }
+        // Ÿ_C depends on whatever q̈ depends on.
+        for i in 0..n {
+            for c in 0..nin {
+                if found[n + i][c] {
+                    found[nx][c] = true;
+                }
+            }
+        }
+        let rows = found.iter().map(|r| (0..nin).filter(|&c| r[c]).collect()).collect();
+        Ok(StatePattern { nx, nu, rows, samples_used: used, samples_rejected: rejected })
+    }
+
+    /// Entries outside the pattern that are significant (see
+    /// [`ROUNDOFF`]) at `samples` fresh random states (seed `seed`):
+    /// (row, column, largest |∂g_r/∂c| / max_c' |∂g_r/∂c'|). Empty when the
+    /// pattern holds there.
+    pub fn violations(&self, ocp: &JumpOcp, samples: usize, seed: u64) -> Vec<(usize, usize, f64)> {
+        let (nx, nu) = (self.nx, self.nu);
+        let (nin, nout) = (nx + nu, nx + 2);
+        let dense = Compiled::new(&vec![(0..nin).collect::<Vec<_>>(); nout], nin, false, LANES);
+        let mut w = Worker::<LANES>::new(ocp);
+        let mut out = vec![0.0; nout];
+        let mut jac = vec![0.0; dense.entries.len()];
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut worst = vec![0.0f64; nout * nin];
+        for s in 0..samples {
+            sample_state(ocp, s % 3, &mut rng, &mut w.x, &mut w.u);
+            if eval_jac(ocp, &dense, &mut w, &mut out, &mut jac, None).is_err() {
+                continue;
+            }
+            mark_significant(&dense, &jac, nin, |r, c, ratio| {
+                if !self.contains(r, c) {
+                    worst[r * nin + c] = worst[r * nin + c].max(ratio);
+                }
+            });
+        }
+        (0..nout * nin).filter(|&i| worst[i] > 0.0).map(|i| (i / nin, i % nin, worst[i])).collect()
+    }
+}
+
+/// Entries of a sampled Jacobian below this fraction of their row's
+/// largest entry count as roundoff: a muscle-tendon length computed from
+/// ground-frame point positions depends on the floating-base coordinates
+/// (and a knee muscle's on the hip angle) by ~1e-16 relative, although it
+/// depends mathematically only on the joint angles its path spans.
+pub const ROUNDOFF: f64 = 1e-10;
+
+/// Call `mark(row, column, |J_rc| / max_c' |J_rc'|)` for every entry of a
+/// dense sampled Jacobian above [`ROUNDOFF`] relative to its row (and every
+/// non-finite entry).
+fn mark_significant(dense: &Compiled, jac: &[f64], nin: usize, mut mark: impl FnMut(usize, usize, f64)) {
+    for r in 0..dense.row_start.len() - 1 {
+        let row = &jac[r * nin..(r + 1) * nin];
+        let big = row.iter().filter(|v| v.is_finite()).fold(0.0f64, |m, v| m.max(v.abs()));
+        for (c, &v) in row.iter().enumerate() {
+            if !v.is_finite() {
+                mark(r, c, f64::INFINITY);
+            } else if v != 0.0 && v.abs() > ROUNDOFF * big {
+                mark(r, c, v.abs() / big);
+            }
+        }
+    }
+}
+
+/// Moment arms below this (m/rad or m/m) are roundoff (see [`ROUNDOFF`]).
+const PATH_ROUNDOFF: f64 = 1e-9;
+
+/// A random state and excitation for pattern detection (`kind` 0, 1, 2:
+/// feet near the ground, anywhere, near the squat).
+fn sample_state(ocp: &JumpOcp, kind: usize, rng: &mut ChaCha8Rng, x: &mut [f64], u: &mut [f64]) {
+    let (n, nm) = (ocp.nq(), ocp.nm());
+    let (lo, hi) = (&ocp.state_lower, &ocp.state_upper);
+    let mut uni = |a: f64, b: f64| if b > a { rng.random_range(a..=b) } else { a };
+    for i in 0..n {
+        if kind == 2 {
+            x[i] = ocp.squat.x[i] + uni(-0.15, 0.15);
+            x[n + i] = uni(-3.0, 3.0);
+        } else {
+            // Ranges beyond ±π say nothing new about a rotation.
+            x[i] = uni(lo[i].max(-std::f64::consts::PI), hi[i].min(std::f64::consts::PI));
+            let s = if kind == 0 { ocp.options.speed_bound.min(5.0) } else { ocp.options.speed_bound };
+            x[n + i] = uni(-s, s);
+        }
+    }
+    for k in 0..nm {
+        let j = 2 * n + k;
+        x[j] = if kind == 2 { (ocp.squat.x[j] * uni(0.9, 1.1)).clamp(lo[j], hi[j]) } else { uni(lo[j], hi[j]) };
+        let a = 2 * n + nm + k;
+        x[a] = uni(lo[a], hi[a]);
+        u[k] = uni(ocp.control_lower[k], ocp.control_upper[k]);
+    }
+    if kind != 1 {
+        let depth = if kind == 0 { uni(-0.01, 0.01) } else { uni(0.0, 0.01) };
+        place_feet(ocp, x, depth);
+    }
+}
+
+/// Shift pelvis_ty so that the lowest contact sphere reaches `depth` into
+/// the ground (negative: above it). No-op without contact or pelvis_ty.
+fn place_feet(ocp: &JumpOcp, x: &mut [f64], depth: f64) {
+    let eq = &ocp.eq;
+    let n = eq.nq();
+    let (Some(contact), Some(c)) = (&eq.model.contact, eq.model.coordinate_index("pelvis_ty")) else { return };
+    let ty = eq.system.q_of_model_coordinate[c];
+    let mut ws = eq.multibody.workspace::<f64>();
+    for _ in 0..3 {
+        eq.multibody.set_state(&mut ws, &x[..n], &x[n..2 * n]);
+        let lowest = contact
+            .spheres
+            .iter()
+            .map(|sp| {
+                let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
+                let p: [f64; 3] = eq.multibody.point_position(&ws, ci, [sp.location[0] + off[0], sp.location[1] + off[1], sp.location[2] + off[2]]);
+                p[1] - sp.radius
+            })
+            .fold(f64::INFINITY, f64::min);
+        if !lowest.is_finite() {
+            return;
+        }
+        x[ty] += -depth - lowest;
+    }
+}
+
+/// A row-major sparse pattern with its dual seeding plan.
+#[derive(Debug, Clone)]
+struct Compiled {
+    /// (row, column), row-major; the position is the entry index.
+    entries: Vec<(usize, usize)>,
+    row_start: Vec<usize>,
+    num_colors: usize,
+    passes: Vec<Pass>,
+}
+
+#[derive(Debug, Clone, Default)]
+struct Pass {
+    /// Input columns seeded in this pass and their lane.
+    seeds: Vec<(usize, usize)>,
+    /// (entry, row, lane) read after this pass.
+    extract: Vec<(usize, usize, usize)>,
+}
+
+impl Compiled {
+    fn new(rows: &[Vec<usize>], nin: usize, compress: bool, lanes: usize) -> Self {
+        let lanes = lanes.max(1);
+        let mut entries = Vec::new();
+        let mut row_start = vec![0];
+        for (r, cols) in rows.iter().enumerate() {
+            for &c in cols {
+                entries.push((r, c));
+            }
+            row_start.push(entries.len());
+        }
+        // Greedy colouring: columns sharing a row get different colours.
+        let mut color = vec![usize::MAX; nin];
+        if compress {
+            let mut rows_of = vec![Vec::new(); nin];
+            for &(r, c) in &entries {
+                rows_of[c].push(r);
+            }
+            let mut forbidden = vec![usize::MAX; nin];
+            for j in 0..nin {
+                for &r in &rows_of[j] {
+                    for &c in &rows[r] {
+                        if color[c] != usize::MAX {
+                            forbidden[color[c]] = j;
+                        }
+                    }
+                }
+                color[j] = (0..nin).find(|&k| forbidden[k] != j).unwrap_or(j);
+            }
+        } else {
+            for (j, c) in color.iter_mut().enumerate() {
+                *c = j;
+            }
+        }
+        let num_colors = color.iter().map(|&c| c + 1).max().unwrap_or(0);
+        let mut passes = vec![Pass::default(); num_colors.div_ceil(lanes)];
+        for j in 0..nin {
+            passes[color[j] / lanes].seeds.push((j, color[j] % lanes));
+        }
+        for (e, &(r, c)) in entries.iter().enumerate() {
+            passes[color[c] / lanes].extract.push((e, r, color[c] % lanes));
+        }
+        Compiled { entries, row_start, num_colors, passes }
+    }
+
+    /// Entry index of (r, c), if in the pattern.
+    fn entry(&self, r: usize, c: usize) -> Option<usize> {
+        let s = self.row_start[r];
+        self.entries[s..self.row_start[r + 1]].binary_search_by_key(&c, |&(_, cc)| cc).ok().map(|i| s + i)
+    }
+}
+
+/// Buffers of one evaluation thread.
+struct Worker<const W: usize> {
+    ws: StateWorkspace<f64>,
+    wd: StateWorkspace<DualSVec64<W>>,
+    x: Vec<f64>,
+    u: Vec<f64>,
+    xdot: Vec<f64>,
+    xd: Vec<DualSVec64<W>>,
+    ud: Vec<DualSVec64<W>>,
+    xdotd: Vec<DualSVec64<W>>,
+}
+
+impl<const W: usize> Worker<W> {
+    fn new(ocp: &JumpOcp) -> Self {
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let z = DualSVec64::<W>::from(0.0);
+        Worker {
+            ws: ocp.eq.workspace(),
+            wd: ocp.eq.workspace(),
+            x: vec![0.0; nx],
+            u: vec![0.0; nu],
+            xdot: vec![0.0; nx],
+            xd: vec![z; nx],
+            ud: vec![z; nu],
+            xdotd: vec![z; nx],
+        }
+    }
+}
+
+/// g(x, u) = (f, Ÿ_C, F_y/(m g)) at the worker's (x, u) into `out`.
+fn eval_value<const W: usize>(ocp: &JumpOcp, w: &mut Worker<W>, out: &mut [f64]) -> Result<(), String> {
+    let nx = w.x.len();
+    let (ydd, fy) = ocp.state_rates(&mut w.ws, &w.x, &w.u, &mut w.xdot).map_err(|e| e.to_string())?;
+    out[..nx].copy_from_slice(&w.xdot);
+    out[nx] = ydd;
+    out[nx + 1] = fy;
+    Ok(())
+}
+
+#[inline]
+fn lane<const W: usize>(d: &DualSVec64<W>, l: usize) -> f64 {
+    d.eps.0.as_ref().map_or(0.0, |m| m[l])
+}
+
+/// g and its Jacobian entries in `cp`'s pattern at the worker's (x, u).
+/// With `path_columns`, marks the fibre-length rows' dependence on every
+/// coordinate its muscle-tendon length depends on (pattern detection).
+fn eval_jac<const W: usize>(ocp: &JumpOcp, cp: &Compiled, w: &mut Worker<W>, out: &mut [f64], jac: &mut [f64], mut path_columns: Option<&mut Vec<Vec<bool>>>) -> Result<(), String> {
+    let (nx, nu) = (w.x.len(), w.u.len());
+    let (n, nm) = (ocp.nq(), ocp.nm());
+    for (s, pass) in cp.passes.iter().enumerate() {
+        for i in 0..nx {
+            w.xd[i] = DualSVec64::from(w.x[i]);
+        }
+        for k in 0..nu {
+            w.ud[k] = DualSVec64::from(w.u[k]);
+        }
+        for &(c, l) in &pass.seeds {
+            if c < nx {
+                w.xd[c] = DualSVec64::from_re(w.x[c]).derivative(l);
+            } else {
+                w.ud[c - nx] = DualSVec64::from_re(w.u[c - nx]).derivative(l);
+            }
+        }
+        let (ydd, fy) = ocp.state_rates(&mut w.wd, &w.xd, &w.ud, &mut w.xdotd).map_err(|e| e.to_string())?;
+        if s == 0 {
+            for i in 0..nx {
+                out[i] = w.xdotd[i].re;
+            }
+            out[nx] = ydd.re;
+            out[nx + 1] = fy.re;
+        }
+        for &(e, r, l) in &pass.extract {
+            let d = if r < nx {
+                &w.xdotd[r]
+            } else if r == nx {
+                &ydd
+            } else {
+                &fy
+            };
+            jac[e] = lane(d, l);
+        }
+        if let Some(found) = path_columns.as_deref_mut() {
+            for &(c, l) in &pass.seeds {
+                if c < n {
+                    for k in 0..nm {
+                        if lane(&w.wd.mtu_length[k], l).abs() > PATH_ROUNDOFF {
+                            found[2 * n + k][c] = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Where the state equation is evaluated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Point {
+    /// Node k (1..N).
+    Node(usize),
+    /// The mean of nodes k−1 and k (interval k = 1..N).
+    Mid(usize),
+    /// The Hermite–Simpson centre of interval k: states
+    /// (x_{k−1} + x_k)/2 + h(f_{k−1} − f_k)/8, excitations the mean.
+    Center(usize),
+}
+
+/// How one Jacobian entry is computed from the point evaluations.
+#[derive(Debug, Clone, Copy)]
+enum Src {
+    /// diag − (h/2)·J_point[entry] (defect w.r.t. a node variable).
+    Dyn { point: usize, entry: Option<usize>, diag: f64 },
+    /// −(f_row at `a` + f_row at `b`)·`scale` (defect w.r.t. t_f).
+    Tf { a: Term, b: usize, row: usize, scale: f64 },
+    /// A Hermite–Simpson defect entry (filled block by block).
+    Hs,
+    /// scale·J_point[entry] (Ÿ_C and lift-off rows).
+    Out { point: usize, entry: usize, scale: f64 },
+}
+
+/// The first term of a t_f column entry.
+#[derive(Debug, Clone, Copy)]
+enum Term {
+    Point(usize),
+    /// The fixed start (trapezoidal interval 1).
+    Start,
+    None,
+}
+
+/// Jacobian sizes.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct JacobianStats {
+    /// Non-zeros of the whole constraint Jacobian.
+    pub nnz: usize,
+    /// Of the defect rows, of the no-countermovement rows, of the lift-off row.
+    pub nnz_defects: usize,
+    pub nnz_no_countermovement: usize,
+    pub nnz_liftoff: usize,
+    /// Per defect block (interval 1 has no previous-node columns).
+    pub nnz_first_interval: usize,
+    pub nnz_interval: usize,
+    /// Of ∂f/∂(x, u) (n_x × (n_x + n_u) = 5,332 entries for the jump).
+    pub nnz_state_equation: usize,
+    pub state_equation_entries: usize,
+    /// Dual directions per Jacobian of f (colours) and passes of `LANES`.
+    pub colors: usize,
+    pub passes: usize,
+    pub lanes: usize,
+}
+
+/// Evaluation counts and times (s), for solver reports.
+#[derive(Debug, Clone, Default, serde::Serialize)]
+pub struct EvalCounters {
+    pub constraints: usize,
+    pub constraints_time: f64,
+    pub jacobians: usize,
+    pub jacobian_time: f64,
+}
+
+/// A trajectory on the mesh: node times, states and excitations (node 0
+/// included).
+#[derive(Debug, Clone)]
+pub struct MeshTrajectory {
+    pub time: Vec<f64>,
+    pub states: Vec<Vec<f64>>,
+    pub controls: Vec<Vec<f64>>,
+}
+
+/// The jump problem transcribed by direct collocation.
+pub struct Transcription {
+    pub ocp: Arc<JumpOcp>,
+    options: TranscriptionOptions,
+    pattern: StatePattern,
+    pub counters: EvalCounters,
+    compiled: Compiled,
+    nx: usize,
+    nu: usize,
+    n_cm: usize,
+    points: Vec<Point>,
+    /// The midpoint (or Hermite–Simpson centre) of interval k at [k − 1].
+    interval_point: Vec<usize>,
+    /// Points before this index are evaluated first (Hermite–Simpson
+    /// centres need the node values).
+    first_stage: usize,
+    /// Hermite–Simpson: per state row, the node columns of its defect
+    /// (F ∪ I ∪ F^x·F) with the entry of F and the identity; the x-columns
+    /// s of F's row with their entries (for F_c^x·F); a scratch row.
+    hs_rows: Vec<Vec<(usize, Option<usize>, f64)>>,
+    hs_prods: Vec<Vec<(usize, usize)>>,
+    scratch: Vec<f64>,
+    /// The point of node k, if evaluated.
+    node_point: Vec<Option<usize>>,
+    /// g at node 0 (fixed).
+    node0: Vec<f64>,
+    structure: Vec<(usize, usize)>,
+    sources: Vec<Src>,
+    /// Offsets into `structure` of the defect, no-countermovement and lift-off rows.
+    block_offsets: [usize; 4],
+    point_vals: Vec<f64>,
+    point_jac: Vec<f64>,
+    workers: Vec<Worker<LANES>>,
+    initial: Vec<f64>,
+    /// Column layout of node k's element in the no-countermovement rows etc.
+    ydd_cols: Vec<usize>,
+    fy_cols: Vec<usize>,
+}
+
+impl Transcription {
+    /// Transcribe `ocp`, detecting the pattern of ∂f/∂(x, u) first.
+    pub fn new(ocp: Arc<JumpOcp>, options: TranscriptionOptions) -> Result<Self, TranscriptionError> {
+        let pattern = StatePattern::detect(&ocp, options.pattern_samples, options.pattern_seed)?;
+        Self::with_pattern(ocp, options, pattern)
+    }
+
+    /// Transcribe `ocp` with a known pattern (e.g. shared between meshes).
+    pub fn with_pattern(ocp: Arc<JumpOcp>, options: TranscriptionOptions, pattern: StatePattern) -> Result<Self, TranscriptionError> {
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let big_n = options.num_mesh_intervals;
+        let n_cm = ocp.options.no_countermovement_nodes;
+        if big_n == 0 {
+            return Err(TranscriptionError::Invalid("num_mesh_intervals must be at least 1".into()));
+        }
+        if n_cm > big_n {
+            return Err(TranscriptionError::Invalid(format!(
+                "{n_cm} no-countermovement rows need at least {n_cm} mesh intervals, got num_mesh_intervals = {big_n}"
+            )));
+        }
+        if pattern.nx != nx || pattern.nu != nu || pattern.rows.len() != nx + 2 {
+            return Err(TranscriptionError::Pattern(format!("the pattern is for {} states and {} controls, the problem has {nx} and {nu}", pattern.nx, pattern.nu)));
+        }
+        if options.threads == 0 {
+            return Err(TranscriptionError::Invalid("threads must be at least 1".into()));
+        }
+        let nin = nx + nu;
+        let compiled = Compiled::new(&pattern.rows, nin, options.compress_columns, LANES);
+        // Evaluation points.
+        let mut points = Vec::new();
+        let mut interval_point = Vec::new();
+        let mut node_point = vec![None; big_n + 1];
+        match options.scheme {
+            Scheme::MidpointEuler => {
+                for k in 1..=big_n {
+                    interval_point.push(points.len());
+                    points.push(Point::Mid(k));
+                }
+                for k in (1..=n_cm).chain(std::iter::once(big_n)) {
+                    if node_point[k].is_none() {
+                        node_point[k] = Some(points.len());
+                        points.push(Point::Node(k));
+                    }
+                }
+            }
+            Scheme::Trapezoidal => {
+                for k in 1..=big_n {
+                    node_point[k] = Some(points.len());
+                    points.push(Point::Node(k));
+                }
+            }
+            Scheme::HermiteSimpson => {
+                for k in 1..=big_n {
+                    node_point[k] = Some(points.len());
+                    points.push(Point::Node(k));
+                }
+                for k in 1..=big_n {
+                    interval_point.push(points.len());
+                    points.push(Point::Center(k));
+                }
+            }
+        }
+        let first_stage = if options.scheme == Scheme::HermiteSimpson { big_n } else { points.len() };
+        let nv = nin;
+        let var = |k: usize, c: usize| (k - 1) * nv + c;
+        let tf = big_n * nv;
+        // Defect rows: per state row, the node columns (pattern ∪ identity).
+        let blk: Vec<Vec<(usize, Option<usize>, f64)>> = (0..nx)
+            .map(|r| {
+                let mut cols: Vec<usize> = pattern.rows[r].clone();
+                if !cols.contains(&r) {
+                    cols.push(r);
+                    cols.sort_unstable();
+                }
+                cols.iter().map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 })).collect()
+            })
+            .collect();
+        // Hermite–Simpson: F_c^x·F adds, to row r, the columns of every row
+        // s < n_x that row r depends on.
+        let (mut hs_rows, mut hs_prods) = (Vec::new(), Vec::new());
+        if options.scheme == Scheme::HermiteSimpson {
+            for r in 0..nx {
+                let mut cols: Vec<usize> = pattern.rows[r].iter().copied().chain(std::iter::once(r)).collect();
+                let prods: Vec<(usize, usize)> = pattern.rows[r].iter().filter(|&&c| c < nx).map(|&c| (c, compiled.entry(r, c).unwrap_or(usize::MAX))).collect();
+                for &(sr, _) in &prods {
+                    cols.extend(pattern.rows[sr].iter().copied());
+                }
+                cols.sort_unstable();
+                cols.dedup();
+                hs_rows.push(cols.iter().map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 })).collect::<Vec<_>>());
+                hs_prods.push(prods);
+            }
+        }
+        let mut structure = Vec::new();
+        let mut sources = Vec::new();
+        let inv_n = 1.0 / big_n as f64;
+        for k in 1..=big_n {
+            let row0 = (k - 1) * nx;
+            let (pa, pb) = match options.scheme {
+                Scheme::MidpointEuler => (interval_point[k - 1], interval_point[k - 1]),
+                Scheme::Trapezoidal | Scheme::HermiteSimpson => (node_point[k - 1].unwrap_or(usize::MAX), node_point[k].unwrap_or(usize::MAX)),
+            };
+            for r in 0..nx {
+                let cols = if options.scheme == Scheme::HermiteSimpson { &hs_rows[r] } else { &blk[r] };
+                if k >= 2 {
+                    for &(c, e, d) in cols {
+                        structure.push((row0 + r, var(k - 1, c)));
+                        sources.push(if options.scheme == Scheme::HermiteSimpson { Src::Hs } else { Src::Dyn { point: pa, entry: e, diag: -d } });
+                    }
+                }
+                for &(c, e, d) in cols {
+                    structure.push((row0 + r, var(k, c)));
+                    sources.push(if options.scheme == Scheme::HermiteSimpson { Src::Hs } else { Src::Dyn { point: pb, entry: e, diag: d } });
+                }
+                structure.push((row0 + r, tf));
+                sources.push(match options.scheme {
+                    Scheme::MidpointEuler => Src::Tf { a: Term::None, b: pb, row: r, scale: inv_n },
+                    Scheme::Trapezoidal => Src::Tf { a: node_point[k - 1].map_or(Term::Start, Term::Point), b: pb, row: r, scale: 0.5 * inv_n },
+                    Scheme::HermiteSimpson => Src::Hs,
+                });
+            }
+        }
+        let off_cm = structure.len();
+        let ydd_cols = pattern.rows[nx].clone();
+        let fy_cols = pattern.rows[nx + 1].clone();
+        for j in 0..n_cm {
+            let row = big_n * nx + j;
+            for (node, scale) in [(j, 1.0), (j + 1, -1.0)] {
+                if node == 0 {
+                    continue;
+                }
+                let p = node_point[node].unwrap_or(usize::MAX);
+                for &c in &ydd_cols {
+                    structure.push((row, var(node, c)));
+                    sources.push(Src::Out { point: p, entry: compiled.entry(nx, c).unwrap_or(usize::MAX), scale });
+                }
+            }
+        }
+        let off_lo = structure.len();
+        {
+            let row = big_n * nx + n_cm;
+            let p = node_point[big_n].unwrap_or(usize::MAX);
+            for &c in &fy_cols {
+                structure.push((row, var(big_n, c)));
+                sources.push(Src::Out { point: p, entry: compiled.entry(nx + 1, c).unwrap_or(usize::MAX), scale: 1.0 });
+            }
+        }
+        let off_end = structure.len();
+        // Node 0.
+        let mut w0 = Worker::<LANES>::new(&ocp);
+        w0.x.copy_from_slice(ocp.x0());
+        w0.u.copy_from_slice(ocp.u0());
+        let mut node0 = vec![0.0; nx + 2];
+        eval_value(&ocp, &mut w0, &mut node0).map_err(|e| TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}")))?;
+        let workers = (0..options.threads).map(|_| Worker::new(&ocp)).collect();
+        let npts = points.len();
+        let nnz_g = compiled.entries.len();
+        let mut me = Transcription {
+            ocp,
+            options,
+            pattern,
+            counters: EvalCounters::default(),
+            compiled,
+            nx,
+            nu,
+            n_cm,
+            points,
+            interval_point,
+            first_stage,
+            hs_rows,
+            hs_prods,
+            scratch: vec![0.0; nin],
+            node_point,
+            node0,
+            structure,
+            sources,
+            block_offsets: [0, off_cm, off_lo, off_end],
+            point_vals: vec![0.0; npts * (nx + 2)],
+            point_jac: vec![0.0; npts * nnz_g],
+            workers,
+            initial: Vec::new(),
+            ydd_cols,
+            fy_cols,
+        };
+        // Until a guess is set: the squat held, t_f = 0.3 s within its bounds.
+        let [t0, t1] = me.ocp.options.final_time_bounds;
+        me.initial = me.constant_guess(0.3f64.clamp(t0, t1));
+        Ok(me)
+    }
+
+    /// The settings it was built with.
+    pub fn options(&self) -> &TranscriptionOptions {
+        &self.options
+    }
+
+    /// The sparsity of ∂(f, Ÿ_C, F_y)/∂(x, u) it uses.
+    pub fn pattern(&self) -> &StatePattern {
+        &self.pattern
+    }
+
+    /// Mesh intervals N.
+    pub fn num_intervals(&self) -> usize {
+        self.options.num_mesh_intervals
+    }
+
+    /// Variables per node (n_x + n_u).
+    pub fn node_size(&self) -> usize {
+        self.nx + self.nu
+    }
+
+    /// Index of state `i` of node `k` (None for node 0, which is fixed).
+    pub fn state_index(&self, k: usize, i: usize) -> Option<usize> {
+        (k >= 1 && k <= self.num_intervals() && i < self.nx).then(|| (k - 1) * self.node_size() + i)
+    }
+
+    /// Index of control `i` of node `k` (None for node 0).
+    pub fn control_index(&self, k: usize, i: usize) -> Option<usize> {
+        (k >= 1 && k <= self.num_intervals() && i < self.nu).then(|| (k - 1) * self.node_size() + self.nx + i)
+    }
+
+    /// Index of t_f (the last variable).
+    pub fn final_time_index(&self) -> usize {
+        self.num_intervals() * self.node_size()
+    }
+
+    /// t_f of a variable vector.
+    pub fn final_time(&self, v: &[f64]) -> f64 {
+        v[self.final_time_index()]
+    }
+
+    /// The states of node k (node 0: the fixed start).
+    pub fn node_state<'a>(&'a self, v: &'a [f64], k: usize) -> &'a [f64] {
+        if k == 0 {
+            self.ocp.x0()
+        } else {
+            let o = (k - 1) * self.node_size();
+            &v[o..o + self.nx]
+        }
+    }
+
+    /// The excitations of node k (node 0: the fixed start).
+    pub fn node_control<'a>(&'a self, v: &'a [f64], k: usize) -> &'a [f64] {
+        if k == 0 {
+            self.ocp.u0()
+        } else {
+            let o = (k - 1) * self.node_size() + self.nx;
+            &v[o..o + self.nu]
+        }
+    }
+
+    /// Node times for final time `tf`.
+    pub fn mesh_times(&self, tf: f64) -> Vec<f64> {
+        let big_n = self.num_intervals();
+        (0..=big_n).map(|k| tf * k as f64 / big_n as f64).collect()
+    }
+
+    /// The trajectory a variable vector holds (node 0 included).
+    pub fn unpack(&self, v: &[f64]) -> MeshTrajectory {
+        let big_n = self.num_intervals();
+        MeshTrajectory {
+            time: self.mesh_times(self.final_time(v)),
+            states: (0..=big_n).map(|k| self.node_state(v, k).to_vec()).collect(),
+            controls: (0..=big_n).map(|k| self.node_control(v, k).to_vec()).collect(),
+        }
+    }
+
+    /// The variable vector of node states and excitations (N + 1 each,
+    /// node 0's ignored: it is fixed) and final time `tf`.
+    pub fn pack(&self, states: &[Vec<f64>], controls: &[Vec<f64>], tf: f64) -> Result<Vec<f64>, TranscriptionError> {
+        let big_n = self.num_intervals();
+        if states.len() != big_n + 1 || controls.len() != big_n + 1 {
+            return Err(TranscriptionError::Guess(format!("need {} node states and controls (node 0 included), got {} and {}", big_n + 1, states.len(), controls.len())));
+        }
+        let mut v = vec![0.0; self.num_variables()];
+        for k in 1..=big_n {
+            if states[k].len() != self.nx || controls[k].len() != self.nu {
+                return Err(TranscriptionError::Guess(format!("node {k}: {} states and {} controls, expected {} and {}", states[k].len(), controls[k].len(), self.nx, self.nu)));
+            }
+            let o = (k - 1) * self.node_size();
+            v[o..o + self.nx].copy_from_slice(&states[k]);
+            v[o + self.nx..o + self.nx + self.nu].copy_from_slice(&controls[k]);
+        }
+        v[self.final_time_index()] = tf;
+        Ok(v)
+    }
+
+    /// The static squat held at every node, final time `tf`.
+    pub fn constant_guess(&self, tf: f64) -> Vec<f64> {
+        let nv = self.node_size();
+        let mut v = vec![0.0; self.num_variables()];
+        for node in v[..self.final_time_index()].chunks_mut(nv) {
+            node[..self.nx].copy_from_slice(self.ocp.x0());
+            node[self.nx..].copy_from_slice(self.ocp.u0());
+        }
+        v[self.final_time_index()] = tf;
+        v
+    }
+
+    /// An initial guess from a trajectory (times increasing, from 0, states
+    /// and excitations per time) resampled linearly onto the mesh for final
+    /// time `tf`, then clipped into the variable bounds (t_f too).
+    pub fn guess_from_trajectory(&self, time: &[f64], states: &[Vec<f64>], controls: &[Vec<f64>], tf: f64) -> Result<Vec<f64>, TranscriptionError> {
+        if time.is_empty() || time.len() != states.len() || time.len() != controls.len() {
+            return Err(TranscriptionError::Guess(format!("{} times, {} states and {} controls; need equally many, at least one", time.len(), states.len(), controls.len())));
+        }
+        if let Some(i) = time.windows(2).position(|w| w[0].is_nan() || w[1].is_nan() || w[1] < w[0]) {
+            return Err(TranscriptionError::Guess(format!("times not increasing at index {}: {} then {}", i + 1, time[i], time[i + 1])));
+        }
+        if let Some(i) = states.iter().position(|s| s.len() != self.nx) {
+            return Err(TranscriptionError::Guess(format!("state {i} has {} values, expected {}", states[i].len(), self.nx)));
+        }
+        if let Some(i) = controls.iter().position(|c| c.len() != self.nu) {
+            return Err(TranscriptionError::Guess(format!("control {i} has {} values, expected {}", controls[i].len(), self.nu)));
+        }
+        if !(tf.is_finite() && tf > 0.0) {
+            return Err(TranscriptionError::Guess(format!("final time must be positive, got {tf}")));
+        }
+        let t_end = *time.last().unwrap_or(&0.0);
+        if tf > t_end + 1e-12 * t_end.abs().max(1.0) {
+            return Err(TranscriptionError::Guess(format!("the trajectory ends at {t_end} s, before the final time {tf} s")));
+        }
+        let big_n = self.num_intervals();
+        let times = self.mesh_times(tf);
+        let mut xs = vec![self.ocp.x0().to_vec(); big_n + 1];
+        let mut us = vec![self.ocp.u0().to_vec(); big_n + 1];
+        let mut j = 0;
+        for k in 1..=big_n {
+            let t = times[k];
+            while j + 1 < time.len() && time[j + 1] < t {
+                j += 1;
+            }
+            let (a, b) = if j + 1 < time.len() { (j, j + 1) } else { (j, j) };
+            let s = if b > a && time[b] > time[a] { ((t - time[a]) / (time[b] - time[a])).clamp(0.0, 1.0) } else { 0.0 };
+            for i in 0..self.nx {
+                xs[k][i] = states[a][i] + s * (states[b][i] - states[a][i]);
+            }
+            for i in 0..self.nu {
+                us[k][i] = controls[a][i] + s * (controls[b][i] - controls[a][i]);
+            }
+        }
+        let mut v = self.pack(&xs, &us, tf)?;
+        let n = v.len();
+        let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
+        self.variable_bounds(&mut lo, &mut hi);
+        for i in 0..n {
+            v[i] = v[i].clamp(lo[i], hi[i]);
+        }
+        Ok(v)
+    }
+
+    /// The bang-bang guess: the built-in bang-bang jump integrated forward
+    /// (Rust-native Dormand–Prince, accuracy 1e-6) and resampled onto the
+    /// mesh with t_f the lift-off time; returns the guess and the jump.
+    pub fn bang_bang_guess(&self) -> Result<(Vec<f64>, JumpSummary), TranscriptionError> {
+        let (summary, traj) = self.ocp.simulate_bang_bang(1e-6).map_err(TranscriptionError::Simulation)?;
+        let tf = summary.liftoff_time_s.ok_or_else(|| TranscriptionError::Guess(format!("the bang-bang jump does not lift off within {} s", summary.final_time_s)))?;
+        let v = self.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, tf)?;
+        Ok((v, summary))
+    }
+
+    /// Set the point [`Nlp::initial_point`] returns (default: the squat
+    /// held at every node, t_f = 0.3 s; see [`Self::bang_bang_guess`]).
+    pub fn set_initial_point(&mut self, v: &[f64]) -> Result<(), TranscriptionError> {
+        if v.len() != self.num_variables() {
+            return Err(TranscriptionError::Guess(format!("{} values, the problem has {} variables", v.len(), self.num_variables())));
+        }
+        self.initial = v.to_vec();
+        Ok(())
+    }
+
+    /// Non-zeros of the constraint Jacobian.
+    pub fn jacobian_nnz(&self) -> usize {
+        self.structure.len()
+    }
+
+    /// Sizes of the Jacobian and its blocks.
+    pub fn jacobian_stats(&self) -> JacobianStats {
+        let [_, cm, lo, end] = self.block_offsets;
+        let nx = self.nx;
+        let first = self.structure.iter().take_while(|&&(r, _)| r < nx).count();
+        let second = self.structure.iter().filter(|&&(r, _)| (nx..2 * nx).contains(&r)).count();
+        JacobianStats {
+            nnz: end,
+            nnz_defects: cm,
+            nnz_no_countermovement: lo - cm,
+            nnz_liftoff: end - lo,
+            nnz_first_interval: first,
+            nnz_interval: if self.num_intervals() >= 2 { second } else { 0 },
+            nnz_state_equation: self.pattern.nnz_f(),
+            state_equation_entries: nx * (nx + self.nu),
+            colors: self.compiled.num_colors,
+            passes: self.compiled.passes.len(),
+            lanes: LANES,
+        }
+    }
+
+    /// Rows of the defects, the no-countermovement inequalities and the lift-off row.
+    pub fn defect_rows(&self) -> std::ops::Range<usize> {
+        0..self.num_intervals() * self.nx
+    }
+    pub fn no_countermovement_rows(&self) -> std::ops::Range<usize> {
+        let s = self.num_intervals() * self.nx;
+        s..s + self.n_cm
+    }
+    pub fn liftoff_row(&self) -> usize {
+        self.num_intervals() * self.nx + self.n_cm
+    }
+
+    /// Y_C, Ẏ_C and J = Y_C + Ẏ_C²/(2g) at the final node.
+    pub fn jump_objective(&self, v: &[f64]) -> (f64, f64, f64) {
+        let mut ws = self.ocp.eq.multibody.workspace::<f64>();
+        self.ocp.jump_objective(&mut ws, self.node_state(v, self.num_intervals()))
+    }
+
+    /// Evaluate g (and with `jac` its Jacobian) at every point, in parallel:
+    /// the nodes and midpoints, then (Hermite–Simpson) the interval centres,
+    /// whose states depend on the node values.
+    fn eval_points(&mut self, v: &[f64], jac: bool) -> Result<(), EvalError> {
+        let what = if jac { "jacobian" } else { "constraints" };
+        if v.len() != self.num_variables() {
+            return Err(EvalError::new(what, format!("{} values, the problem has {} variables", v.len(), self.num_variables())));
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(EvalError::new(what, format!("{} is {}", self.variable_name(i), v[i])));
+        }
+        let first_stage = self.first_stage;
+        self.eval_stage(v, jac, 0, first_stage).map_err(|e| EvalError::new(what, e))?;
+        if first_stage < self.points.len() {
+            let all = self.points.len();
+            self.eval_stage(v, jac, first_stage, all).map_err(|e| EvalError::new(what, e))?;
+        }
+        Ok(())
+    }
+
+    /// Evaluate points `lo..hi`; earlier points' values are available.
+    fn eval_stage(&mut self, v: &[f64], jac: bool, lo: usize, hi: usize) -> Result<(), String> {
+        let (nx, nu) = (self.nx, self.nu);
+        let nv = nx + nu;
+        let nout = nx + 2;
+        let ocp: &JumpOcp = &self.ocp;
+        let cp = &self.compiled;
+        let nnz = cp.entries.len();
+        let points = &self.points[lo..hi];
+        let node_point = &self.node_point;
+        let node0 = &self.node0;
+        let h = v[self.final_time_index()] / self.num_intervals() as f64;
+        let (done_vals, todo_vals) = self.point_vals.split_at_mut(lo * nout);
+        let todo_vals = &mut todo_vals[..(hi - lo) * nout];
+        let todo_jac = &mut self.point_jac[lo * nnz..hi * nnz];
+        let done_vals: &[f64] = done_vals;
+        let node = |k: usize| -> (&[f64], &[f64]) {
+            if k == 0 {
+                (ocp.x0(), ocp.u0())
+            } else {
+                let o = (k - 1) * nv;
+                (&v[o..o + nx], &v[o + nx..o + nv])
+            }
+        };
+        // f at node k from the first stage (node 0: the fixed start).
+        let node_f = |k: usize| -> &[f64] {
+            match node_point[k] {
+                Some(p) if p < lo => &done_vals[p * nout..p * nout + nx],
+                _ => &node0[..nx],
+            }
+        };
+        let run = |w: &mut Worker<LANES>, first: usize, pts: &[Point], vals: &mut [f64], jacs: &mut [f64]| -> Result<(), (usize, String)> {
+            for (i, p) in pts.iter().enumerate() {
+                match *p {
+                    Point::Node(k) => {
+                        let (x, u) = node(k);
+                        w.x.copy_from_slice(x);
+                        w.u.copy_from_slice(u);
+                    }
+                    Point::Mid(k) => {
+                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
+                        for j in 0..nx {
+                            w.x[j] = 0.5 * (xa[j] + xb[j]);
+                        }
+                        for j in 0..nu {
+                            w.u[j] = 0.5 * (ua[j] + ub[j]);
+                        }
+                    }
+                    Point::Center(k) => {
+                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
+                        let (fa, fb) = (node_f(k - 1), node_f(k));
+                        for j in 0..nx {
+                            w.x[j] = 0.5 * (xa[j] + xb[j]) + 0.125 * h * (fa[j] - fb[j]);
+                        }
+                        for j in 0..nu {
+                            w.u[j] = 0.5 * (ua[j] + ub[j]);
+                        }
+                    }
+                }
+                let out = &mut vals[i * nout..(i + 1) * nout];
+                let r = if jac { eval_jac(ocp, cp, w, out, &mut jacs[i * nnz..(i + 1) * nnz], None) } else { eval_value(ocp, w, out) };
+                r.map_err(|e| (first + i, e))?;
+            }
+            Ok(())
+        };
+        // Values alone (36 evaluations of ~10 µs) do not repay starting a
+        // thread: measured 0.35 ms on one thread, 0.5-0.7 ms on two.
+        let threads = if jac { self.workers.len() } else { 1 };
+        let nt = threads.min(points.len()).max(1);
+        let per = points.len().div_ceil(nt).max(1);
+        let result = if nt == 1 {
+            run(&mut self.workers[0], lo, points, todo_vals, todo_jac)
+        } else {
+            let run = &run;
+            // The first chunk runs on this thread, the others on scoped threads.
+            std::thread::scope(|s| {
+                let mut jobs = self
+                    .workers
+                    .iter_mut()
+                    .zip(todo_vals.chunks_mut(per * nout).zip(todo_jac.chunks_mut(per * nnz.max(1))))
+                    .zip(points.chunks(per).enumerate());
+                let first = jobs.next();
+                let handles: Vec<_> = jobs.map(|((w, (vals, jacs)), (ci, pts))| s.spawn(move || run(w, lo + ci * per, pts, vals, jacs))).collect();
+                let mut res = match first {
+                    Some(((w, (vals, jacs)), (_, pts))) => run(w, lo, pts, vals, jacs),
+                    None => Ok(()),
+                };
+                for h in handles {
+                    let r = h.join().unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
+                    if res.is_ok() {
+                        res = r;
+                    }
+                }
+                res
+            })
+        };
+        result.map_err(|(p, e)| {
+            let at = match self.points[p] {
+                Point::Node(k) => format!("node {k}"),
+                Point::Mid(k) => format!("midpoint of interval {k}"),
+                Point::Center(k) => format!("centre of interval {k}"),
+            };
+            format!("{at}: {e}")
+        })
+    }
+
+    /// The defect block values of the Hermite–Simpson scheme, in structure
+    /// order (see [`Scheme::HermiteSimpson`]):
+    ///
+    /// ```text
+    ///   ∂d/∂z_{k−1} = −[I 0] − (h/6)F_{k−1} − (h/3)F_c − (h²/12)·F_c^x·F_{k−1}
+    ///   ∂d/∂z_k     =  [I 0] − (h/6)F_k     − (h/3)F_c + (h²/12)·F_c^x·F_k
+    ///   ∂d/∂t_f     = −(f_{k−1} + 4f_c + f_k)/(6N) − (h/(12N))·F_c^x·(f_{k−1} − f_k)
+    /// ```
+    fn hermite_simpson_jacobian(&mut self, h: f64, values: &mut [f64]) {
+        let (nx, big_n) = (self.nx, self.num_intervals());
+        let nout = nx + 2;
+        let nnz = self.compiled.entries.len();
+        let inv_n = 1.0 / big_n as f64;
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut out = values.iter_mut();
+        for k in 1..=big_n {
+            let pc = self.interval_point[k - 1];
+            let jc = &self.point_jac[pc * nnz..(pc + 1) * nnz];
+            let fc = &self.point_vals[pc * nout..pc * nout + nx];
+            let fval = |k: usize| -> &[f64] {
+                match self.node_point[k] {
+                    Some(p) => &self.point_vals[p * nout..p * nout + nx],
+                    None => &self.node0[..nx],
+                }
+            };
+            let (fa, fb) = (fval(k - 1), fval(k));
+            let pb = self.node_point[k].unwrap_or(0);
+            let jb = &self.point_jac[pb * nnz..(pb + 1) * nnz];
+            for r in 0..nx {
+                let cols = &self.hs_rows[r];
+                let prods = &self.hs_prods[r];
+                for (node_jac, sign) in [(if k >= 2 { self.node_point[k - 1].map(|p| &self.point_jac[p * nnz..(p + 1) * nnz]) } else { None }, -1.0), (Some(jb), 1.0)] {
+                    let Some(jn) = node_jac else { continue };
+                    // scratch = row r of F_c^x·F_node.
+                    for &(sr, e_rs) in prods {
+                        let a = jc[e_rs];
+                        for e in self.compiled.row_start[sr]..self.compiled.row_start[sr + 1] {
+                            scratch[self.compiled.entries[e].1] += a * jn[e];
+                        }
+                    }
+                    for &(c, e, d) in cols {
+                        let (fnode, fcen) = e.map_or((0.0, 0.0), |e| (jn[e], jc[e]));
+                        let v = sign * d - h / 6.0 * fnode - h / 3.0 * fcen + sign * h * h / 12.0 * scratch[c];
+                        scratch[c] = 0.0;
+                        if let Some(o) = out.next() {
+                            *o = v;
+                        }
+                    }
+                }
+                let mut corr = 0.0;
+                for &(sr, e_rs) in prods {
+                    corr += jc[e_rs] * (fa[sr] - fb[sr]);
+                }
+                if let Some(o) = out.next() {
+                    *o = -(fa[r] + 4.0 * fc[r] + fb[r]) * inv_n / 6.0 - h * inv_n / 12.0 * corr;
+                }
+            }
+        }
+        self.scratch = scratch;
+    }
+
+    fn point_val(&self, p: Option<usize>, r: usize) -> f64 {
+        match p {
+            Some(p) => self.point_vals[p * (self.nx + 2) + r],
+            None => self.node0[r],
+        }
+    }
+}
+
+fn check_len(what: &str, name: &str, got: usize, want: usize) -> Result<(), EvalError> {
+    if got == want {
+        Ok(())
+    } else {
+        Err(EvalError::new(what, format!("{name} has length {got}, expected {want}")))
+    }
+}
+
+fn finite(what: &str, v: &[f64], name: impl Fn(usize) -> String) -> Result<(), EvalError> {
+    match v.iter().position(|x| !x.is_finite()) {
+        Some(i) => Err(EvalError::new(what, format!("{} is {}", name(i), v[i]))),
+        None => Ok(()),
+    }
+}
+
+impl Nlp for Transcription {
+    fn num_variables(&self) -> usize {
+        self.num_intervals() * self.node_size() + 1
+    }
+
+    fn num_constraints(&self) -> usize {
+        self.num_intervals() * self.nx + self.n_cm + 1
+    }
+
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        let ocp = &self.ocp;
+        for k in 1..=self.num_intervals() {
+            let o = (k - 1) * self.node_size();
+            lower[o..o + self.nx].copy_from_slice(&ocp.state_lower);
+            upper[o..o + self.nx].copy_from_slice(&ocp.state_upper);
+            lower[o + self.nx..o + self.node_size()].copy_from_slice(&ocp.control_lower);
+            upper[o + self.nx..o + self.node_size()].copy_from_slice(&ocp.control_upper);
+        }
+        let t = self.final_time_index();
+        lower[t] = ocp.options.final_time_bounds[0];
+        upper[t] = ocp.options.final_time_bounds[1];
+    }
+
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        for i in self.defect_rows() {
+            lower[i] = 0.0;
+            upper[i] = 0.0;
+        }
+        for i in self.no_countermovement_rows() {
+            lower[i] = f64::NEG_INFINITY;
+            upper[i] = 0.0;
+        }
+        let (a, b) = self.ocp.liftoff_bounds();
+        lower[self.liftoff_row()] = a;
+        upper[self.liftoff_row()] = b;
+    }
+
+    fn initial_point(&self, x: &mut [f64]) {
+        x.copy_from_slice(&self.initial);
+    }
+
+    fn objective(&mut self, x: &[f64]) -> Result<f64, EvalError> {
+        check_len("objective", "x", x.len(), self.num_variables())?;
+        let (_, _, j) = self.jump_objective(x);
+        if !j.is_finite() {
+            return Err(EvalError::new("objective", format!("J = {j} at the final node")));
+        }
+        Ok(-j)
+    }
+
+    fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
+        check_len("gradient", "x", x.len(), self.num_variables())?;
+        check_len("gradient", "g", g.len(), self.num_variables())?;
+        g.iter_mut().for_each(|v| *v = 0.0);
+        let n = self.ocp.nq();
+        let big_n = self.num_intervals();
+        let xn = self.node_state(x, big_n);
+        let mut ws = self.ocp.eq.multibody.workspace::<Dual64>();
+        let mut xd: Vec<Dual64> = xn[..2 * n].iter().map(|&v| Dual64::from(v)).collect();
+        for i in 0..2 * n {
+            xd[i] = Dual64::from(xn[i]).derivative();
+            let (_, _, j) = self.ocp.jump_objective(&mut ws, &xd);
+            xd[i] = Dual64::from(xn[i]);
+            g[(big_n - 1) * self.node_size() + i] = -j.eps;
+        }
+        finite("gradient", g, |i| self.variable_name(i))
+    }
+
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        check_len("constraints", "c", c.len(), self.num_constraints())?;
+        let start = std::time::Instant::now();
+        self.eval_points(x, false)?;
+        let (nx, big_n) = (self.nx, self.num_intervals());
+        let h = self.final_time(x) / big_n as f64;
+        for k in 1..=big_n {
+            let (xa, xb) = (self.node_state(x, k - 1), self.node_state(x, k));
+            let row0 = (k - 1) * nx;
+            match self.options.scheme {
+                Scheme::MidpointEuler => {
+                    let p = self.interval_point[k - 1];
+                    let f = &self.point_vals[p * (nx + 2)..p * (nx + 2) + nx];
+                    for r in 0..nx {
+                        c[row0 + r] = xb[r] - xa[r] - h * f[r];
+                    }
+                }
+                Scheme::Trapezoidal => {
+                    let (pa, pb) = (self.node_point[k - 1], self.node_point[k]);
+                    for r in 0..nx {
+                        c[row0 + r] = xb[r] - xa[r] - 0.5 * h * (self.point_val(pa, r) + self.point_val(pb, r));
+                    }
+                }
+                Scheme::HermiteSimpson => {
+                    let (pa, pb, pc) = (self.node_point[k - 1], self.node_point[k], Some(self.interval_point[k - 1]));
+                    for r in 0..nx {
+                        c[row0 + r] = xb[r] - xa[r] - h / 6.0 * (self.point_val(pa, r) + 4.0 * self.point_val(pc, r) + self.point_val(pb, r));
+                    }
+                }
+            }
+        }
+        for j in 0..self.n_cm {
+            c[big_n * nx + j] = self.point_val(self.node_point[j], nx) - self.point_val(self.node_point[j + 1], nx);
+        }
+        c[self.liftoff_row()] = self.point_val(self.node_point[big_n], nx + 1);
+        self.counters.constraints += 1;
+        self.counters.constraints_time += start.elapsed().as_secs_f64();
+        finite("constraints", c, |i| self.constraint_name(i))
+    }
+
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.structure.clone()
+    }
+
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        check_len("jacobian", "values", values.len(), self.jacobian_nnz())?;
+        let start = std::time::Instant::now();
+        self.eval_points(x, true)?;
+        let h = self.final_time(x) / self.num_intervals() as f64;
+        let nout = self.nx + 2;
+        let nnz = self.compiled.entries.len();
+        let half_h = 0.5 * h;
+        if self.options.scheme == Scheme::HermiteSimpson {
+            self.hermite_simpson_jacobian(h, &mut values[..self.block_offsets[1]]);
+        }
+        for (v, src) in values.iter_mut().zip(&self.sources) {
+            *v = match *src {
+                Src::Hs => continue,
+                Src::Dyn { point, entry, diag } => match entry {
+                    Some(e) => diag - half_h * self.point_jac[point * nnz + e],
+                    None => diag,
+                },
+                Src::Tf { a, b, row, scale } => {
+                    let fa = match a {
+                        Term::Point(p) => self.point_vals[p * nout + row],
+                        Term::Start => self.node0[row],
+                        Term::None => 0.0,
+                    };
+                    -(fa + self.point_vals[b * nout + row]) * scale
+                }
+                Src::Out { point, entry, scale } => scale * self.point_jac[point * nnz + entry],
+            };
+        }
+        self.counters.jacobians += 1;
+        self.counters.jacobian_time += start.elapsed().as_secs_f64();
+        finite("jacobian", values, |i| {
+            let (r, c) = self.structure[i];
+            format!("∂{}/∂{}", self.constraint_name(r), self.variable_name(c))
+        })
+    }
+
+    fn elements(&self) -> Vec<Element> {
+        let big_n = self.num_intervals();
+        let nv = self.node_size();
+        let nx = self.nx;
+        let tf = self.final_time_index();
+        let mut out = Vec::with_capacity(big_n + self.n_cm + 1);
+        for k in 1..=big_n {
+            let start = if k >= 2 { (k - 2) * nv } else { 0 };
+            let mut variables: Vec<usize> = (start..k * nv).collect();
+            variables.push(tf);
+            out.push(Element { variables, constraints: ((k - 1) * nx..k * nx).collect(), objective: false });
+        }
+        for j in 0..self.n_cm {
+            let mut variables = Vec::new();
+            for node in [j, j + 1] {
+                if node >= 1 {
+                    variables.extend(self.ydd_cols.iter().map(|&c| (node - 1) * nv + c));
+                }
+            }
+            out.push(Element { variables, constraints: vec![big_n * nx + j], objective: false });
+        }
+        let n = self.ocp.nq();
+        let mut cols: Vec<usize> = (0..2 * n).chain(self.fy_cols.iter().copied()).collect();
+        cols.sort_unstable();
+        cols.dedup();
+        out.push(Element { variables: cols.iter().map(|&c| (big_n - 1) * nv + c).collect(), constraints: vec![self.liftoff_row()], objective: true });
+        out
+    }
+
+    fn variable_name(&self, i: usize) -> String {
+        if i == self.final_time_index() {
+            return "t_f".into();
+        }
+        let nv = self.node_size();
+        let (k, c) = (i / nv + 1, i % nv);
+        if c < self.nx {
+            format!("node {k} {}", self.ocp.eq.state_names()[c])
+        } else {
+            format!("node {k} {}", self.ocp.eq.control_names()[c - self.nx])
+        }
+    }
+
+    fn constraint_name(&self, i: usize) -> String {
+        let nx = self.nx;
+        if i < self.num_intervals() * nx {
+            format!("defect of interval {} in {}", i / nx + 1, self.ocp.eq.state_names()[i % nx])
+        } else if self.no_countermovement_rows().contains(&i) {
+            let j = i - self.num_intervals() * nx;
+            format!("no countermovement: Ÿ_C(node {j}) ≤ Ÿ_C(node {})", j + 1)
+        } else {
+            "lift-off: vertical ground force at t_f / body weight".into()
+        }
+    }
+}
+
+/// Median time (s) of one Jacobian of g = (f, Ÿ_C, F_y/(m g)) at (x, u)
+/// in `pattern` with `W` dual lanes per pass, over `reps` evaluations
+/// (for choosing [`LANES`]; `W = 1` is one direction per pass).
+pub fn time_point_jacobian<const W: usize>(ocp: &JumpOcp, pattern: &StatePattern, compress: bool, x: &[f64], u: &[f64], reps: usize) -> Result<f64, String> {
+    let nin = pattern.nx + pattern.nu;
+    let cp = Compiled::new(&pattern.rows, nin, compress, W);
+    let mut w = Worker::<W>::new(ocp);
+    w.x.copy_from_slice(x);
+    w.u.copy_from_slice(u);
+    let mut out = vec![0.0; pattern.nx + 2];
+    let mut jac = vec![0.0; cp.entries.len()];
+    let mut times = Vec::with_capacity(reps);
+    for _ in 0..reps.max(1) {
+        let t = std::time::Instant::now();
+        eval_jac(ocp, &cp, &mut w, &mut out, &mut jac, None)?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    times.sort_by(|a, b| a.total_cmp(b));
+    Ok(times[times.len() / 2])
+}

@@ -1,0 +1,653 @@
+//! Direct collocation of the jump (Porsa et al. 2016): problem sizes, the
+//! exact sparse Jacobian against finite differences, the sparsity pattern
+//! at fresh random states, defects on a forward trajectory (convergence
+//! order), the objective and the no-countermovement rows against
+//! independent computations, and the partially separable structure.
+
+use leap::integrator::{Dopri5, Dopri5Options, OdeSystem};
+use leap::nlp::{check_elements, Nlp};
+use leap::ocp::{JumpOcp, LiftOff, OcpOptions};
+use leap::simulate::ExcitationSource;
+use leap::transcription::*;
+use std::sync::{Arc, OnceLock};
+
+/// One problem and pattern for the whole file (tests run in parallel).
+fn setup() -> &'static (Arc<JumpOcp>, StatePattern, Vec<f64>) {
+    static S: OnceLock<(Arc<JumpOcp>, StatePattern, Vec<f64>)> = OnceLock::new();
+    S.get_or_init(|| {
+        let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+        let ocp = Arc::new(JumpOcp::new(&model, OcpOptions::default()).unwrap());
+        let opts = TranscriptionOptions::default();
+        let pattern = StatePattern::detect(&ocp, opts.pattern_samples, opts.pattern_seed).unwrap();
+        let tr = Transcription::with_pattern(ocp.clone(), opts, pattern.clone()).unwrap();
+        let (guess, _) = tr.bang_bang_guess().unwrap();
+        (ocp, pattern, guess)
+    })
+}
+
+fn transcription(options: TranscriptionOptions) -> Transcription {
+    let (ocp, pattern, _) = setup();
+    Transcription::with_pattern(ocp.clone(), options, pattern.clone()).unwrap()
+}
+
+/// The worst discrepancies of a Jacobian against finite differences.
+#[derive(Debug, Default)]
+struct FdReport {
+    /// max |J − central| / max(1, |central|) over entries where f is smooth.
+    worst: f64,
+    worst_at: String,
+    /// Entries where the one-sided differences disagree (a kink of f within
+    /// the step: OpenSim's activation switch at u = a, the clamp at a_min,
+    /// contact onset) and J equals one of them.
+    kinks: usize,
+    /// Entries that needed the smaller step (strong curvature: the fibre
+    /// velocity of a muscle at minimum activation).
+    refined: usize,
+    /// Entries within 1e-6 of the difference only relative to the largest
+    /// entry of their row (the differences' roundoff is relative to the
+    /// row's terms), and the largest such error.
+    row_scaled: usize,
+    row_scaled_worst: f64,
+    /// Largest |central| / max(1, max_j |J_ij|) outside the declared pattern.
+    outside: f64,
+    outside_at: String,
+    entries: usize,
+}
+
+/// Central differences of every constraint row along variable `j`, step
+/// `s` (and the one-sided ones).
+fn differences(tr: &mut Transcription, x: &[f64], c0: &[f64], j: usize, s: f64) -> Vec<(f64, f64, f64)> {
+    let m = c0.len();
+    let (mut cp, mut cm) = (vec![0.0; m], vec![0.0; m]);
+    let mut xp = x.to_vec();
+    xp[j] = x[j] + s;
+    tr.constraints(&xp, &mut cp).unwrap();
+    xp[j] = x[j] - s;
+    tr.constraints(&xp, &mut cm).unwrap();
+    (0..m).map(|i| ((cp[i] - cm[i]) / (2.0 * s), (cp[i] - c0[i]) / s, (c0[i] - cm[i]) / s)).collect()
+}
+
+/// Compare the Jacobian at `x` with central differences of step 1e-6
+/// (relative to max(1, |x_j|)); an entry that misses 1e-6 relative is
+/// checked again with step 1e-8 and by Richardson extrapolation of steps
+/// 2e-8 and 1e-8 (the differences converge to it as the step shrinks: the
+/// fibre velocity of a muscle at minimum activation is strongly curved), or,
+/// where the one-sided differences disagree, against
+/// the one-sided difference it matches (a kink).
+fn fd_check(tr: &mut Transcription, x: &[f64]) -> FdReport {
+    let (n, m) = (tr.num_variables(), tr.num_constraints());
+    let structure = tr.jacobian_structure();
+    let mut jv = vec![0.0; structure.len()];
+    tr.jacobian_values(x, &mut jv).unwrap();
+    let mut by_col: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+    let mut row_max = vec![0.0f64; m];
+    for (k, &(i, j)) in structure.iter().enumerate() {
+        by_col[j].push((i, jv[k]));
+        row_max[i] = row_max[i].max(jv[k].abs());
+    }
+    let mut c0 = vec![0.0; m];
+    tr.constraints(x, &mut c0).unwrap();
+    let mut rep = FdReport::default();
+    let mut analytic = vec![None; m];
+    for j in 0..n {
+        let scale = x[j].abs().max(1.0);
+        let d = differences(tr, x, &c0, j, 1e-6 * scale);
+        let mut fine: Option<Vec<(f64, f64, f64)>> = None;
+        let mut double: Option<Vec<(f64, f64, f64)>> = None;
+        for &(i, v) in &by_col[j] {
+            analytic[i] = Some(v);
+        }
+        for i in 0..m {
+            let (central, fwd, bwd) = d[i];
+            match analytic[i] {
+                Some(a) => {
+                    rep.entries += 1;
+                    let err = (a - central).abs() / central.abs().max(1.0);
+                    if err <= 1e-6 {
+                        continue;
+                    }
+                    let f = fine.get_or_insert_with(|| differences(tr, x, &c0, j, 1e-8 * scale));
+                    let err2 = (a - f[i].0).abs() / f[i].0.abs().max(1.0);
+                    if err2 <= 1e-6 {
+                        rep.refined += 1;
+                        continue;
+                    }
+                    // Richardson extrapolation of steps 2e-8 and 1e-8 (error
+                    // O(step⁴)) for the most strongly curved entries.
+                    let f2 = double.get_or_insert_with(|| differences(tr, x, &c0, j, 2e-8 * scale));
+                    let rich = (4.0 * f[i].0 - f2[i].0) / 3.0;
+                    if (a - rich).abs() / rich.abs().max(1.0) <= 1e-6 {
+                        rep.refined += 1;
+                        continue;
+                    }
+                    // A kink: the one-sided derivatives differ and J is one of
+                    // them (to the O(step) error of a one-sided difference).
+                    let (fwd2, bwd2) = (f[i].1, f[i].2);
+                    let kink = (fwd2 - bwd2).abs() > 1e-3 * fwd2.abs().max(bwd2.abs()).max(1.0);
+                    if kink && (a - fwd2).abs().min((a - bwd2).abs()) <= 1e-4 * a.abs().max(1.0) {
+                        rep.kinks += 1;
+                        continue;
+                    }
+                    // Roundoff of the differences: judge against the row's scale.
+                    let row_err = (a - central).abs().min((a - f[i].0).abs()) / row_max[i].max(1.0);
+                    rep.row_scaled_worst = rep.row_scaled_worst.max(row_err);
+                    if row_err <= 1e-6 {
+                        rep.row_scaled += 1;
+                    } else if row_err > rep.worst {
+                        rep.worst = row_err;
+                        rep.worst_at = format!("∂{}/∂{}: {a} vs {central} (step 1e-8: {}; fwd {fwd}, bwd {bwd}; row scale {})", tr.constraint_name(i), tr.variable_name(j), f[i].0, row_max[i]);
+                    }
+                }
+                None => {
+                    let r = central.abs() / row_max[i].max(1.0);
+                    if r > rep.outside {
+                        rep.outside = r;
+                        rep.outside_at = format!("∂{}/∂{} = {central}", tr.constraint_name(i), tr.variable_name(j));
+                    }
+                }
+            }
+        }
+        for &(i, _) in &by_col[j] {
+            analytic[i] = None;
+        }
+    }
+    rep
+}
+
+/// A point near `x`: states and controls moved by 2 % of their range (at
+/// most 2), kept inside the bounds.
+fn perturbed(tr: &Transcription, x: &[f64], seed: u64) -> Vec<f64> {
+    perturbed_by(tr, x, seed, 0.02)
+}
+
+fn perturbed_by(tr: &Transcription, x: &[f64], seed: u64, amplitude: f64) -> Vec<f64> {
+    let n = x.len();
+    let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
+    tr.variable_bounds(&mut lo, &mut hi);
+    let mut y = x.to_vec();
+    let mut s = seed;
+    for i in 0..n {
+        // SplitMix64: a uniform number in [-1, 1).
+        s = s.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = s;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^= z >> 31;
+        let r = (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0;
+        let width = (hi[i] - lo[i]).min(2.0);
+        // Distinct margins keep clipped values apart (an activation equal
+        // to its excitation sits on OpenSim's activation/deactivation switch).
+        let margin = (1e-4 + 1e-3 * (i % 7) as f64) * width;
+        y[i] = (x[i] + amplitude * width * r).clamp(lo[i] + margin, hi[i] - margin);
+    }
+    y
+}
+
+#[test]
+fn sizes_bounds_and_elements() {
+    let (ocp, _, guess) = setup();
+    let tr = transcription(TranscriptionOptions::default());
+    let (n, m) = (tr.num_variables(), tr.num_constraints());
+    // Porsa et al.: 28 free nodes of 62 states and 24 excitations, plus t_f;
+    // 28·62 midpoint defects, 7 no-countermovement rows, one lift-off row.
+    assert_eq!(n, 2409);
+    assert_eq!(tr.defect_rows(), 0..1736);
+    assert_eq!(tr.no_countermovement_rows(), 1736..1743);
+    assert_eq!(tr.liftoff_row(), 1743);
+    assert_eq!(m, 1744);
+    let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
+    tr.variable_bounds(&mut lo, &mut hi);
+    assert!(lo.iter().zip(&hi).all(|(a, b)| a <= b));
+    assert_eq!((lo[n - 1], hi[n - 1]), (0.1, 1.0));
+    // Excitations in [min_control, 1], activations in [a_min, 1].
+    for k in 0..24 {
+        let c = tr.control_index(3, k).unwrap();
+        assert_eq!((lo[c], hi[c]), (0.01, 1.0));
+        let a = tr.state_index(3, 38 + k).unwrap();
+        assert_eq!((lo[a], hi[a]), (0.01, 1.0));
+    }
+    // The start and the guess lie inside the bounds.
+    assert!(ocp.x0().iter().enumerate().all(|(i, v)| (ocp.state_lower[i]..=ocp.state_upper[i]).contains(v)));
+    assert!(guess.iter().enumerate().all(|(i, v)| (lo[i]..=hi[i]).contains(v)));
+    let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
+    tr.constraint_bounds(&mut cl, &mut cu);
+    assert!(cl[..1736].iter().chain(&cu[..1736]).all(|&v| v == 0.0));
+    assert!(cl[1736..1743].iter().all(|&v| v == f64::NEG_INFINITY) && cu[1736..1743].iter().all(|&v| v == 0.0));
+    assert_eq!((cl[1743], cu[1743]), (f64::NEG_INFINITY, 0.01));
+    // Jacobian pattern: no duplicates, in range, sizes as reported.
+    let s = tr.jacobian_structure();
+    let mut sorted = s.clone();
+    sorted.sort_unstable();
+    sorted.dedup();
+    assert_eq!(sorted.len(), s.len(), "duplicate Jacobian entries");
+    assert!(s.iter().all(|&(i, j)| i < m && j < n));
+    let st = tr.jacobian_stats();
+    eprintln!("{st:#?}");
+    assert_eq!(st.nnz, tr.jacobian_nnz());
+    assert_eq!(st.nnz, s.len());
+    assert_eq!(st.state_equation_entries, 5332);
+    // Each defect block: both nodes' columns of ∂f/∂(x, u) ∪ I, and t_f.
+    let f_x_and_identity: usize = (0..62).map(|r| tr.pattern().rows[r].iter().filter(|&&c| c < 62).count() + usize::from(!tr.pattern().contains(r, r))).sum();
+    let f_u: usize = (0..62).map(|r| tr.pattern().rows[r].iter().filter(|&&c| c >= 62).count()).sum();
+    assert_eq!(st.nnz_interval, 2 * (f_x_and_identity + f_u) + 62);
+    assert_eq!(st.nnz_first_interval, f_x_and_identity + f_u + 62);
+    assert_eq!(st.nnz_defects, st.nnz_first_interval + 27 * st.nnz_interval);
+    // The structure of ∂f/∂(x, u): q̇ rows the identity on q̇; q̈ rows dense
+    // over q, q̇ and l^M, not a or u (Thelen's tendon force depends on the
+    // fibre and MTU lengths only); activation rows on a_i and u_i.
+    for i in 0..7 {
+        assert_eq!(tr.pattern().rows[i], vec![7 + i]);
+        assert_eq!(tr.pattern().rows[7 + i], (0..38).collect::<Vec<_>>());
+    }
+    for k in 0..24 {
+        assert_eq!(tr.pattern().rows[38 + k], vec![38 + k, 62 + k]);
+        let r = &tr.pattern().rows[14 + k];
+        assert!(r.contains(&(14 + k)) && r.contains(&(38 + k)) && r.iter().all(|&c| c < 7 || c == 14 + k || c == 38 + k), "{r:?}");
+    }
+    // Vasti span the knee only; gastrocnemii the knee and the ankle.
+    let names = ocp.eq.state_names();
+    let row = |muscle: &str| tr.pattern().rows[names.iter().position(|s| *s == format!("/forceset/{muscle}/fiber_length")).unwrap()].clone();
+    assert_eq!(row("vas_int_r"), vec![4, 30, 54]);
+    assert_eq!(row("med_gas_r"), vec![4, 5, 32, 56]);
+    // The partially separable structure.
+    let el = tr.elements();
+    check_elements(&el, n, m).unwrap();
+    assert_eq!(el.len(), 28 + 7 + 1);
+    assert_eq!(el[5].variables.len(), 2 * 86 + 1);
+    assert_eq!(el.iter().filter(|e| e.objective).count(), 1);
+    // Every Jacobian entry lies inside its row's element.
+    let mut owner = vec![0; m];
+    for (e, x) in el.iter().enumerate() {
+        for &i in &x.constraints {
+            owner[i] = e;
+        }
+    }
+    for &(i, j) in &s {
+        assert!(el[owner[i]].variables.binary_search(&j).is_ok(), "entry ({i}, {j}) outside its element");
+    }
+    // Names.
+    assert_eq!(tr.variable_name(n - 1), "t_f");
+    assert_eq!(tr.variable_name(86 + 3), "node 2 /jointset/hip_r/hip_flexion_r/value");
+    assert!(tr.constraint_name(62 + 7).starts_with("defect of interval 2 in /jointset/ground_pelvis/pelvis_tilt/speed"));
+}
+
+#[test]
+fn settings_errors_name_what_is_wrong() {
+    let (ocp, pattern, _) = setup();
+    let with = |o: OcpOptions| JumpOcp::from_parts(ocp.eq.clone(), ocp.laws.clone(), ocp.squat.clone(), o);
+    let e = with(OcpOptions { final_time_bounds: [0.5, 0.2], ..Default::default() }).unwrap_err().to_string();
+    assert!(e.contains("final_time_bounds"), "{e}");
+    let e = with(OcpOptions { speed_bound: 0.0, ..Default::default() }).unwrap_err().to_string();
+    assert!(e.contains("speed_bound"), "{e}");
+    let e = with(OcpOptions { fiber_length_bounds: [0.2, 0.5], ..Default::default() }).unwrap_err().to_string();
+    assert!(e.contains("the start violates the bounds of /forceset/"), "{e}");
+    let e = with(OcpOptions { fiber_length_bounds: [1.5, 1.2], ..Default::default() }).unwrap_err().to_string();
+    assert!(e.contains("fiber_length_bounds"), "{e}");
+    // Lift-off as an equality.
+    let eq_ocp = Arc::new(with(OcpOptions { liftoff: LiftOff::ForceEquals { fraction: 0.05 }, ..Default::default() }).unwrap());
+    let tr = Transcription::with_pattern(eq_ocp, TranscriptionOptions::default(), pattern.clone()).unwrap();
+    let (mut cl, mut cu) = (vec![0.0; tr.num_constraints()], vec![0.0; tr.num_constraints()]);
+    tr.constraint_bounds(&mut cl, &mut cu);
+    assert_eq!((cl[tr.liftoff_row()], cu[tr.liftoff_row()]), (0.05, 0.05));
+    // Too few intervals for the no-countermovement rows; a wrong pattern.
+    let e = Transcription::with_pattern(ocp.clone(), TranscriptionOptions { num_mesh_intervals: 5, ..Default::default() }, pattern.clone()).err().unwrap().to_string();
+    assert!(e.contains("num_mesh_intervals = 5"), "{e}");
+    let mut bad = pattern.clone();
+    bad.nu = 3;
+    assert!(Transcription::with_pattern(ocp.clone(), TranscriptionOptions::default(), bad).is_err());
+    // Guesses.
+    let tr = transcription(TranscriptionOptions::default());
+    let x0 = ocp.x0().to_vec();
+    let u0 = ocp.u0().to_vec();
+    let e = tr.guess_from_trajectory(&[0.0, 0.2, 0.1], &[x0.clone(), x0.clone(), x0.clone()], &[u0.clone(), u0.clone(), u0.clone()], 0.1).unwrap_err().to_string();
+    assert!(e.contains("not increasing at index 2"), "{e}");
+    let e = tr.guess_from_trajectory(&[0.0, 0.2], &[x0.clone(), x0.clone()], &[u0.clone(), u0.clone()], 0.3).unwrap_err().to_string();
+    assert!(e.contains("ends at 0.2 s"), "{e}");
+    let e = tr.guess_from_trajectory(&[0.0, 0.2], &[x0.clone(), x0[..10].to_vec()], &[u0.clone(), u0.clone()], 0.1).unwrap_err().to_string();
+    assert!(e.contains("state 1 has 10 values"), "{e}");
+    // Evaluation errors instead of panics.
+    let mut tr = tr;
+    let mut c = vec![0.0; 3];
+    let v = tr.constant_guess(0.3);
+    assert!(tr.constraints(&v, &mut c).unwrap_err().to_string().contains("length 3"));
+    let mut c = vec![0.0; tr.num_constraints()];
+    let mut w = v.clone();
+    w[100] = f64::NAN;
+    let e = tr.constraints(&w, &mut c).unwrap_err().to_string();
+    assert!(e.contains("node 2 /forceset/") && e.contains("NaN"), "{e}");
+}
+
+#[test]
+fn jacobian_matches_finite_differences_midpoint() {
+    let (_, _, guess) = setup();
+    let mut tr = transcription(TranscriptionOptions::default());
+    for (name, x) in [("bang-bang guess", guess.clone()), ("perturbed guess", perturbed(&tr, guess, 7))] {
+        let r = fd_check(&mut tr, &x);
+        eprintln!("midpoint, {name}: {} entries, worst {:.2e} ({}), kinks {}, refined {}, row-scaled {} (worst {:.1e}), outside the pattern {:.2e} ({})", r.entries, r.worst, r.worst_at, r.kinks, r.refined, r.row_scaled, r.row_scaled_worst, r.outside, r.outside_at);
+        assert!(r.worst <= 1e-6, "{name}: {}", r.worst_at);
+        assert!(r.outside <= 1e-7, "{name}: {}", r.outside_at);
+        // At the guess, muscles that are off sit at a = u = a_min: on the
+        // activation switch and the clamp (6 entries per muscle and interval).
+        let allowed = if name == "bang-bang guess" { 6 * 8 * 28 + r.entries / 1000 } else { r.entries / 1000 };
+        assert!(r.kinks <= allowed, "{name}: {} kinks", r.kinks);
+    }
+}
+
+#[test]
+fn jacobian_matches_finite_differences_trapezoidal_and_hermite_simpson() {
+    let (_, _, guess) = setup();
+    // A coarser mesh keeps the column count small; the guess is resampled.
+    let full = transcription(TranscriptionOptions::default());
+    let traj = full.unpack(guess);
+    for scheme in [Scheme::Trapezoidal, Scheme::HermiteSimpson] {
+        let mut tr = transcription(TranscriptionOptions { num_mesh_intervals: 10, scheme, ..Default::default() });
+        let x = tr.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, full.final_time(guess)).unwrap();
+        // Hermite–Simpson's centre state x_c = x̄ + h(f_{k−1} − f_k)/8 leaves
+        // the physiological range at 10 intervals if perturbed fibres move
+        // at metres per second: a smaller perturbation there.
+        let x = perturbed_by(&tr, &x, 11, if scheme == Scheme::HermiteSimpson { 1e-4 } else { 0.02 });
+        let r = fd_check(&mut tr, &x);
+        eprintln!("{scheme:?}: {} entries, worst {:.2e} ({}), kinks {}, refined {}, row-scaled {} (worst {:.1e}), outside the pattern {:.2e} ({})", r.entries, r.worst, r.worst_at, r.kinks, r.refined, r.row_scaled, r.row_scaled_worst, r.outside, r.outside_at);
+        assert!(r.worst <= 1e-6, "{scheme:?}: {}", r.worst_at);
+        assert!(r.outside <= 1e-7, "{scheme:?}: {}", r.outside_at);
+        assert!(r.kinks <= r.entries / 1000, "{scheme:?}: {} kinks", r.kinks);
+    }
+}
+
+#[test]
+fn compressed_uncompressed_and_parallel_jacobians_agree() {
+    let (_, _, guess) = setup();
+    for scheme in [Scheme::MidpointEuler, Scheme::HermiteSimpson] {
+        let mut a = transcription(TranscriptionOptions { threads: 1, scheme, ..Default::default() });
+        let mut b = transcription(TranscriptionOptions { threads: 2, scheme, compress_columns: false, ..Default::default() });
+        let x = perturbed_by(&a, guess, 3, 1e-3);
+        let (mut ja, mut jb) = (vec![0.0; a.jacobian_nnz()], vec![0.0; b.jacobian_nnz()]);
+        a.jacobian_values(&x, &mut ja).unwrap();
+        b.jacobian_values(&x, &mut jb).unwrap();
+        assert_eq!(a.jacobian_structure(), b.jacobian_structure());
+        let worst = ja.iter().zip(&jb).map(|(p, q)| (p - q).abs() / p.abs().max(1.0)).fold(0.0, f64::max);
+        assert!(worst <= 1e-12, "{scheme:?}: compressed vs uncompressed: {worst:e}");
+        let (mut ca, mut cb) = (vec![0.0; a.num_constraints()], vec![0.0; b.num_constraints()]);
+        a.constraints(&x, &mut ca).unwrap();
+        b.constraints(&x, &mut cb).unwrap();
+        assert_eq!(ca, cb, "{scheme:?}");
+        assert!(a.jacobian_stats().colors < b.jacobian_stats().colors);
+    }
+}
+
+#[test]
+fn pattern_holds_at_fresh_random_states() {
+    let (ocp, pattern, _) = setup();
+    let v = pattern.violations(ocp, 150, 2024);
+    assert!(v.is_empty(), "entries outside the pattern: {v:?}");
+    assert_eq!(pattern.samples_rejected, 0);
+}
+
+/// ẋ = f(x, u(t)) with u linear in time from u_a (t = 0) to u_b (t = T).
+struct Ramp<'a> {
+    ocp: &'a JumpOcp,
+    ws: leap::ode::StateWorkspace<f64>,
+    ua: Vec<f64>,
+    ub: Vec<f64>,
+    t_end: f64,
+    u: Vec<f64>,
+}
+
+impl Ramp<'_> {
+    fn control(&self, t: f64) -> Vec<f64> {
+        self.ua.iter().zip(&self.ub).map(|(a, b)| a + (b - a) * t / self.t_end).collect()
+    }
+}
+
+impl OdeSystem for Ramp<'_> {
+    fn dim(&self) -> usize {
+        self.ocp.nx()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        self.u = self.control(t);
+        self.ocp.state_rates(&mut self.ws, x, &self.u, dx).map(|_| ()).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn defects_vanish_at_the_schemes_order_on_a_forward_trajectory() {
+    let (ocp, _, _) = setup();
+    // Excitations ramp linearly from the squat's to the bang-bang pattern's
+    // (piecewise-linear controls are exact on every mesh). Low-activation
+    // fibres are stiff (time constants of ~0.1 ms), so the asymptotic order
+    // shows from 32 intervals in 0.1 s on; up to 16 the ratio is ~4.
+    let t_end = 0.1;
+    let mut ub = vec![0.0; ocp.nu()];
+    ocp.bang_bang().at(0.0, &mut ub);
+    let mut sys = Ramp { ocp, ws: ocp.eq.workspace(), ua: ocp.u0().to_vec(), ub, t_end, u: vec![] };
+    let finest = 128;
+    let mut ig = Dopri5::new(&mut sys, 0.0, ocp.x0(), Dopri5Options { accuracy: 1e-11, max_steps: 1_000_000, ..Default::default() }).unwrap();
+    let mut states = vec![ocp.x0().to_vec()];
+    for k in 1..=finest {
+        let t = t_end * k as f64 / finest as f64;
+        while ig.t() < t {
+            ig.step(&mut sys, t).unwrap();
+        }
+        states.push(ig.x().to_vec());
+    }
+    let mut worst_at_finest = Vec::new();
+    for scheme in [Scheme::Trapezoidal, Scheme::MidpointEuler, Scheme::HermiteSimpson] {
+        let mut last: Option<f64> = None;
+        for big_n in [32, 64, 128] {
+            let mut tr = transcription(TranscriptionOptions { num_mesh_intervals: big_n, scheme, ..Default::default() });
+            let stride = finest / big_n;
+            let xs: Vec<Vec<f64>> = (0..=big_n).map(|k| states[k * stride].clone()).collect();
+            let us: Vec<Vec<f64>> = tr.mesh_times(t_end).iter().map(|&t| sys.control(t)).collect();
+            let v = tr.pack(&xs, &us, t_end).unwrap();
+            let mut c = vec![0.0; tr.num_constraints()];
+            tr.constraints(&v, &mut c).unwrap();
+            let worst = c[tr.defect_rows()].iter().fold(0.0f64, |m, d| m.max(d.abs()));
+            eprintln!("{scheme:?}, N = {big_n}: max |defect| {worst:.3e}{}", last.map(|l| format!(", ratio {:.2}", l / worst)).unwrap_or_default());
+            worst_at_finest.push((scheme, worst));
+            if let Some(l) = last {
+                // Local truncation error O(h³) (Hermite–Simpson O(h⁵)):
+                // halving h divides it by ~8 (~32), less where f has kinks
+                // (passive fibre force at l̃ = 1, the tendon's toe region).
+                assert!(l / worst > 5.5, "{scheme:?}: N = {big_n}: ratio {}", l / worst);
+            }
+            last = Some(worst);
+        }
+        assert!(last.unwrap() < 2e-4, "{scheme:?}: {last:?}");
+    }
+    // Hermite–Simpson is far more accurate on the finest mesh.
+    let at = |s: Scheme| worst_at_finest.iter().rev().find(|(t, _)| *t == s).unwrap().1;
+    assert!(at(Scheme::HermiteSimpson) < 0.2 * at(Scheme::Trapezoidal).min(at(Scheme::MidpointEuler)));
+}
+
+#[test]
+fn objective_and_path_rows_match_independent_computations() {
+    let (ocp, _, guess) = setup();
+    let mut tr = transcription(TranscriptionOptions::default());
+    let x = perturbed(&tr, guess, 5);
+    let eq = &ocp.eq;
+    let (n, big_n) = (eq.nq(), 28);
+    let g = 9.80665;
+    assert_eq!(ocp.gravity, g);
+    // J = Y_C + Ẏ_C²/(2g) at the final node, from the multibody directly.
+    let xn = tr.node_state(&x, big_n).to_vec();
+    let mut w = eq.multibody.workspace::<f64>();
+    eq.multibody.set_state(&mut w, &xn[..n], &xn[n..2 * n]);
+    let (yc, vc) = (eq.multibody.com_position(&w)[1], eq.multibody.com_velocity(&w)[1]);
+    let f = tr.objective(&x).unwrap();
+    assert!((f + yc + vc * vc / (2.0 * g)).abs() < 1e-14, "{f} vs {}", -(yc + vc * vc / (2.0 * g)));
+    // The gradient against central differences.
+    let mut grad = vec![0.0; x.len()];
+    tr.gradient(&x, &mut grad).unwrap();
+    let mut xp = x.clone();
+    for j in 0..x.len() {
+        let s = 1e-6 * x[j].abs().max(1.0);
+        xp[j] = x[j] + s;
+        let fp = tr.objective(&xp).unwrap();
+        xp[j] = x[j] - s;
+        let fm = tr.objective(&xp).unwrap();
+        xp[j] = x[j];
+        let fd = (fp - fm) / (2.0 * s);
+        assert!((grad[j] - fd).abs() <= 1e-7 * fd.abs().max(1.0), "∂f/∂{}: {} vs {fd}", tr.variable_name(j), grad[j]);
+    }
+    // Ÿ_C at nodes 0..7 from q̈ = f(x, u) and com_acceleration; the
+    // vertical ground force at the final node.
+    let mut c = vec![0.0; tr.num_constraints()];
+    tr.constraints(&x, &mut c).unwrap();
+    let mut ws = eq.workspace::<f64>();
+    let mut dx = vec![0.0; eq.nx()];
+    let ydd: Vec<f64> = (0..=7)
+        .map(|k| {
+            eq.rhs(&ocp.laws, &mut ws, tr.node_state(&x, k), tr.node_control(&x, k), &mut dx).unwrap();
+            eq.multibody.com_acceleration(&ws.mb, &dx[n..2 * n])[1]
+        })
+        .collect();
+    assert!(ydd[0].abs() < 1e-6, "the static squat accelerates: {}", ydd[0]);
+    for j in 0..7 {
+        let want = ydd[j] - ydd[j + 1];
+        assert!((c[1736 + j] - want).abs() <= 1e-12 * want.abs().max(1.0), "row {j}: {} vs {want}", c[1736 + j]);
+    }
+    eq.rhs(&ocp.laws, &mut ws, &xn, tr.node_control(&x, big_n), &mut dx).unwrap();
+    let fy: f64 = ws.sphere_force.iter().map(|f| f[1]).sum();
+    let weight = eq.model.total_mass() * g;
+    assert!((c[1743] - fy / weight).abs() <= 1e-12 * (fy / weight).abs().max(1.0));
+    // The defects of interval 3 (midpoint Euler) by hand.
+    let h = tr.final_time(&x) / 28.0;
+    let xm: Vec<f64> = tr.node_state(&x, 2).iter().zip(tr.node_state(&x, 3)).map(|(a, b)| 0.5 * (a + b)).collect();
+    let um: Vec<f64> = tr.node_control(&x, 2).iter().zip(tr.node_control(&x, 3)).map(|(a, b)| 0.5 * (a + b)).collect();
+    eq.rhs(&ocp.laws, &mut ws, &xm, &um, &mut dx).unwrap();
+    for r in 0..62 {
+        let want = tr.node_state(&x, 3)[r] - tr.node_state(&x, 2)[r] - h * dx[r];
+        assert!((c[2 * 62 + r] - want).abs() <= 1e-12 * want.abs().max(1.0));
+    }
+}
+
+#[test]
+fn bang_bang_guess_follows_the_forward_jump() {
+    let (ocp, _, guess) = setup();
+    let tr = transcription(TranscriptionOptions::default());
+    let (summary, traj) = ocp.simulate_bang_bang(1e-6).unwrap();
+    let tf = summary.liftoff_time_s.unwrap();
+    assert!((0.2..0.4).contains(&tf), "lift-off at {tf} s");
+    assert_eq!(tr.final_time(guess), tf);
+    // Node 0 is the squat; node N is the state at lift-off.
+    let mesh = tr.unpack(guess);
+    assert_eq!(mesh.states[0], ocp.x0());
+    assert_eq!(mesh.time.len(), 29);
+    assert!((mesh.time[28] - tf).abs() < 1e-15);
+    let i = traj.time.iter().position(|&t| t >= tf).unwrap();
+    let n = ocp.nq();
+    for c in 0..2 * n {
+        let (a, b) = (traj.states[i - 1][c], traj.states[i][c]);
+        let (lo, hi) = (a.min(b) - 1e-9, a.max(b) + 1e-9);
+        assert!((lo..=hi).contains(&mesh.states[28][c]), "{}: {} not between {a} and {b}", ocp.eq.state_names()[c], mesh.states[28][c]);
+    }
+    // Extensors on, the others at the minimum excitation.
+    let bb = ocp.bang_bang();
+    for (k, iv) in bb.intervals.iter().enumerate() {
+        assert_eq!(mesh.controls[5][k], if iv.is_some() { 1.0 } else { 0.01 });
+    }
+    // Round trip through pack/unpack.
+    let v = tr.pack(&mesh.states, &mesh.controls, tf).unwrap();
+    assert_eq!(&v, guess);
+}
+
+/// Timings of the full 29-node problem (run with
+/// `cargo test --release --test transcription -- --ignored --nocapture timing`).
+#[test]
+#[ignore]
+fn timing() {
+    let (ocp, pattern, guess) = setup();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(|a, b| a.total_cmp(b));
+        v[v.len() / 2]
+    };
+    let t = std::time::Instant::now();
+    let _ = StatePattern::detect(ocp, 60, 1).unwrap();
+    eprintln!("pattern detection (60 samples): {:.1} ms", 1e3 * t.elapsed().as_secs_f64());
+    let x = guess.to_vec();
+    let mut ws = ocp.eq.workspace::<f64>();
+    let mut dx = vec![0.0; ocp.nx()];
+    let xs = &x[86 * 9..86 * 9 + 62];
+    let us = &x[86 * 9 + 62..86 * 10];
+    let f64_time = median((0..500).map(|_| {
+        let t = std::time::Instant::now();
+        ocp.state_rates(&mut ws, xs, us, &mut dx).unwrap();
+        t.elapsed().as_secs_f64()
+    }).collect());
+    eprintln!("f(x, u) in f64: {:.1} µs", 1e6 * f64_time);
+    {
+        use leap::scalar::Dual64;
+        let mut wd = ocp.eq.workspace::<Dual64>();
+        let mut xd: Vec<Dual64> = xs.iter().map(|&v| Dual64::from(v)).collect();
+        let ud: Vec<Dual64> = us.iter().map(|&v| Dual64::from(v)).collect();
+        let mut dxd = vec![Dual64::from(0.0); ocp.nx()];
+        let t = median((0..200).map(|i| {
+            let j = i % 38;
+            xd[j] = Dual64::from(xs[j]).derivative();
+            let t = std::time::Instant::now();
+            ocp.state_rates(&mut wd, &xd, &ud, &mut dxd).unwrap();
+            let e = t.elapsed().as_secs_f64();
+            xd[j] = Dual64::from(xs[j]);
+            e
+        }).collect());
+        let colors = transcription(TranscriptionOptions::default()).jacobian_stats().colors;
+        eprintln!("one direction with Dual64: {:.1} µs; × {colors} colours = {:.0} µs per point", 1e6 * t, 1e6 * t * colors as f64);
+    }
+    for compress in [true, false] {
+        let mut best = [f64::INFINITY; 7];
+        for _ in 0..5 {
+            let t = [
+                time_point_jacobian::<1>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<4>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<6>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<8>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<10>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<13>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<19>(ocp, pattern, compress, xs, us, 20).unwrap(),
+            ];
+            for i in 0..7 {
+                best[i] = best[i].min(t[i]);
+            }
+        }
+        eprintln!("one Jacobian of (f, Ÿ_C, F_y) (compress {compress}), µs for W = 1, 4, 6, 8, 10, 13, 19 lanes: {:?}", best.map(|v| (v * 1e6).round()));
+    }
+    {
+        let mut tr = transcription(TranscriptionOptions::default());
+        let mut c = vec![0.0; tr.num_constraints()];
+        tr.constraints(&x, &mut c).unwrap();
+        let (y, yd, j) = tr.jump_objective(&x);
+        eprintln!(
+            "bang-bang guess: t_f {:.4} s, Y_C {y:.4} m, Ẏ_C {yd:.4} m/s, J {j:.4} m (jump height {:.4} m), max |defect| {:.3e}, no-countermovement rows {:?}, lift-off row {:.3e}",
+            tr.final_time(&x),
+            j - ocp.standing_com_height,
+            c[tr.defect_rows()].iter().fold(0.0f64, |m, d| m.max(d.abs())),
+            c[tr.no_countermovement_rows()].iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>(),
+            c[tr.liftoff_row()]
+        );
+        let mut rows: Vec<usize> = tr.defect_rows().collect();
+        rows.sort_by(|&a, &b| c[b].abs().total_cmp(&c[a].abs()));
+        for &r in &rows[..6] {
+            eprintln!("  {}: {:.3e}", tr.constraint_name(r), c[r]);
+        }
+        let by_kind = |lo: usize, hi: usize| tr.defect_rows().filter(|r| (lo..hi).contains(&(r % 62))).map(|r| c[r].abs()).fold(0.0f64, f64::max);
+        eprintln!("  max |defect| of q {:.2e}, q̇ {:.2e}, l^M {:.2e}, a {:.2e}", by_kind(0, 7), by_kind(7, 14), by_kind(14, 38), by_kind(38, 62));
+    }
+    for scheme in [Scheme::MidpointEuler, Scheme::Trapezoidal, Scheme::HermiteSimpson] {
+        for threads in [1, 2] {
+            let mut tr = transcription(TranscriptionOptions { threads, scheme, ..Default::default() });
+            let mut c = vec![0.0; tr.num_constraints()];
+            let mut jv = vec![0.0; tr.jacobian_nnz()];
+            let (mut tc, mut tj) = (vec![], vec![]);
+            for _ in 0..40 {
+                let t = std::time::Instant::now();
+                tr.constraints(&x, &mut c).unwrap();
+                tc.push(t.elapsed().as_secs_f64());
+                let t = std::time::Instant::now();
+                tr.jacobian_values(&x, &mut jv).unwrap();
+                tj.push(t.elapsed().as_secs_f64());
+            }
+            let st = tr.jacobian_stats();
+            eprintln!("{scheme:?}, {threads} thread(s): constraints {:.3} ms, Jacobian {:.3} ms (median of 40; {} non-zeros, {} per defect block)", 1e3 * median(tc), 1e3 * median(tj), st.nnz, st.nnz_interval);
+        }
+    }
+}
