@@ -373,3 +373,76 @@ pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
     }
     t.to_string()
 }
+
+/// One SQP iteration on the 29-node jump collocation problem (2,409
+/// variables, 1,736 defects), from the bang-bang guess.
+#[derive(Debug, Clone, Serialize)]
+pub struct SqpJumpRow {
+    pub iter: usize,
+    pub derivatives_ms: f64,
+    pub hessian_ms: f64,
+    pub qp_ms: f64,
+    pub qp_iterations: u32,
+    pub qp_mode: String,
+    pub line_search_ms: f64,
+    pub objective: f64,
+    pub inf_pr: f64,
+}
+
+/// The problem's size and the first `iterations` SQP iterations on it.
+#[derive(Debug, Clone, Serialize)]
+pub struct SqpJumpReport {
+    pub variables: usize,
+    pub constraints: usize,
+    pub jacobian_nnz: usize,
+    pub hessian: crate::sqp::HessianMode,
+    pub rows: Vec<SqpJumpRow>,
+}
+
+/// Run `iterations` SQP iterations on the jump transcription of `model`.
+pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMode) -> Result<SqpJumpReport, String> {
+    use crate::nlp::Nlp;
+    let ocp = std::sync::Arc::new(crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?);
+    let mut tr = crate::transcription::Transcription::new(ocp, Default::default()).map_err(|e| e.to_string())?;
+    let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
+    let settings = crate::sqp::SqpSettings { hessian: Some(hessian), max_iterations: iterations, ..Default::default() };
+    let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
+    let rows = r
+        .history
+        .iter()
+        .filter(|h| h.qp_iterations > 0)
+        .map(|h| SqpJumpRow {
+            iter: h.iter,
+            derivatives_ms: 1e3 * h.derivatives_s,
+            hessian_ms: 1e3 * h.hessian_s,
+            qp_ms: 1e3 * h.qp_s,
+            qp_iterations: h.qp_iterations,
+            qp_mode: h.qp_mode.clone(),
+            line_search_ms: 1e3 * h.line_search_s,
+            objective: h.objective,
+            inf_pr: h.inf_pr,
+        })
+        .collect();
+    Ok(SqpJumpReport { variables: tr.num_variables(), constraints: tr.num_constraints(), jacobian_nnz: tr.jacobian_nnz(), hessian, rows })
+}
+
+impl SqpJumpReport {
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        t.set_header(vec!["iter", "derivatives ms", "Hessian ms", "QP ms", "QP iterations", "QP mode", "line search ms", "objective (scaled)", "inf_pr (scaled)"]);
+        for r in &self.rows {
+            t.add_row(vec![
+                r.iter.to_string(),
+                format!("{:.1}", r.derivatives_ms),
+                format!("{:.1}", r.hessian_ms),
+                format!("{:.0}", r.qp_ms),
+                r.qp_iterations.to_string(),
+                r.qp_mode.clone(),
+                format!("{:.2}", r.line_search_ms),
+                format!("{:.6}", r.objective),
+                format!("{:.2e}", r.inf_pr),
+            ]);
+        }
+        format!("jump collocation: {} variables, {} constraints, nnz(J) {}, Hessian {:?}\n{t}", self.variables, self.constraints, self.jacobian_nnz, self.hessian)
+    }
+}

@@ -127,6 +127,20 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// SQP iterations on the 29-node jump collocation problem from the
+    /// bang-bang guess: time per iteration split into derivatives, Hessian,
+    /// QP and line search.
+    SqpJump {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        #[arg(long, default_value_t = 3)]
+        iterations: usize,
+        /// "bfgs" or "exact".
+        #[arg(long, default_value = "bfgs")]
+        hessian: String,
+        #[arg(long)]
+        json: bool,
+    },
     /// One forward jump per integrator and accuracy: steps, rejected steps,
     /// f evaluations, wall time.
     Integrators {
@@ -267,6 +281,17 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 println!("{}", serde_json::to_string_pretty(&rows)?);
             } else {
                 println!("{}", leap::bench::sqp_table(&rows));
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench { which: BenchCommand::SqpJump { model, iterations, hessian, json } } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let mode: leap::sqp::HessianMode = hessian.parse().map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
+            let report = leap::bench::sqp_jump(&m, iterations, mode).map_err(|e| anyhow::anyhow!(e))?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                println!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
         }
