@@ -327,7 +327,7 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
             let mut row = SqpTestSetRow { hessian: mode, problems: 0, at_published_optimum: 0, solved_or_acceptable: 0, iterations: 0, qp_iterations: 0, wall_time_s: 0.0, derivatives_s: 0.0, hessian_s: 0.0, qp_s: 0.0, line_search_s: 0.0, other_s: 0.0 };
             let t = Instant::now();
             for p in crate::testset::hock_schittkowski() {
-                let f_star = p.f_star;
+                let f_star = p.reference_optimum();
                 let r = solve(&mut crate::nlp::AdNlp::new(p), &settings);
                 row.problems += 1;
                 row.iterations += r.iterations;
@@ -354,7 +354,7 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
 /// The test-set rows as a table.
 pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
     let mut t = comfy_table::Table::new();
-    t.set_header(vec!["Hessian", "problems", "at f* (solved)", "solved/acceptable", "iterations", "QP iterations", "wall s (median)", "derivatives s", "Hessian s", "QP s", "line search s", "other s"]);
+    t.set_header(vec!["Hessian", "problems", "at reference f* (solved)", "solved/acceptable", "iterations", "QP iterations", "wall s (median)", "derivatives s", "Hessian s", "QP s", "line search s", "other s"]);
     for r in rows {
         t.add_row(vec![
             format!("{:?}", r.hessian),
@@ -396,16 +396,17 @@ pub struct SqpJumpReport {
     pub constraints: usize,
     pub jacobian_nnz: usize,
     pub hessian: crate::sqp::HessianMode,
+    pub qp_equilibrate: bool,
     pub rows: Vec<SqpJumpRow>,
 }
 
 /// Run `iterations` SQP iterations on the jump transcription of `model`.
-pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMode) -> Result<SqpJumpReport, String> {
+pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMode, qp_equilibrate: bool) -> Result<SqpJumpReport, String> {
     use crate::nlp::Nlp;
     let ocp = std::sync::Arc::new(crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?);
     let mut tr = crate::transcription::Transcription::new(ocp, Default::default()).map_err(|e| e.to_string())?;
     let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
-    let settings = crate::sqp::SqpSettings { hessian: Some(hessian), max_iterations: iterations, ..Default::default() };
+    let settings = crate::sqp::SqpSettings { hessian: Some(hessian), max_iterations: iterations, qp_equilibrate, ..Default::default() };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
     let rows = r
         .history
@@ -423,7 +424,7 @@ pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMo
             inf_pr: h.inf_pr,
         })
         .collect();
-    Ok(SqpJumpReport { variables: tr.num_variables(), constraints: tr.num_constraints(), jacobian_nnz: tr.jacobian_nnz(), hessian, rows })
+    Ok(SqpJumpReport { variables: tr.num_variables(), constraints: tr.num_constraints(), jacobian_nnz: tr.jacobian_nnz(), hessian, qp_equilibrate, rows })
 }
 
 impl SqpJumpReport {
@@ -443,6 +444,6 @@ impl SqpJumpReport {
                 format!("{:.2e}", r.inf_pr),
             ]);
         }
-        format!("jump collocation: {} variables, {} constraints, nnz(J) {}, Hessian {:?}\n{t}", self.variables, self.constraints, self.jacobian_nnz, self.hessian)
+        format!("jump collocation: {} variables, {} constraints, nnz(J) {}, Hessian {:?}, QP equilibration {}\n{t}", self.variables, self.constraints, self.jacobian_nnz, self.hessian, self.qp_equilibrate)
     }
 }

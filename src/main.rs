@@ -138,6 +138,9 @@ enum BenchCommand {
         /// "bfgs" or "exact".
         #[arg(long, default_value = "bfgs")]
         hessian: String,
+        /// Turn off clarabel's equilibration of the QPs.
+        #[arg(long)]
+        no_equilibrate: bool,
         #[arg(long)]
         json: bool,
     },
@@ -284,10 +287,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::SqpJump { model, iterations, hessian, json } } => {
+        Command::Bench { which: BenchCommand::SqpJump { model, iterations, hessian, no_equilibrate, json } } => {
             let m = leap::model::Model::from_file(&model)?;
             let mode: leap::sqp::HessianMode = hessian.parse().map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
-            let report = leap::bench::sqp_jump(&m, iterations, mode).map_err(|e| anyhow::anyhow!(e))?;
+            let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate).map_err(|e| anyhow::anyhow!(e))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {

@@ -26,17 +26,6 @@ const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
     ("hs106", Some(HessianMode::ExactConvexified), "badly scaled (x up to 1e4): acceptable only, after 500 iterations"),
 ];
 
-/// Where the book's value lies above a better feasible point published
-/// since, the better value is the reference: hs106 is problem g10 of the
-/// CEC 2006 constrained test set (Liang et al. 2006, same constants), best
-/// known f = 7049.24802052867 (the book: 7049.330923).
-fn best_known(name: &str) -> Option<f64> {
-    match name {
-        "hs106" => Some(7049.24802052867),
-        _ => None,
-    }
-}
-
 fn known_failure(name: &str, mode: HessianMode) -> bool {
     KNOWN_FAILURES.iter().any(|&(n, m, _)| n == name && m.is_none_or(|m| m == mode))
 }
@@ -47,7 +36,7 @@ fn run_all(mode: HessianMode) {
     let mut solved = 0;
     let problems = hock_schittkowski();
     for p in problems.iter().cloned() {
-        let (name, f_star) = (p.name, best_known(p.name).unwrap_or(p.f_star));
+        let (name, f_star) = (p.name, p.reference_optimum());
         if known_failure(name, mode) && std::env::var("LEAP_ALL").is_err() {
             continue;
         }

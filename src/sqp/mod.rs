@@ -85,12 +85,17 @@ pub struct SqpSettings {
     pub unbounded_objective: f64,
     /// Relative accuracy of the QP solves.
     pub qp_tolerance: f64,
+    /// Clarabel's Ruiz equilibration of each QP (computed from the first
+    /// QP and kept through the in-place updates).
+    pub qp_equilibrate: bool,
     /// Second-order correction of rejected full steps.
     pub second_order_correction: bool,
     /// Print the iteration log to standard error.
     pub verbose: bool,
     /// Directory where a failing QP is written (clarabel JSON).
     pub qp_dump_dir: Option<PathBuf>,
+    /// Also write every iteration's QP there (for profiling the QP solver).
+    pub qp_dump_every: bool,
     /// Gradient-based scaling of the objective and constraints at the
     /// starting point (IPOPT's default); tolerances apply to the scaled
     /// problem.
@@ -111,9 +116,11 @@ impl Default for SqpSettings {
             initial_step_bound: 10.0,
             unbounded_objective: -1e20,
             qp_tolerance: 1e-8,
+            qp_equilibrate: true,
             second_order_correction: true,
             verbose: false,
             qp_dump_dir: None,
+            qp_dump_every: false,
             nlp_scaling: true,
         }
     }
@@ -695,7 +702,7 @@ impl<'s> Solver<'s> {
         let Solver { pb, blocks, qp, qp_elastic, settings, .. } = self;
         let slot = if elastic { qp_elastic } else { qp };
         let qp = slot.get_or_insert_with(|| {
-            let qp = Qp::new(&pb.xl, &pb.xu, &pb.cl, &pb.cu, &pb.jac, &pb.elements, elastic, settings.qp_tolerance);
+            let qp = Qp::new(&pb.xl, &pb.xu, &pb.cl, &pb.cu, &pb.jac, &pb.elements, elastic, settings.qp_tolerance, settings.qp_equilibrate);
             if settings.verbose {
                 let (nv, rows, nnz_p, nnz_a) = qp.size();
                 eprintln!("{} QP: {nv} variables, {rows} rows, nnz(P) {nnz_p}, nnz(A) {nnz_a}", if elastic { "elastic" } else { "plain" });
@@ -859,6 +866,9 @@ impl<'s> Solver<'s> {
             rec.qp_s = t.elapsed().as_secs_f64();
             time.qp_s += rec.qp_s;
             rec.qp_mode = if elastic { "elastic".into() } else { "ok".into() };
+            if st.qp_dump_every {
+                self.dump(elastic, iter, "qp");
+            }
             if let Some(msg) = qp_failure(&outcome) {
                 // A QP that fails at a huge step bound after the objective
                 // kept falling at feasible points: diverging iterates.

@@ -108,6 +108,7 @@ impl Qp {
         elements: &[Element],
         elastic: bool,
         tolerance: f64,
+        equilibrate: bool,
     ) -> Qp {
         let (n, m) = (x_lower.len(), c_lower.len());
         let finite = |v: f64| v.abs() < INFINITE_BOUND;
@@ -231,6 +232,11 @@ impl Qp {
             .presolve_enable(false)
             .input_sparse_dropzeros(false)
             .direct_solve_method("qdldl".into())
+            // Clarabel's Ruiz equilibration is computed once, from the first
+            // iterate, and kept through the in-place updates. Off, the
+            // jump's first QP takes 19 interior-point iterations instead of
+            // 120; on, the Hock–Schittkowski set does better.
+            .equilibrate_enable(equilibrate)
             .tol_gap_abs(tolerance)
             .tol_gap_rel(tolerance)
             .tol_feas(tolerance)

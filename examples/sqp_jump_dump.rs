@@ -1,0 +1,17 @@
+//! Write the QPs of the first SQP iterations on the jump collocation
+//! problem as clarabel JSON, for profiling the QP solver:
+//! `cargo run --release --example sqp_jump_dump -- DIR [ITERATIONS]`.
+use std::sync::Arc;
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let dir = args.next().ok_or("usage: sqp_jump_dump DIR [ITERATIONS]")?;
+    let iterations: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(1);
+    let model = leap::model::Model::from_file(std::path::Path::new("models/jumper.json"))?;
+    let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
+    let mut tr = leap::transcription::Transcription::new(ocp, Default::default())?;
+    let (guess, _) = tr.bang_bang_guess()?;
+    let settings = leap::sqp::SqpSettings { max_iterations: iterations, qp_dump_dir: Some(dir.into()), qp_dump_every: true, ..Default::default() };
+    let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
+    println!("{:?} after {} iterations", r.status, r.iterations);
+    Ok(())
+}
