@@ -250,13 +250,18 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
     }
 }
 
+/// ẍ = u as x = (position, speed).
+fn double_integrator<D: Scalar>(x: &[D], u: &[D], xdot: &mut [D]) {
+    xdot[0] = x[1];
+    xdot[1] = u[0];
+}
+
 struct DoubleIntegrator;
 impl Ocp for DoubleIntegrator {
     const NX: usize = 2;
     const NU: usize = 1;
     fn dynamics<D: Scalar>(&self, x: &[D], u: &[D], xdot: &mut [D]) {
-        xdot[0] = x[1];
-        xdot[1] = u[0];
+        double_integrator(x, u, xdot);
     }
     fn running_cost<D: Scalar>(&self, _x: &[D], u: &[D]) -> D {
         u[0] * u[0]
@@ -286,8 +291,7 @@ impl Ocp for BrysonDenham {
     const NX: usize = 2;
     const NU: usize = 1;
     fn dynamics<D: Scalar>(&self, x: &[D], u: &[D], xdot: &mut [D]) {
-        xdot[0] = x[1];
-        xdot[1] = u[0];
+        double_integrator(x, u, xdot);
     }
     fn running_cost<D: Scalar>(&self, _x: &[D], u: &[D]) -> D {
         u[0] * u[0] * 0.5

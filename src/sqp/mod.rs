@@ -976,49 +976,47 @@ impl<'s> Solver<'s> {
                 for j in 0..n {
                     trial_x[j] = (p.x[j] + alpha * d[j]).clamp(self.pb.xl[j], self.pb.xu[j]);
                 }
-                match eval_fc(nlp, &trial_x, &mut trial_c) {
-                    Ok(f) => {
-                        let (v1, _) = self.pb.violation(&trial_c);
-                        let phi = f + nu * v1;
-                        // Armijo with IPOPT's round-off allowance 10 ε |φ|.
-                        if phi <= phi0 + 1e-4 * alpha * dphi + 10.0 * f64::EPSILON * phi0.abs() {
-                            accepted = Some((trial_x.clone(), f, trial_c.clone()));
-                            break;
+                // Not finite at the trial point: shorten the step.
+                if let Ok(f) = eval_fc(nlp, &trial_x, &mut trial_c) {
+                    let (v1, _) = self.pb.violation(&trial_c);
+                    let phi = f + nu * v1;
+                    // Armijo with IPOPT's round-off allowance 10 ε |φ|.
+                    if phi <= phi0 + 1e-4 * alpha * dphi + 10.0 * f64::EPSILON * phi0.abs() {
+                        accepted = Some((trial_x.clone(), f, trial_c.clone()));
+                        break;
+                    }
+                    // Second-order correction (Nocedal & Wright §18.3)
+                    // when the full step made the constraints worse.
+                    if alpha == 1.0 && st.second_order_correction && !soc_tried && v1 > viol1 && !elastic {
+                        soc_tried = true;
+                        // c_soc = c(x + d) − J d, so the QP's rows read
+                        // J d̂ + c(x+d) − J d within bounds.
+                        let mut jd = vec![0.0; m];
+                        for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
+                            jd[i] += p.jv[k] * d[j];
                         }
-                        // Second-order correction (Nocedal & Wright §18.3)
-                        // when the full step made the constraints worse.
-                        if alpha == 1.0 && st.second_order_correction && !soc_tried && v1 > viol1 && !elastic {
-                            soc_tried = true;
-                            // c_soc = c(x + d) − J d, so the QP's rows read
-                            // J d̂ + c(x+d) − J d within bounds.
-                            let mut jd = vec![0.0; m];
-                            for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
-                                jd[i] += p.jv[k] * d[j];
-                            }
-                            let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
-                            let tq = Instant::now();
-                            let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
-                            let dq = tq.elapsed().as_secs_f64();
-                            time.qp_s += dq;
-                            rec.qp_s += dq;
-                            soc_qp_s += dq;
-                            if let Ok(QpOutcome::Solved) = soc {
-                                let q = self.qp.as_ref().expect("solved");
-                                let d2 = q.d.clone();
-                                let soc_x: Vec<f64> = (0..n).map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j])).collect();
-                                let mut soc_c = vec![0.0; m];
-                                if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
-                                    let (v2, _) = self.pb.violation(&soc_c);
-                                    if f2 + nu * v2 <= phi0 + 1e-4 * dphi {
-                                        accepted = Some((soc_x, f2, soc_c));
-                                        soc_used = true;
-                                        break;
-                                    }
+                        let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
+                        let tq = Instant::now();
+                        let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
+                        let dq = tq.elapsed().as_secs_f64();
+                        time.qp_s += dq;
+                        rec.qp_s += dq;
+                        soc_qp_s += dq;
+                        if let Ok(QpOutcome::Solved) = soc {
+                            let q = self.qp.as_ref().expect("solved");
+                            let d2 = q.d.clone();
+                            let soc_x: Vec<f64> = (0..n).map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j])).collect();
+                            let mut soc_c = vec![0.0; m];
+                            if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
+                                let (v2, _) = self.pb.violation(&soc_c);
+                                if f2 + nu * v2 <= phi0 + 1e-4 * dphi {
+                                    accepted = Some((soc_x, f2, soc_c));
+                                    soc_used = true;
+                                    break;
                                 }
                             }
                         }
                     }
-                    Err(_) => {} // not finite there: shorten the step
                 }
                 alpha *= 0.5;
             }
@@ -1078,7 +1076,7 @@ impl<'s> Solver<'s> {
         let mut rec = rec.clone();
         rec.time_s = start.elapsed().as_secs_f64();
         if self.settings.verbose {
-            if rec.iter % 10 == 0 {
+            if rec.iter.is_multiple_of(10) {
                 eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||    alpha  ls  qp_it  qp_mode   penalty  time_s");
             }
             eprintln!(
