@@ -12,7 +12,11 @@ fn main() {
     println!("cargo:rerun-if-changed=cpp/leap_simbody.cpp");
     println!("cargo:rerun-if-env-changed=PKG_CONFIG_PATH");
 
-    let simbody = match pkg_config::Config::new().atleast_version("3.7").cargo_metadata(true).probe("simbody") {
+    let simbody = match pkg_config::Config::new()
+        .atleast_version("3.7")
+        .cargo_metadata(true)
+        .probe("simbody")
+    {
         Ok(lib) => lib,
         Err(e) => {
             eprintln!(
@@ -45,7 +49,8 @@ fn main() {
         Some(path) => {
             println!("cargo:rerun-if-changed={}", path.display());
             let bytes = std::fs::read(path).unwrap_or_default();
-            let sym: &[u8] = b"_ZN5SimTK14CacheEntryInfo26recordPrerequisiteVersionsERKNS_9StateImplE";
+            let sym: &[u8] =
+                b"_ZN5SimTK14CacheEntryInfo26recordPrerequisiteVersionsERKNS_9StateImplE";
             bytes.windows(sym.len()).any(|w| w == sym)
         }
         // Debian's layout: assume its (assert-enabled) build.

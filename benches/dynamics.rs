@@ -17,7 +17,12 @@ fn main() {
         Ok(report) => println!("{}\n", report.table()),
         Err(e) => eprintln!("error: {e}"),
     }
-    let cases = [("RungeKuttaMerson", 1e-5), ("RungeKuttaFeldberg", 1e-5), ("CPodes", 1e-5), ("DormandPrince", 1e-5)];
+    let cases = [
+        ("RungeKuttaMerson", 1e-5),
+        ("RungeKuttaFeldberg", 1e-5),
+        ("CPodes", 1e-5),
+        ("DormandPrince", 1e-5),
+    ];
     match leap::bench::integrators(&model, &cases) {
         Ok(rows) => println!("{}", leap::bench::integrator_table(&rows)),
         Err(e) => eprintln!("error: {e}"),

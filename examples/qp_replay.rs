@@ -5,12 +5,15 @@
 use clarabel::solver::*;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = args.next().ok_or("usage: qp_replay FILE.json [key=value ...]")?;
+    let path = args
+        .next()
+        .ok_or("usage: qp_replay FILE.json [key=value ...]")?;
     let text = std::fs::read_to_string(&path)?;
     let mut json: serde_json::Value = serde_json::from_str(&text)?;
     for kv in args {
         let (k, v) = kv.split_once('=').ok_or("settings are key=value")?;
-        let value: serde_json::Value = serde_json::from_str(v).unwrap_or(serde_json::Value::String(v.into()));
+        let value: serde_json::Value =
+            serde_json::from_str(v).unwrap_or(serde_json::Value::String(v.into()));
         json["settings"][k] = value;
     }
     let tmp = std::env::temp_dir().join(format!("qp_replay_{}.json", std::process::id()));
@@ -19,6 +22,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None)?;
     std::fs::remove_file(&tmp).ok();
     s.solve();
-    println!("{:?}: {} iterations, {:.3} s, objective {:e}, r_prim {:.1e}, r_dual {:.1e}", s.solution.status, s.solution.iterations, s.solution.solve_time, s.solution.obj_val, s.solution.r_prim, s.solution.r_dual);
+    println!(
+        "{:?}: {} iterations, {:.3} s, objective {:e}, r_prim {:.1e}, r_dual {:.1e}",
+        s.solution.status,
+        s.solution.iterations,
+        s.solution.solve_time,
+        s.solution.obj_val,
+        s.solution.r_prim,
+        s.solution.r_dual
+    );
     Ok(())
 }

@@ -10,7 +10,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
     let mut tr = leap::transcription::Transcription::new(ocp, Default::default())?;
     let (guess, _) = tr.bang_bang_guess()?;
-    let settings = leap::sqp::SqpSettings { max_iterations: iterations, qp_dump_dir: Some(dir.into()), qp_dump_every: true, ..Default::default() };
+    let settings = leap::sqp::SqpSettings {
+        max_iterations: iterations,
+        qp_dump_dir: Some(dir.into()),
+        qp_dump_every: true,
+        ..Default::default()
+    };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
     println!("{:?} after {} iterations", r.status, r.iterations);
     Ok(())

@@ -6,6 +6,17 @@ fn main() {
     let p = leap::testset::by_name(&args[1]).expect("unknown problem");
     let mode = args.get(2).map(|s| s.parse().expect("mode"));
     let tol = args.get(3).map(|s| s.parse().expect("tol")).unwrap_or(1e-6);
-    let r = solve(&mut AdNlp::new(p), &SqpSettings { hessian: mode, verbose: true, optim_convergence_tolerance: tol, ..Default::default() });
-    println!("{:?} f {} viol {} its {}: {}\nx {:?}", r.status, r.objective, r.constraint_violation, r.iterations, r.message, r.x);
+    let r = solve(
+        &mut AdNlp::new(p),
+        &SqpSettings {
+            hessian: mode,
+            verbose: true,
+            optim_convergence_tolerance: tol,
+            ..Default::default()
+        },
+    );
+    println!(
+        "{:?} f {} viol {} its {}: {}\nx {:?}",
+        r.status, r.objective, r.constraint_violation, r.iterations, r.message, r.x
+    );
 }

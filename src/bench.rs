@@ -47,7 +47,11 @@ pub fn time_per_call(batches: usize, calls: usize, mut f: impl FnMut(usize)) -> 
         })
         .collect();
     per_call.sort_by(|a, b| a.total_cmp(b));
-    (per_call[per_call.len() / 2], per_call[0], per_call[per_call.len() - 1])
+    (
+        per_call[per_call.len() / 2],
+        per_call[0],
+        per_call[per_call.len() - 1],
+    )
 }
 
 /// Time per q̈ evaluation (set q and q̇, apply generalized forces, solve for
@@ -59,7 +63,11 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
     if !model.symmetry.is_empty() {
         systems.push(("symmetric", model.system(true)?));
     }
-    let pose = model.poses.get("squat").cloned().unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    let pose = model
+        .poses
+        .get("squat")
+        .cloned()
+        .unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
     for (label, sys) in systems {
         let n = sys.nq();
         let q0 = sys.q_from_model(&pose);
@@ -67,7 +75,13 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
         let states: Vec<(Vec<f64>, Vec<f64>)> = (0..16)
             .map(|k| {
                 let s = 0.01 * k as f64;
-                (q0.iter().enumerate().map(|(i, q)| q + s * ((i + 1) as f64).sin()).collect(), (0..n).map(|i| s * (i as f64 - 2.0)).collect())
+                (
+                    q0.iter()
+                        .enumerate()
+                        .map(|(i, q)| q + s * ((i + 1) as f64).sin())
+                        .collect(),
+                    (0..n).map(|i| s * (i as f64 - 2.0)).collect(),
+                )
             })
             .collect();
         let tau: Vec<f64> = (0..n).map(|i| 10.0 * (i as f64).cos()).collect();
@@ -79,11 +93,17 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
         let (med_r, min_r, max_r) = time_per_call(31, 20_000, |i| {
             let (q, u) = &states[i % states.len()];
             mb.set_state(&mut ws, q, u);
-            failed |= mb.forward_dynamics(&mut ws, black_box(&tau), &mut qdd).is_err();
+            failed |= mb
+                .forward_dynamics(&mut ws, black_box(&tau), &mut qdd)
+                .is_err();
             black_box(&qdd);
         });
         if failed {
-            return Err(crate::multibody::SingularMassMatrix { pivot: 0, value: f64::NAN }.into());
+            return Err(crate::multibody::SingularMassMatrix {
+                pivot: 0,
+                value: f64::NAN,
+            }
+            .into());
         }
         rows.push(BenchRow {
             system: label.into(),
@@ -103,7 +123,10 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
         let mut err = None;
         let (med_s, min_s, max_s) = time_per_call(15, 2_000, |i| {
             let (q, u) = &states[i % states.len()];
-            if let Err(e) = sb.set_state(0.0, q, u).and_then(|_| sb.accelerations(&mut qdd)) {
+            if let Err(e) = sb
+                .set_state(0.0, q, u)
+                .and_then(|_| sb.accelerations(&mut qdd))
+            {
                 err = Some(e);
             }
             black_box(&qdd);
@@ -124,14 +147,27 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
         });
         speedup.push((label.to_string(), med_s / med_r));
     }
-    Ok(DynamicsReport { model: model.file.display().to_string(), rows, speedup })
+    Ok(DynamicsReport {
+        model: model.file.display().to_string(),
+        rows,
+        speedup,
+    })
 }
 
 impl DynamicsReport {
     /// A table a person can read.
     pub fn table(&self) -> String {
         let mut t = comfy_table::Table::new();
-        t.set_header(["system", "nq", "backend", "evaluation", "median ns/call", "min", "max", "batches × calls"]);
+        t.set_header([
+            "system",
+            "nq",
+            "backend",
+            "evaluation",
+            "median ns/call",
+            "min",
+            "max",
+            "batches × calls",
+        ]);
         for r in &self.rows {
             t.add_row([
                 r.system.clone(),
@@ -144,7 +180,11 @@ impl DynamicsReport {
                 format!("{} × {}", r.batches, r.calls_per_batch),
             ]);
         }
-        let ratios: Vec<String> = self.speedup.iter().map(|(s, r)| format!("{s}: Rust-native {r:.1}× faster than Simbody")).collect();
+        let ratios: Vec<String> = self
+            .speedup
+            .iter()
+            .map(|(s, r)| format!("{s}: Rust-native {r:.1}× faster than Simbody"))
+            .collect();
         format!("q̈ evaluation, {}\n{t}\n{}", self.model, ratios.join("\n"))
     }
 }
@@ -156,10 +196,22 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
     use crate::ode::{SimbodyStateEquation, StateEquation};
     use crate::scalar::Dual64;
     use std::sync::Arc;
-    let eq = Arc::new(StateEquation::new(model, true, crate::path::PathSmoothing::Smooth { delta: 0.02 })?);
+    let eq = Arc::new(StateEquation::new(
+        model,
+        true,
+        crate::path::PathSmoothing::Smooth { delta: 0.02 },
+    )?);
     let laws = Arc::new(crate::laws::OpenSimLaws::new(model)?);
-    let pose = model.poses.get("squat").cloned().unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
-    let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input(e.to_string())))?;
+    let pose = model
+        .poses
+        .get("squat")
+        .cloned()
+        .unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| {
+        crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input(
+            e.to_string(),
+        ))
+    })?;
     let (n, nx) = (eq.nq(), eq.nx());
     let states: Vec<Vec<f64>> = (0..16)
         .map(|k| {
@@ -176,30 +228,61 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
     let mut xd = vec![0.0; nx];
     let mut bad = false;
     let (m, lo, hi) = time_per_call(21, 5_000, |i| {
-        bad |= eq.rhs(&*laws, &mut ws, &states[i % 16], &u, &mut xd).is_err();
+        bad |= eq
+            .rhs(&*laws, &mut ws, &states[i % 16], &u, &mut xd)
+            .is_err();
         black_box(&xd);
     });
-    let row = |backend: &str, what: &str, (m, lo, hi): (f64, f64, f64), b: usize, c: usize| BenchRow {
-        system: "symmetric jumper".into(),
-        backend: backend.into(),
-        what: what.into(),
-        nq: nx,
-        median_ns: m,
-        min_ns: lo,
-        max_ns: hi,
-        batches: b,
-        calls_per_batch: c,
-    };
-    rows.push(row("rust-native", "ẋ = f(x, u), f64", (m, lo, hi), 21, 5_000));
+    let row =
+        |backend: &str, what: &str, (m, lo, hi): (f64, f64, f64), b: usize, c: usize| BenchRow {
+            system: "symmetric jumper".into(),
+            backend: backend.into(),
+            what: what.into(),
+            nq: nx,
+            median_ns: m,
+            min_ns: lo,
+            max_ns: hi,
+            batches: b,
+            calls_per_batch: c,
+        };
+    rows.push(row(
+        "rust-native",
+        "ẋ = f(x, u), f64",
+        (m, lo, hi),
+        21,
+        5_000,
+    ));
     let mut wsd = eq.workspace::<Dual64>();
     let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
-    let sd: Vec<Vec<Dual64>> = states.iter().map(|x| x.iter().enumerate().map(|(i, &v)| if i == 3 { Dual64::from(v).derivative() } else { Dual64::from(v) }).collect()).collect();
+    let sd: Vec<Vec<Dual64>> = states
+        .iter()
+        .map(|x| {
+            x.iter()
+                .enumerate()
+                .map(|(i, &v)| {
+                    if i == 3 {
+                        Dual64::from(v).derivative()
+                    } else {
+                        Dual64::from(v)
+                    }
+                })
+                .collect()
+        })
+        .collect();
     let mut xdd = vec![Dual64::from(0.0); nx];
     let t_dual = time_per_call(11, 2_000, |i| {
-        bad |= eq.rhs(&*laws, &mut wsd, &sd[i % 16], &ud, &mut xdd).is_err();
+        bad |= eq
+            .rhs(&*laws, &mut wsd, &sd[i % 16], &ud, &mut xdd)
+            .is_err();
         black_box(&xdd);
     });
-    rows.push(row("rust-native", "ẋ and one directional derivative (Dual64)", t_dual, 11, 2_000));
+    rows.push(row(
+        "rust-native",
+        "ẋ and one directional derivative (Dual64)",
+        t_dual,
+        11,
+        2_000,
+    ));
     let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone())?;
     let mut err = None;
     let t_sb = time_per_call(7, 300, |i| {
@@ -212,11 +295,23 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
         return Err(e.into());
     }
     if bad {
-        return Err(crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input("f(x, u) failed during the benchmark".into())));
+        return Err(crate::crosscheck::CrosscheckError::Simbody(
+            crate::simbody::SimbodyError::Input("f(x, u) failed during the benchmark".into()),
+        ));
     }
-    rows.push(row("simbody", "ẋ = f(x, u) (forces in a Simbody force element)", t_sb, 7, 300));
+    rows.push(row(
+        "simbody",
+        "ẋ = f(x, u) (forces in a Simbody force element)",
+        t_sb,
+        7,
+        300,
+    ));
     let speedup = vec![("f(x, u)".to_string(), t_sb.0 / m)];
-    Ok(DynamicsReport { model: model.file.display().to_string(), rows, speedup })
+    Ok(DynamicsReport {
+        model: model.file.display().to_string(),
+        rows,
+        speedup,
+    })
 }
 
 /// One forward jump per integrator and accuracy from the static squat with
@@ -237,13 +332,27 @@ pub struct IntegratorRow {
 pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<IntegratorRow>, String> {
     use crate::simulate::*;
     use std::sync::Arc;
-    let eq = crate::ode::StateEquation::new(model, true, crate::path::PathSmoothing::Exact).map_err(|e| e.to_string())?;
+    let eq = crate::ode::StateEquation::new(model, true, crate::path::PathSmoothing::Exact)
+        .map_err(|e| e.to_string())?;
     let laws = crate::laws::OpenSimLaws::new(model).map_err(|e| e.to_string())?;
-    let pose = model.poses.get("squat").cloned().ok_or("the model has no squat pose")?;
+    let pose = model
+        .poses
+        .get("squat")
+        .cloned()
+        .ok_or("the model has no squat pose")?;
     let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| e.to_string())?;
     let ext = extensor_moments(&eq, &pose);
     let exc = StudyExcitation::BangBang(BangBang {
-        intervals: ext.iter().map(|&e| if e > 0.0 { Some((0.0, f64::INFINITY)) } else { None }).collect(),
+        intervals: ext
+            .iter()
+            .map(|&e| {
+                if e > 0.0 {
+                    Some((0.0, f64::INFINITY))
+                } else {
+                    None
+                }
+            })
+            .collect(),
         off_level: crate::laws::MIN_ACTIVATION,
     });
     let standing = standing_com_height(&eq);
@@ -257,9 +366,18 @@ pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<Integrato
                 &exc,
                 &sq.x,
                 standing,
-                SimulateOptions { integrator: crate::integrator::Dopri5Options { accuracy: acc, max_steps: 200_000, ..Default::default() }, t_max: 1.0 },
+                SimulateOptions {
+                    integrator: crate::integrator::Dopri5Options {
+                        accuracy: acc,
+                        max_steps: 200_000,
+                        ..Default::default()
+                    },
+                    t_max: 1.0,
+                },
             ),
-            IntegratorChoice::Simbody(w) => simulate_simbody(&eqa, &lawsa, &exc, &sq.x, standing, w, acc, 1.0, 1e-3),
+            IntegratorChoice::Simbody(w) => {
+                simulate_simbody(&eqa, &lawsa, &exc, &sq.x, standing, w, acc, 1.0, 1e-3)
+            }
         };
         let (s, _) = r.map_err(|e| format!("{name} at {acc:e}: {e}"))?;
         rows.push(IntegratorRow {
@@ -279,7 +397,16 @@ pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<Integrato
 /// The integrator table as text.
 pub fn integrator_table(rows: &[IntegratorRow]) -> String {
     let mut t = comfy_table::Table::new();
-    t.set_header(["integrator", "accuracy", "steps", "rejected", "f evaluations", "wall time (s)", "jump height (cm)", "lift-off (s)"]);
+    t.set_header([
+        "integrator",
+        "accuracy",
+        "steps",
+        "rejected",
+        "f evaluations",
+        "wall time (s)",
+        "jump height (cm)",
+        "lift-off (s)",
+    ]);
     for r in rows {
         t.add_row([
             r.integrator.clone(),
@@ -289,7 +416,9 @@ pub fn integrator_table(rows: &[IntegratorRow]) -> String {
             r.f_evals.to_string(),
             format!("{:.3}", r.wall_time_s),
             format!("{:.2}", 100.0 * r.jump_height_m),
-            r.liftoff_time_s.map(|t| format!("{t:.4}")).unwrap_or("-".into()),
+            r.liftoff_time_s
+                .map(|t| format!("{t:.4}"))
+                .unwrap_or("-".into()),
         ]);
     }
     format!("forward jump from the static squat, default bang-bang excitations\n{t}")
@@ -321,10 +450,26 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
     use crate::sqp::{solve, HessianMode, SqpSettings};
     let mut rows = Vec::new();
     for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
-        let settings = SqpSettings { hessian: Some(mode), ..Default::default() };
+        let settings = SqpSettings {
+            hessian: Some(mode),
+            ..Default::default()
+        };
         let mut runs = Vec::new();
         for _ in 0..repeats.max(1) {
-            let mut row = SqpTestSetRow { hessian: mode, problems: 0, at_published_optimum: 0, solved_or_acceptable: 0, iterations: 0, qp_iterations: 0, wall_time_s: 0.0, derivatives_s: 0.0, hessian_s: 0.0, qp_s: 0.0, line_search_s: 0.0, other_s: 0.0 };
+            let mut row = SqpTestSetRow {
+                hessian: mode,
+                problems: 0,
+                at_published_optimum: 0,
+                solved_or_acceptable: 0,
+                iterations: 0,
+                qp_iterations: 0,
+                wall_time_s: 0.0,
+                derivatives_s: 0.0,
+                hessian_s: 0.0,
+                qp_s: 0.0,
+                line_search_s: 0.0,
+                other_s: 0.0,
+            };
             let t = Instant::now();
             for p in crate::testset::hock_schittkowski() {
                 let f_star = p.reference_optimum();
@@ -333,7 +478,9 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
                 row.iterations += r.iterations;
                 row.qp_iterations += r.qp_iterations;
                 row.solved_or_acceptable += usize::from(r.status.success());
-                if r.status == crate::sqp::SqpStatus::Solved && (r.objective - f_star).abs() <= 1e-6 * f_star.abs().max(1.0) {
+                if r.status == crate::sqp::SqpStatus::Solved
+                    && (r.objective - f_star).abs() <= 1e-6 * f_star.abs().max(1.0)
+                {
                     row.at_published_optimum += 1;
                 }
                 row.derivatives_s += r.time.derivatives_s;
@@ -354,7 +501,20 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
 /// The test-set rows as a table.
 pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
     let mut t = comfy_table::Table::new();
-    t.set_header(vec!["Hessian", "problems", "at reference f* (solved)", "solved/acceptable", "iterations", "QP iterations", "wall s (median)", "derivatives s", "Hessian s", "QP s", "line search s", "other s"]);
+    t.set_header(vec![
+        "Hessian",
+        "problems",
+        "at reference f* (solved)",
+        "solved/acceptable",
+        "iterations",
+        "QP iterations",
+        "wall s (median)",
+        "derivatives s",
+        "Hessian s",
+        "QP s",
+        "line search s",
+        "other s",
+    ]);
     for r in rows {
         t.add_row(vec![
             format!("{:?}", r.hessian),
@@ -401,12 +561,25 @@ pub struct SqpJumpReport {
 }
 
 /// Run `iterations` SQP iterations on the jump transcription of `model`.
-pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMode, qp_equilibrate: bool) -> Result<SqpJumpReport, String> {
+pub fn sqp_jump(
+    model: &Model,
+    iterations: usize,
+    hessian: crate::sqp::HessianMode,
+    qp_equilibrate: bool,
+) -> Result<SqpJumpReport, String> {
     use crate::nlp::Nlp;
-    let ocp = std::sync::Arc::new(crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?);
-    let mut tr = crate::transcription::Transcription::new(ocp, Default::default()).map_err(|e| e.to_string())?;
+    let ocp = std::sync::Arc::new(
+        crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?,
+    );
+    let mut tr = crate::transcription::Transcription::new(ocp, Default::default())
+        .map_err(|e| e.to_string())?;
     let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
-    let settings = crate::sqp::SqpSettings { hessian: Some(hessian), max_iterations: iterations, qp_equilibrate, ..Default::default() };
+    let settings = crate::sqp::SqpSettings {
+        hessian: Some(hessian),
+        max_iterations: iterations,
+        qp_equilibrate,
+        ..Default::default()
+    };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
     let rows = r
         .history
@@ -424,13 +597,30 @@ pub fn sqp_jump(model: &Model, iterations: usize, hessian: crate::sqp::HessianMo
             inf_pr: h.inf_pr,
         })
         .collect();
-    Ok(SqpJumpReport { variables: tr.num_variables(), constraints: tr.num_constraints(), jacobian_nnz: tr.jacobian_nnz(), hessian, qp_equilibrate, rows })
+    Ok(SqpJumpReport {
+        variables: tr.num_variables(),
+        constraints: tr.num_constraints(),
+        jacobian_nnz: tr.jacobian_nnz(),
+        hessian,
+        qp_equilibrate,
+        rows,
+    })
 }
 
 impl SqpJumpReport {
     pub fn table(&self) -> String {
         let mut t = comfy_table::Table::new();
-        t.set_header(vec!["iter", "derivatives ms", "Hessian ms", "QP ms", "QP iterations", "QP mode", "line search ms", "objective (scaled)", "inf_pr (scaled)"]);
+        t.set_header(vec![
+            "iter",
+            "derivatives ms",
+            "Hessian ms",
+            "QP ms",
+            "QP iterations",
+            "QP mode",
+            "line search ms",
+            "objective (scaled)",
+            "inf_pr (scaled)",
+        ]);
         for r in &self.rows {
             t.add_row(vec![
                 r.iter.to_string(),

@@ -136,10 +136,19 @@ fn eval_rust(model: &Model, mb: &Multibody, x: &Inputs) -> Result<Sample, Singul
 fn eval_simbody(model: &Model, sb: &mut SimbodyModel, x: &Inputs) -> Result<Sample, SimbodyError> {
     let n = sb.nq();
     sb.set_state(0.0, &x.q, &x.u)?;
-    let forces: Vec<(usize, [f64; 3], [f64; 3])> =
-        model.stations.iter().zip(&x.station_forces).map(|(st, f)| (st.body, st.location, *f)).collect();
+    let forces: Vec<(usize, [f64; 3], [f64; 3])> = model
+        .stations
+        .iter()
+        .zip(&x.station_forces)
+        .map(|(st, f)| (st.body, st.location, *f))
+        .collect();
     sb.set_applied_forces(&x.tau, &forces)?;
-    let mut s = Sample { mass_matrix: vec![0.0; n * n], bias: vec![0.0; n], qdd: vec![0.0; n], ..Default::default() };
+    let mut s = Sample {
+        mass_matrix: vec![0.0; n * n],
+        bias: vec![0.0; n],
+        qdd: vec![0.0; n],
+        ..Default::default()
+    };
     sb.mass_matrix(&mut s.mass_matrix)?;
     sb.bias(&mut s.bias)?;
     sb.accelerations(&mut s.qdd)?;
@@ -147,8 +156,10 @@ fn eval_simbody(model: &Model, sb: &mut SimbodyModel, x: &Inputs) -> Result<Samp
     s.com_velocity = sb.com_velocity()?.to_vec();
     s.com_acceleration = sb.com_acceleration()?.to_vec();
     for st in &model.stations {
-        s.station_position.extend(sb.station_position(st.body, st.location)?);
-        s.station_velocity.extend(sb.station_velocity(st.body, st.location)?);
+        s.station_position
+            .extend(sb.station_position(st.body, st.location)?);
+        s.station_velocity
+            .extend(sb.station_velocity(st.body, st.location)?);
     }
     Ok(s)
 }
@@ -159,7 +170,11 @@ fn project(full: &Sample, full_sys: &SystemSpec, sym_sys: &SystemSpec) -> Sample
     let nf = full_sys.nq();
     let ns = sym_sys.nq();
     // B[i][k] = 1 when full coordinate i follows symmetric coordinate k.
-    let map: Vec<usize> = full_sys.coordinates.iter().map(|&c| sym_sys.q_of_model_coordinate[c]).collect();
+    let map: Vec<usize> = full_sys
+        .coordinates
+        .iter()
+        .map(|&c| sym_sys.q_of_model_coordinate[c])
+        .collect();
     let mut m = vec![0.0; ns * ns];
     let mut b = vec![0.0; ns];
     for i in 0..nf {
@@ -173,7 +188,12 @@ fn project(full: &Sample, full_sys: &SystemSpec, sym_sys: &SystemSpec) -> Sample
         .iter()
         .map(|&c| full.qdd[full_sys.q_of_model_coordinate[c]])
         .collect();
-    Sample { mass_matrix: m, bias: b, qdd, ..full.clone() }
+    Sample {
+        mass_matrix: m,
+        bias: b,
+        qdd,
+        ..full.clone()
+    }
 }
 
 fn record(table: &mut BTreeMap<String, f64>, a: &Sample, b: &Sample) {
@@ -197,12 +217,26 @@ fn random_inputs(rng: &mut ChaCha8Rng, model: &Model, sys: &SystemSpec) -> Input
             rng.random_range(lo..=hi)
         })
         .collect();
-    let model_u: Vec<f64> = model.coordinates.iter().map(|_| rng.random_range(-5.0..=5.0)).collect();
-    let model_tau: Vec<f64> = model.coordinates.iter().map(|_| rng.random_range(-100.0..=100.0)).collect();
+    let model_u: Vec<f64> = model
+        .coordinates
+        .iter()
+        .map(|_| rng.random_range(-5.0..=5.0))
+        .collect();
+    let model_tau: Vec<f64> = model
+        .coordinates
+        .iter()
+        .map(|_| rng.random_range(-100.0..=100.0))
+        .collect();
     let station_forces = model
         .stations
         .iter()
-        .map(|_| [rng.random_range(-500.0..=500.0), rng.random_range(-500.0..=1500.0), rng.random_range(-100.0..=100.0)])
+        .map(|_| {
+            [
+                rng.random_range(-500.0..=500.0),
+                rng.random_range(-500.0..=1500.0),
+                rng.random_range(-100.0..=100.0),
+            ]
+        })
         .collect();
     Inputs {
         q: sys.q_from_model(&model_q),
@@ -218,7 +252,11 @@ pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport,
     let full = model.system(false)?;
     let mb_full = Multibody::new(model, &full);
     let mut sb_full = SimbodyModel::new(model, &full)?;
-    let sym = if model.symmetry.is_empty() { None } else { Some(model.system(true)?) };
+    let sym = if model.symmetry.is_empty() {
+        None
+    } else {
+        Some(model.system(true)?)
+    };
     let mut sym_backends = match &sym {
         Some(s) => Some((Multibody::new(model, s), SimbodyModel::new(model, s)?)),
         None => None,
@@ -228,7 +266,13 @@ pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport,
         let x = random_inputs(&mut rng, model, &full);
         let r = eval_rust(model, &mb_full, &x)?;
         let s = eval_simbody(model, &mut sb_full, &x)?;
-        record(comparisons.entry("rust_vs_simbody_full".into()).or_default(), &r, &s);
+        record(
+            comparisons
+                .entry("rust_vs_simbody_full".into())
+                .or_default(),
+            &r,
+            &s,
+        );
         if let (Some(sym), Some((mb_sym, sb_sym))) = (&sym, sym_backends.as_mut()) {
             // A symmetric state: left coordinates copy their right partners;
             // generalized forces likewise, so the full solution stays symmetric.
@@ -243,34 +287,71 @@ pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport,
                 station_forces: mirror_station_forces(model, &xs.station_forces),
             };
             // The symmetric system carries both legs' forces: sum of generalized forces.
-            let xs = Inputs { station_forces: xf.station_forces.clone(), tau: sym_tau(&full, sym, &xf.tau), ..xs };
+            let xs = Inputs {
+                station_forces: xf.station_forces.clone(),
+                tau: sym_tau(&full, sym, &xf.tau),
+                ..xs
+            };
             let rs = eval_rust(model, mb_sym, &xs)?;
             let ss = eval_simbody(model, sb_sym, &xs)?;
-            record(comparisons.entry("rust_vs_simbody_symmetric".into()).or_default(), &rs, &ss);
+            record(
+                comparisons
+                    .entry("rust_vs_simbody_symmetric".into())
+                    .or_default(),
+                &rs,
+                &ss,
+            );
             let rf = eval_rust(model, &mb_full, &xf)?;
             let sf = eval_simbody(model, &mut sb_full, &xf)?;
-            record(comparisons.entry("symmetric_vs_full_rust".into()).or_default(), &rs, &project(&rf, &full, sym));
-            record(comparisons.entry("symmetric_vs_full_simbody".into()).or_default(), &ss, &project(&sf, &full, sym));
+            record(
+                comparisons
+                    .entry("symmetric_vs_full_rust".into())
+                    .or_default(),
+                &rs,
+                &project(&rf, &full, sym),
+            );
+            record(
+                comparisons
+                    .entry("symmetric_vs_full_simbody".into())
+                    .or_default(),
+                &ss,
+                &project(&sf, &full, sym),
+            );
         }
     }
-    let max_rel_error = comparisons.values().flat_map(|t| t.values()).fold(0.0f64, |a, &b| if b.is_nan() { f64::INFINITY } else { a.max(b) });
-    let state_equation_max_rel_error = if model.muscles.is_empty() && model.contact.is_none() && model.ligaments.is_empty() {
-        None
-    } else {
-        let mut worst: f64 = 0.0;
-        let mut table = BTreeMap::new();
-        for symmetric in [true, false] {
-            if symmetric && model.symmetry.is_empty() {
-                continue;
+    let max_rel_error = comparisons
+        .values()
+        .flat_map(|t| t.values())
+        .fold(
+            0.0f64,
+            |a, &b| if b.is_nan() { f64::INFINITY } else { a.max(b) },
+        );
+    let state_equation_max_rel_error =
+        if model.muscles.is_empty() && model.contact.is_none() && model.ligaments.is_empty() {
+            None
+        } else {
+            let mut worst: f64 = 0.0;
+            let mut table = BTreeMap::new();
+            for symmetric in [true, false] {
+                if symmetric && model.symmetry.is_empty() {
+                    continue;
+                }
+                let e = state_equation_error(model, symmetric, samples, &mut rng)?;
+                table.insert(
+                    if symmetric {
+                        "symmetric".to_string()
+                    } else {
+                        "full".to_string()
+                    },
+                    e,
+                );
+                worst = worst.max(if e.is_nan() { f64::INFINITY } else { e });
             }
-            let e = state_equation_error(model, symmetric, samples, &mut rng)?;
-            table.insert(if symmetric { "symmetric".to_string() } else { "full".to_string() }, e);
-            worst = worst.max(if e.is_nan() { f64::INFINITY } else { e });
-        }
-        comparisons.insert("state_equation_rust_vs_simbody".into(), table);
-        Some(worst)
-    };
-    let passed = max_rel_error <= TOLERANCE && state_equation_max_rel_error.is_none_or(|e| e <= STATE_EQUATION_TOLERANCE);
+            comparisons.insert("state_equation_rust_vs_simbody".into(), table);
+            Some(worst)
+        };
+    let passed = max_rel_error <= TOLERANCE
+        && state_equation_max_rel_error.is_none_or(|e| e <= STATE_EQUATION_TOLERANCE);
     Ok(CrosscheckReport {
         model: model.file.display().to_string(),
         samples,
@@ -288,16 +369,31 @@ pub fn run(model: &Model, samples: usize, seed: u64) -> Result<CrosscheckReport,
 /// state equation and the same equation inside Simbody, at random states
 /// near the model's squat (so that the feet touch the ground) with random
 /// speeds, fibre lengths, activations and excitations.
-fn state_equation_error(model: &Model, symmetric: bool, samples: usize, rng: &mut ChaCha8Rng) -> Result<f64, CrosscheckError> {
+fn state_equation_error(
+    model: &Model,
+    symmetric: bool,
+    samples: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<f64, CrosscheckError> {
     use crate::ode::{SimbodyStateEquation, StateEquation};
     use std::sync::Arc;
-    let eq = Arc::new(StateEquation::new(model, symmetric, crate::path::PathSmoothing::Smooth { delta: 0.02 })?);
+    let eq = Arc::new(StateEquation::new(
+        model,
+        symmetric,
+        crate::path::PathSmoothing::Smooth { delta: 0.02 },
+    )?);
     let laws = Arc::new(crate::laws::OpenSimLaws::new(model)?);
     let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone())?;
     let (n, nm, nx) = (eq.nq(), eq.nm(), eq.nx());
-    let pose = model.poses.get("squat").cloned().unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    let pose = model
+        .poses
+        .get("squat")
+        .cloned()
+        .unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
     let q0 = eq.system.q_from_model(&pose);
-    let ty = model.coordinate_index("pelvis_ty").map(|c| eq.system.q_of_model_coordinate[c]);
+    let ty = model
+        .coordinate_index("pelvis_ty")
+        .map(|c| eq.system.q_of_model_coordinate[c]);
     let mut ws = eq.workspace::<f64>();
     let mut worst: f64 = 0.0;
     for _ in 0..samples {
@@ -315,8 +411,20 @@ fn state_equation_error(model: &Model, symmetric: bool, samples: usize, rng: &mu
             use crate::multibody::{GeneralizedForces, ModelView};
             let mut w = eq.multibody.workspace::<f64>();
             eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
-            let view = ModelView { mb: &eq.multibody, ws: &w, q_of: &eq.system.q_of_model_coordinate };
-            eq.muscles.iter().map(|&m| model.muscles[m].path.calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None).length).collect()
+            let view = ModelView {
+                mb: &eq.multibody,
+                ws: &w,
+                q_of: &eq.system.q_of_model_coordinate,
+            };
+            eq.muscles
+                .iter()
+                .map(|&m| {
+                    model.muscles[m]
+                        .path
+                        .calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None)
+                        .length
+                })
+                .collect()
         };
         for k in 0..nm {
             let a = rng.random_range(0.01..=1.0);
@@ -364,27 +472,50 @@ impl CrosscheckReport {
     /// A table a person can read.
     pub fn table(&self) -> String {
         let mut t = comfy_table::Table::new();
-        let cols: Vec<&String> = self.comparisons.keys().filter(|k| k.as_str() != "state_equation_rust_vs_simbody").collect();
+        let cols: Vec<&String> = self
+            .comparisons
+            .keys()
+            .filter(|k| k.as_str() != "state_equation_rust_vs_simbody")
+            .collect();
         let mut header = vec!["quantity".to_string()];
         header.extend(cols.iter().map(|s| s.to_string()));
         t.set_header(header);
-        let names = ["mass_matrix", "bias", "qdd", "com_position", "com_velocity", "com_acceleration", "station_position", "station_velocity"];
+        let names = [
+            "mass_matrix",
+            "bias",
+            "qdd",
+            "com_position",
+            "com_velocity",
+            "com_acceleration",
+            "station_position",
+            "station_velocity",
+        ];
         for q in names {
             if cols.iter().all(|c| !self.comparisons[*c].contains_key(q)) {
                 continue;
             }
             let mut row = vec![q.to_string()];
             for c in &cols {
-                row.push(self.comparisons[*c].get(q).map(|e| format!("{e:.2e}")).unwrap_or_else(|| "-".into()));
+                row.push(
+                    self.comparisons[*c]
+                        .get(q)
+                        .map(|e| format!("{e:.2e}"))
+                        .unwrap_or_else(|| "-".into()),
+                );
             }
             t.add_row(row);
         }
-        let fline = match (self.state_equation_max_rel_error, self.comparisons.get("state_equation_rust_vs_simbody")) {
-            (Some(e), Some(tab)) => format!(
+        let fline = match (
+            self.state_equation_max_rel_error,
+            self.comparisons.get("state_equation_rust_vs_simbody"),
+        ) {
+            (Some(e), Some(tab)) => {
+                format!(
                 "\nstate equation ẋ = f(x, u), Rust-native against Simbody: {} (tolerance {:.0e})",
                 tab.iter().map(|(k, v)| format!("{k} {v:.2e}")).collect::<Vec<_>>().join(", "),
                 self.state_equation_tolerance
-            ) + if e.is_nan() { " NaN" } else { "" },
+            ) + if e.is_nan() { " NaN" } else { "" }
+            }
             _ => String::new(),
         };
         format!(

@@ -59,59 +59,126 @@ pub struct EvalInputError {
 }
 
 /// Read evaluations (x, u) from a JSON or CSV file.
-pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Vec<(Vec<f64>, Vec<f64>)>, EvalInputError> {
+pub fn read_inputs(
+    eq: &StateEquation,
+    path: &Path,
+) -> Result<Vec<(Vec<f64>, Vec<f64>)>, EvalInputError> {
     let file = path.display().to_string();
-    let err = |place: String, reason: String| EvalInputError { file: file.clone(), place, reason };
+    let err = |place: String, reason: String| EvalInputError {
+        file: file.clone(),
+        place,
+        reason,
+    };
     let text = std::fs::read_to_string(path).map_err(|e| err("(file)".into(), e.to_string()))?;
     let states = eq.state_names();
     let controls = eq.control_names();
-    let is_csv = path.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("csv")).unwrap_or(false);
+    let is_csv = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.eq_ignore_ascii_case("csv"))
+        .unwrap_or(false);
     let mut out = Vec::new();
     if is_csv {
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
-        let (_, header) = lines.next().ok_or_else(|| err("line 1".into(), "empty file".into()))?;
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty());
+        let (_, header) = lines
+            .next()
+            .ok_or_else(|| err("line 1".into(), "empty file".into()))?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
         let find = |name: &str| cols.iter().position(|c| *c == name);
-        let xi: Vec<usize> = states.iter().map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'")))).collect::<Result<_, _>>()?;
-        let ui: Vec<usize> = controls.iter().map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'")))).collect::<Result<_, _>>()?;
+        let xi: Vec<usize> = states
+            .iter()
+            .map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'"))))
+            .collect::<Result<_, _>>()?;
+        let ui: Vec<usize> = controls
+            .iter()
+            .map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'"))))
+            .collect::<Result<_, _>>()?;
         for (ln, line) in lines {
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
             if cells.len() != cols.len() {
-                return Err(err(format!("line {}", ln + 1), format!("{} values, expected {}", cells.len(), cols.len())));
+                return Err(err(
+                    format!("line {}", ln + 1),
+                    format!("{} values, expected {}", cells.len(), cols.len()),
+                ));
             }
             let parse = |k: usize| -> Result<f64, EvalInputError> {
-                let v: f64 = cells[k].parse().map_err(|_| err(format!("line {}, column '{}'", ln + 1, cols[k]), format!("'{}' is not a number", cells[k])))?;
+                let v: f64 = cells[k].parse().map_err(|_| {
+                    err(
+                        format!("line {}, column '{}'", ln + 1, cols[k]),
+                        format!("'{}' is not a number", cells[k]),
+                    )
+                })?;
                 if !v.is_finite() {
-                    return Err(err(format!("line {}, column '{}'", ln + 1, cols[k]), "not finite".into()));
+                    return Err(err(
+                        format!("line {}, column '{}'", ln + 1, cols[k]),
+                        "not finite".into(),
+                    ));
                 }
                 Ok(v)
             };
-            let x = xi.iter().map(|&k| parse(k)).collect::<Result<Vec<_>, _>>()?;
-            let u = ui.iter().map(|&k| parse(k)).collect::<Result<Vec<_>, _>>()?;
+            let x = xi
+                .iter()
+                .map(|&k| parse(k))
+                .collect::<Result<Vec<_>, _>>()?;
+            let u = ui
+                .iter()
+                .map(|&k| parse(k))
+                .collect::<Result<Vec<_>, _>>()?;
             out.push((x, u));
         }
         return Ok(out);
     }
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| err(format!("line {}, column {}", e.line(), e.column()), e.to_string()))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+        err(
+            format!("line {}, column {}", e.line(), e.column()),
+            e.to_string(),
+        )
+    })?;
     let items: Vec<&serde_json::Value> = match &v {
         serde_json::Value::Array(a) => a.iter().collect(),
         other => vec![other],
     };
     for (i, item) in items.iter().enumerate() {
-        let place = |f: &str| if items.len() > 1 { format!("[{i}].{f}") } else { f.to_string() };
-        let vector = |key: &str, named: &str, names: &[String]| -> Result<Vec<f64>, EvalInputError> {
+        let place = |f: &str| {
+            if items.len() > 1 {
+                format!("[{i}].{f}")
+            } else {
+                f.to_string()
+            }
+        };
+        let vector = |key: &str,
+                      named: &str,
+                      names: &[String]|
+         -> Result<Vec<f64>, EvalInputError> {
             if let Some(arr) = item.get(key) {
-                let arr = arr.as_array().ok_or_else(|| err(place(key), "must be an array of numbers".into()))?;
+                let arr = arr
+                    .as_array()
+                    .ok_or_else(|| err(place(key), "must be an array of numbers".into()))?;
                 if arr.len() != names.len() {
-                    return Err(err(place(key), format!("{} values, expected {}", arr.len(), names.len())));
+                    return Err(err(
+                        place(key),
+                        format!("{} values, expected {}", arr.len(), names.len()),
+                    ));
                 }
                 return arr
                     .iter()
                     .enumerate()
-                    .map(|(k, v)| v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| err(place(&format!("{key}[{k}]")), "not a finite number".into())))
+                    .map(|(k, v)| {
+                        v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| {
+                            err(place(&format!("{key}[{k}]")), "not a finite number".into())
+                        })
+                    })
                     .collect();
             }
-            let obj = item.get(named).and_then(|o| o.as_object()).ok_or_else(|| err(place(named), format!("missing: give '{named}' (by name) or '{key}' (array)")))?;
+            let obj = item.get(named).and_then(|o| o.as_object()).ok_or_else(|| {
+                err(
+                    place(named),
+                    format!("missing: give '{named}' (by name) or '{key}' (array)"),
+                )
+            })?;
             for k in obj.keys() {
                 if !names.contains(k) {
                     return Err(err(place(&format!("{named}.{k}")), "unknown name".into()));
@@ -122,7 +189,11 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Vec<(Vec<f64>, Vec
                 .map(|n| {
                     obj.get(n)
                         .ok_or_else(|| err(place(named), format!("missing '{n}'")))
-                        .and_then(|v| v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| err(place(&format!("{named}.{n}")), "not a finite number".into())))
+                        .and_then(|v| {
+                            v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| {
+                                err(place(&format!("{named}.{n}")), "not a finite number".into())
+                            })
+                        })
                 })
                 .collect()
         };
@@ -134,7 +205,12 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Vec<(Vec<f64>, Vec
 }
 
 /// Evaluate ẋ = f(x, u) and its parts.
-pub fn evaluate(eq: &StateEquation, laws: &OpenSimLaws, x: &[f64], u: &[f64]) -> Result<EvalReport, crate::ode::OdeError> {
+pub fn evaluate(
+    eq: &StateEquation,
+    laws: &OpenSimLaws,
+    x: &[f64],
+    u: &[f64],
+) -> Result<EvalReport, crate::ode::OdeError> {
     let (n, nm) = (eq.nq(), eq.nm());
     let mut ws = eq.workspace::<f64>();
     let mut xdot = vec![0.0; eq.nx()];
@@ -148,17 +224,35 @@ pub fn evaluate(eq: &StateEquation, laws: &OpenSimLaws, x: &[f64], u: &[f64]) ->
         let m = &model.muscles[mi];
         let mut tau = vec![0.0; n];
         {
-            let view = ModelView { mb: &eq.multibody, ws: mbw, q_of: &eq.system.q_of_model_coordinate };
-            let mut sink = GeneralizedForces { mb: &eq.multibody, ws: mbw, q_of: &eq.system.q_of_model_coordinate, tau: &mut tau };
+            let view = ModelView {
+                mb: &eq.multibody,
+                ws: mbw,
+                q_of: &eq.system.q_of_model_coordinate,
+            };
+            let mut sink = GeneralizedForces {
+                mb: &eq.multibody,
+                ws: mbw,
+                q_of: &eq.system.q_of_model_coordinate,
+                tau: &mut tau,
+            };
             m.path.calc(&view, eq.smoothing, Some((1.0, &mut sink)));
         }
-        let info = laws.muscles[mi].calc(x[2 * n + nm + k], x[2 * n + k], ws.mtu_length[k], ws.mtu_speed[k], u[k]);
+        let info = laws.muscles[mi].calc(
+            x[2 * n + nm + k],
+            x[2 * n + k],
+            ws.mtu_length[k],
+            ws.mtu_speed[k],
+            u[k],
+        );
         muscles.insert(
             m.spec.name.clone(),
             MuscleReport {
                 length: ws.mtu_length[k],
                 lengthening_speed: ws.mtu_speed[k],
-                moment_arms: (0..n).filter(|&j| tau[j].abs() > 1e-12).map(|j| (coord_name(j), tau[j])).collect(),
+                moment_arms: (0..n)
+                    .filter(|&j| tau[j].abs() > 1e-12)
+                    .map(|j| (coord_name(j), tau[j]))
+                    .collect(),
                 fiber_length: info.fiber_length,
                 fiber_velocity: info.fiber_velocity,
                 pennation_angle: info.pennation_angle,
@@ -171,10 +265,20 @@ pub fn evaluate(eq: &StateEquation, laws: &OpenSimLaws, x: &[f64], u: &[f64]) ->
         );
     }
     let contact_forces = match &model.contact {
-        Some(c) => c.spheres.iter().zip(&ws.sphere_force).map(|(s, f)| (s.name.clone(), *f)).collect(),
+        Some(c) => c
+            .spheres
+            .iter()
+            .zip(&ws.sphere_force)
+            .map(|(s, f)| (s.name.clone(), *f))
+            .collect(),
         None => BTreeMap::new(),
     };
-    let ligament_torques = model.ligaments.iter().zip(&ws.ligament_torque).map(|(l, t)| (model.coordinates[l.coordinate].name.clone(), *t)).collect();
+    let ligament_torques = model
+        .ligaments
+        .iter()
+        .zip(&ws.ligament_torque)
+        .map(|(l, t)| (model.coordinates[l.coordinate].name.clone(), *t))
+        .collect();
     Ok(EvalReport {
         state_derivative: names.iter().cloned().zip(xdot.iter().copied()).collect(),
         accelerations: (0..n).map(|k| (coord_name(k), xdot[n + k])).collect(),
@@ -218,10 +322,20 @@ pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
                 mq[coord] = edge;
                 let q = eq.system.q_from_model(&mq);
                 eq.multibody.set_state(&mut ws, &q, &vec![0.0; q.len()]);
-                let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &eq.system.q_of_model_coordinate };
+                let view = ModelView {
+                    mb: &eq.multibody,
+                    ws: &ws,
+                    q_of: &eq.system.q_of_model_coordinate,
+                };
                 let on: f64 = m.path.length_with(&view, j, true);
                 let off: f64 = m.path.length_with(&view, j, false);
-                out.push(SwitchJump { muscle: m.spec.name.clone(), point: pi + 1, coordinate: model.coordinates[coord].name.clone(), at: edge, jump_m: on - off });
+                out.push(SwitchJump {
+                    muscle: m.spec.name.clone(),
+                    point: pi + 1,
+                    coordinate: model.coordinates[coord].name.clone(),
+                    at: edge,
+                    jump_m: on - off,
+                });
             }
         }
     }

@@ -23,7 +23,12 @@ pub struct Dopri5Options {
 impl Default for Dopri5Options {
     fn default() -> Self {
         // OpenSim's AbstractTool defaults (model-equations.md §7.5).
-        Dopri5Options { accuracy: 1e-5, min_step: 1e-8, max_step: 1.0, max_steps: 20_000 }
+        Dopri5Options {
+            accuracy: 1e-5,
+            min_step: 1e-8,
+            max_step: 1.0,
+            max_steps: 20_000,
+        }
     }
 }
 
@@ -40,7 +45,9 @@ pub struct IntegrationStats {
 pub enum IntegrationError {
     #[error("at t = {t}: the right-hand side failed: {reason}")]
     Rhs { t: f64, reason: String },
-    #[error("at t = {t}: the step size fell below the minimum {min_step} (error estimate {err:.3e})")]
+    #[error(
+        "at t = {t}: the step size fell below the minimum {min_step} (error estimate {err:.3e})"
+    )]
     StepTooSmall { t: f64, min_step: f64, err: f64 },
     #[error("at t = {t}: more than {max_steps} steps")]
     TooManySteps { t: f64, max_steps: usize },
@@ -54,12 +61,41 @@ const A: [[f64; 6]; 7] = [
     [0.2, 0.0, 0.0, 0.0, 0.0, 0.0],
     [3.0 / 40.0, 9.0 / 40.0, 0.0, 0.0, 0.0, 0.0],
     [44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0, 0.0, 0.0, 0.0],
-    [19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0, 0.0, 0.0],
-    [9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0, 0.0],
-    [35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0],
+    [
+        19372.0 / 6561.0,
+        -25360.0 / 2187.0,
+        64448.0 / 6561.0,
+        -212.0 / 729.0,
+        0.0,
+        0.0,
+    ],
+    [
+        9017.0 / 3168.0,
+        -355.0 / 33.0,
+        46732.0 / 5247.0,
+        49.0 / 176.0,
+        -5103.0 / 18656.0,
+        0.0,
+    ],
+    [
+        35.0 / 384.0,
+        0.0,
+        500.0 / 1113.0,
+        125.0 / 192.0,
+        -2187.0 / 6784.0,
+        11.0 / 84.0,
+    ],
 ];
 /// Fifth-order weights minus the embedded fourth-order ones.
-const E: [f64; 7] = [71.0 / 57600.0, 0.0, -71.0 / 16695.0, 71.0 / 1920.0, -17253.0 / 339200.0, 22.0 / 525.0, -1.0 / 40.0];
+const E: [f64; 7] = [
+    71.0 / 57600.0,
+    0.0,
+    -71.0 / 16695.0,
+    71.0 / 1920.0,
+    -17253.0 / 339200.0,
+    22.0 / 525.0,
+    -1.0 / 40.0,
+];
 
 /// Dormand-Prince 5(4) stepping one accepted step at a time.
 #[derive(Debug, Clone)]
@@ -80,7 +116,12 @@ pub struct Dopri5 {
 
 impl Dopri5 {
     /// Start at (t0, x0).
-    pub fn new<S: OdeSystem>(sys: &mut S, t0: f64, x0: &[f64], options: Dopri5Options) -> Result<Self, IntegrationError> {
+    pub fn new<S: OdeSystem>(
+        sys: &mut S,
+        t0: f64,
+        x0: &[f64],
+        options: Dopri5Options,
+    ) -> Result<Self, IntegrationError> {
         let n = x0.len();
         let mut me = Dopri5 {
             options,
@@ -98,13 +139,18 @@ impl Dopri5 {
         if x0.iter().any(|v| !v.is_finite()) {
             return Err(IntegrationError::NotFinite { t: t0 });
         }
-        sys.rhs(t0, x0, &mut me.k[0]).map_err(|reason| IntegrationError::Rhs { t: t0, reason })?;
+        sys.rhs(t0, x0, &mut me.k[0])
+            .map_err(|reason| IntegrationError::Rhs { t: t0, reason })?;
         me.stats.f_evals += 1;
         me.f_prev.copy_from_slice(&me.k[0]);
         // Initial step (Hairer et al. II.4, simplified).
         let d0 = me.norm_scaled(&me.x, &me.x);
         let d1 = me.norm_scaled(&me.k[0], &me.x);
-        let h0 = if d0 < 1e-5 || d1 < 1e-5 { 1e-6 } else { 0.01 * d0 / d1 };
+        let h0 = if d0 < 1e-5 || d1 < 1e-5 {
+            1e-6
+        } else {
+            0.01 * d0 / d1
+        };
         me.h = h0.min(options.max_step).max(options.min_step);
         Ok(me)
     }
@@ -112,7 +158,13 @@ impl Dopri5 {
     fn norm_scaled(&self, v: &[f64], x: &[f64]) -> f64 {
         let tol = self.options.accuracy;
         let n = v.len().max(1) as f64;
-        (v.iter().zip(x).map(|(v, x)| (v / (tol + tol * x.abs())).powi(2)).sum::<f64>() / n).sqrt() * tol
+        (v.iter()
+            .zip(x)
+            .map(|(v, x)| (v / (tol + tol * x.abs())).powi(2))
+            .sum::<f64>()
+            / n)
+            .sqrt()
+            * tol
     }
 
     /// Current time and state.
@@ -134,7 +186,10 @@ impl Dopri5 {
         let mut stage_error: Option<(f64, String)> = None;
         loop {
             if self.stats.steps + self.stats.rejected_steps >= self.options.max_steps {
-                return Err(IntegrationError::TooManySteps { t: self.t, max_steps: self.options.max_steps });
+                return Err(IntegrationError::TooManySteps {
+                    t: self.t,
+                    max_steps: self.options.max_steps,
+                });
             }
             let mut h = self.h.min(self.options.max_step);
             let last = self.t + h >= t_end - 1e-14 * t_end.abs().max(1.0);
@@ -192,17 +247,29 @@ impl Dopri5 {
                 let k6 = self.k[6].clone();
                 self.k[0].copy_from_slice(&k6);
                 self.stats.steps += 1;
-                let fac = if err == 0.0 { 5.0 } else { (0.9 * err.powf(-0.2)).clamp(0.2, 5.0) };
+                let fac = if err == 0.0 {
+                    5.0
+                } else {
+                    (0.9 * err.powf(-0.2)).clamp(0.2, 5.0)
+                };
                 if !last || fac < 1.0 {
                     self.h = (h * fac).max(self.options.min_step);
                 }
                 return Ok(self.t);
             }
             self.stats.rejected_steps += 1;
-            let fac = if finite { (0.9 * err.powf(-0.2)).clamp(0.1, 1.0) } else { 0.1 };
+            let fac = if finite {
+                (0.9 * err.powf(-0.2)).clamp(0.1, 1.0)
+            } else {
+                0.1
+            };
             let hn = h * fac;
             if hn < self.options.min_step {
-                return Err(IntegrationError::StepTooSmall { t: self.t, min_step: self.options.min_step, err });
+                return Err(IntegrationError::StepTooSmall {
+                    t: self.t,
+                    min_step: self.options.min_step,
+                    err,
+                });
             }
             self.h = hn;
         }
@@ -224,7 +291,10 @@ impl Dopri5 {
             s * s * s - s * s,
         );
         for i in 0..out.len() {
-            out[i] = h00 * self.x_prev[i] + h10 * h * self.f_prev[i] + h01 * self.x[i] + h11 * h * self.k[0][i];
+            out[i] = h00 * self.x_prev[i]
+                + h10 * h * self.f_prev[i]
+                + h01 * self.x[i]
+                + h11 * h * self.k[0][i];
         }
     }
 
@@ -234,12 +304,18 @@ impl Dopri5 {
     }
 
     /// Restart from a new state (e.g. after a discontinuity), keeping counters.
-    pub fn reset<S: OdeSystem>(&mut self, sys: &mut S, t: f64, x: &[f64]) -> Result<(), IntegrationError> {
+    pub fn reset<S: OdeSystem>(
+        &mut self,
+        sys: &mut S,
+        t: f64,
+        x: &[f64],
+    ) -> Result<(), IntegrationError> {
         self.t = t;
         self.t_prev = t;
         self.x.copy_from_slice(x);
         self.x_prev.copy_from_slice(x);
-        sys.rhs(t, x, &mut self.k[0]).map_err(|reason| IntegrationError::Rhs { t, reason })?;
+        sys.rhs(t, x, &mut self.k[0])
+            .map_err(|reason| IntegrationError::Rhs { t, reason })?;
         self.stats.f_evals += 1;
         self.f_prev.copy_from_slice(&self.k[0]);
         Ok(())

@@ -28,24 +28,43 @@ pub struct StoTable {
 #[derive(Debug, thiserror::Error)]
 pub enum StoError {
     #[error("{file}: {source}")]
-    Io { file: PathBuf, source: std::io::Error },
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{file}: line {line}: {reason}")]
-    Parse { file: PathBuf, line: usize, reason: String },
+    Parse {
+        file: PathBuf,
+        line: usize,
+        reason: String,
+    },
     #[error("{file}: column '{column}': {reason}")]
-    Column { file: PathBuf, column: String, reason: String },
+    Column {
+        file: PathBuf,
+        column: String,
+        reason: String,
+    },
 }
 
 fn fmt_value(v: f64) -> String {
     if v.is_nan() {
         "NaN".into()
     } else if v.is_infinite() {
-        if v > 0.0 { "Inf".into() } else { "-Inf".into() }
+        if v > 0.0 {
+            "Inf".into()
+        } else {
+            "-Inf".into()
+        }
     } else {
         // 16 significant digits, like setprecision(16) in the default format.
         let s = format!("{:.15e}", v);
         let parsed: f64 = s.parse().unwrap_or(v);
         let plain = format!("{parsed}");
-        if plain.len() <= 24 { plain } else { s }
+        if plain.len() <= 24 {
+            plain
+        } else {
+            s
+        }
     }
 }
 
@@ -61,23 +80,44 @@ impl StoTable {
         }
         let _ = writeln!(out, "DataType=double");
         let _ = writeln!(out, "version=3");
-        let _ = writeln!(out, "OpenSimVersion=4.6 (written by leap {})", env!("CARGO_PKG_VERSION"));
+        let _ = writeln!(
+            out,
+            "OpenSimVersion=4.6 (written by leap {})",
+            env!("CARGO_PKG_VERSION")
+        );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|source| StoError::Io { file: path.into(), source })
+        std::fs::write(path, out).map_err(|source| StoError::Io {
+            file: path.into(),
+            source,
+        })
     }
 
     /// Write as a version-1 motion file (`.mot`), as OpenSim's Storage does.
     pub fn write_mot(&self, path: &Path) -> Result<(), StoError> {
         let mut out = String::new();
-        let _ = writeln!(out, "{}", self.name.clone().unwrap_or_else(|| "leap".into()));
+        let _ = writeln!(
+            out,
+            "{}",
+            self.name.clone().unwrap_or_else(|| "leap".into())
+        );
         let _ = writeln!(out, "version=1");
         let _ = writeln!(out, "nRows={}", self.time.len());
         let _ = writeln!(out, "nColumns={}", self.labels.len() + 1);
-        let _ = writeln!(out, "inDegrees={}", self.metadata.get("inDegrees").map(String::as_str).unwrap_or("no"));
+        let _ = writeln!(
+            out,
+            "inDegrees={}",
+            self.metadata
+                .get("inDegrees")
+                .map(String::as_str)
+                .unwrap_or("no")
+        );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|source| StoError::Io { file: path.into(), source })
+        std::fs::write(path, out).map_err(|source| StoError::Io {
+            file: path.into(),
+            source,
+        })
     }
 
     fn write_body(&self, out: &mut String) {
@@ -99,13 +139,20 @@ impl StoTable {
 
     /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF).
     pub fn read(path: &Path) -> Result<Self, StoError> {
-        let text = std::fs::read_to_string(path).map_err(|source| StoError::Io { file: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| StoError::Io {
+            file: path.into(),
+            source,
+        })?;
         Self::parse(&text, path)
     }
 
     /// Parse the text of a storage file; `path` names it in errors.
     pub fn parse(text: &str, path: &Path) -> Result<Self, StoError> {
-        let perr = |line: usize, reason: String| StoError::Parse { file: path.into(), line, reason };
+        let perr = |line: usize, reason: String| StoError::Parse {
+            file: path.into(),
+            line,
+            reason,
+        };
         let mut table = StoTable::default();
         let mut lines = text.lines().enumerate();
         let mut found_end = false;
@@ -117,7 +164,10 @@ impl StoTable {
             }
             if let Some((k, v)) = line.split_once('=') {
                 let k = k.trim();
-                if !matches!(k, "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns") {
+                if !matches!(
+                    k,
+                    "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns"
+                ) {
                     table.metadata.insert(k.to_string(), v.trim().to_string());
                 }
             } else if i == 0 && !line.is_empty() {
@@ -134,16 +184,30 @@ impl StoTable {
                     continue;
                 }
                 Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r')),
-                None => return Err(perr(text.lines().count(), "no column labels after 'endheader'".into())),
+                None => {
+                    return Err(perr(
+                        text.lines().count(),
+                        "no column labels after 'endheader'".into(),
+                    ))
+                }
             }
         };
         let labels: Vec<String> = if labels_raw.contains('\t') {
-            labels_raw.split('\t').map(|s| s.trim().to_string()).collect()
+            labels_raw
+                .split('\t')
+                .map(|s| s.trim().to_string())
+                .collect()
         } else {
             labels_raw.split_whitespace().map(str::to_string).collect()
         };
         if labels.first().map(String::as_str) != Some("time") {
-            return Err(perr(label_line, format!("the first column must be 'time', got '{}'", labels.first().cloned().unwrap_or_default())));
+            return Err(perr(
+                label_line,
+                format!(
+                    "the first column must be 'time', got '{}'",
+                    labels.first().cloned().unwrap_or_default()
+                ),
+            ));
         }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
@@ -151,9 +215,16 @@ impl StoTable {
             if line.is_empty() {
                 continue;
             }
-            let cells: Vec<&str> = if line.contains('\t') { line.split('\t').map(str::trim).collect() } else { line.split_whitespace().collect() };
+            let cells: Vec<&str> = if line.contains('\t') {
+                line.split('\t').map(str::trim).collect()
+            } else {
+                line.split_whitespace().collect()
+            };
             if cells.len() != labels.len() {
-                return Err(perr(i + 1, format!("{} values, expected {}", cells.len(), labels.len())));
+                return Err(perr(
+                    i + 1,
+                    format!("{} values, expected {}", cells.len(), labels.len()),
+                ));
             }
             let mut vals = Vec::with_capacity(cells.len());
             for (c, cell) in cells.iter().enumerate() {
@@ -161,7 +232,12 @@ impl StoTable {
                     "NaN" | "nan" => f64::NAN,
                     "Inf" | "inf" => f64::INFINITY,
                     "-Inf" | "-inf" => f64::NEG_INFINITY,
-                    s => s.parse().map_err(|_| perr(i + 1, format!("column '{}': '{s}' is not a number", labels[c])))?,
+                    s => s.parse().map_err(|_| {
+                        perr(
+                            i + 1,
+                            format!("column '{}': '{s}' is not a number", labels[c]),
+                        )
+                    })?,
                 };
                 vals.push(v);
             }
@@ -201,41 +277,73 @@ impl Controls {
     /// As [`Self::from_file`] for a parsed table.
     pub fn from_table(t: &StoTable, path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
         if t.time.is_empty() {
-            return Err(StoError::Parse { file: path.into(), line: 0, reason: "no data rows".into() });
+            return Err(StoError::Parse {
+                file: path.into(),
+                line: 0,
+                reason: "no data rows".into(),
+            });
         }
         for k in 0..t.time.len() {
             if !t.time[k].is_finite() {
-                return Err(StoError::Column { file: path.into(), column: "time".into(), reason: format!("row {} is not finite", k + 1) });
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: "time".into(),
+                    reason: format!("row {} is not finite", k + 1),
+                });
             }
             if k > 0 && t.time[k] <= t.time[k - 1] {
                 return Err(StoError::Column {
                     file: path.into(),
                     column: "time".into(),
-                    reason: format!("not strictly increasing: row {} has t = {} after t = {}", k + 1, t.time[k], t.time[k - 1]),
+                    reason: format!(
+                        "not strictly increasing: row {} has t = {} after t = {}",
+                        k + 1,
+                        t.time[k],
+                        t.time[k - 1]
+                    ),
                 });
             }
         }
         let mut cols = Vec::with_capacity(muscles.len());
         for m in muscles {
-            let names = [format!("/forceset/{m}"), m.to_string(), format!("{m}.excitation")];
+            let names = [
+                format!("/forceset/{m}"),
+                m.to_string(),
+                format!("{m}.excitation"),
+            ];
             let k = names
                 .iter()
                 .find_map(|n| t.labels.iter().position(|l| l == n))
-                .ok_or_else(|| StoError::Column { file: path.into(), column: format!("/forceset/{m}"), reason: format!("missing: no excitation column for muscle '{m}'") })?;
+                .ok_or_else(|| StoError::Column {
+                    file: path.into(),
+                    column: format!("/forceset/{m}"),
+                    reason: format!("missing: no excitation column for muscle '{m}'"),
+                })?;
             for (r, row) in t.rows.iter().enumerate() {
                 let v = row[k];
                 if !v.is_finite() || !(0.0..=1.0).contains(&v) {
                     return Err(StoError::Column {
                         file: path.into(),
                         column: t.labels[k].clone(),
-                        reason: format!("row {} (t = {}): excitation {v} is not a number in [0, 1]", r + 1, t.time[r]),
+                        reason: format!(
+                            "row {} (t = {}): excitation {v} is not a number in [0, 1]",
+                            r + 1,
+                            t.time[r]
+                        ),
                     });
                 }
             }
             cols.push(k);
         }
-        let values = t.rows.iter().map(|row| cols.iter().map(|&k| row[k]).collect()).collect();
-        Ok(Controls { time: t.time.clone(), values })
+        let values = t
+            .rows
+            .iter()
+            .map(|row| cols.iter().map(|&k| row[k]).collect())
+            .collect();
+        Ok(Controls {
+            time: t.time.clone(),
+            values,
+        })
     }
 
     /// Excitations at time `t` into `out`.

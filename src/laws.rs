@@ -142,7 +142,11 @@ impl Thelen {
     #[inline]
     pub fn rates<S: Scalar>(&self, a: S, lm_state: S, lmt: S, u: S) -> MuscleRates<S> {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
-        let lm = if lm_state.re() < self.min_fiber_length { c(self.min_fiber_length) } else { lm_state };
+        let lm = if lm_state.re() < self.min_fiber_length {
+            c(self.min_fiber_length)
+        } else {
+            lm_state
+        };
         let (_, cos_phi) = self.pennation_sin_cos(lm);
         let ln = lm / self.lopt;
         let fse = self.fse((lmt - lm * cos_phi) / self.lts - 1.0);
@@ -151,7 +155,11 @@ impl Thelen {
         if lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0 {
             vn = S::zero();
         }
-        MuscleRates { tendon_force: fse * self.f0, fiber_velocity: vn * (self.vmax * self.lopt), activation_rate: self.activation_rate(a, u) }
+        MuscleRates {
+            tendon_force: fse * self.f0,
+            fiber_velocity: vn * (self.vmax * self.lopt),
+            activation_rate: self.activation_rate(a, u),
+        }
     }
 
     /// Normalised fibre velocity from Thelen's inverted force-velocity curve
@@ -164,7 +172,10 @@ impl Thelen {
             if f.re() <= a_big.re() {
                 (a_big + f / af, c(1.0 / af))
             } else {
-                ((a_big * flen - f) * ((2.0 + 2.0 / af) / (flen - 1.0)), c(-(2.0 + 2.0 / af) / (flen - 1.0)))
+                (
+                    (a_big * flen - f) * ((2.0 + 2.0 / af) / (flen - 1.0)),
+                    c(-(2.0 + 2.0 / af) / (flen - 1.0)),
+                )
             }
         };
         let knee = a_big * (FV_THRESHOLD * flen);
@@ -183,14 +194,22 @@ impl Thelen {
     /// Activation rate (OpenSim 4.x: excitation not clamped; §1.1).
     pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
-        let tau = if u.re() > ac.re() { (ac * 1.5 + 0.5) * self.tau_act } else { (ac * 1.5 + 0.5).recip() * self.tau_deact };
+        let tau = if u.re() > ac.re() {
+            (ac * 1.5 + 0.5) * self.tau_act
+        } else {
+            (ac * 1.5 + 0.5).recip() * self.tau_deact
+        };
         (u - ac) / tau
     }
 
     /// The muscle's state derivatives and outputs (§2.2-§2.6).
     pub fn calc<S: Scalar>(&self, a: S, lm_state: S, lmt: S, _vmt: S, u: S) -> ThelenInfo<S> {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
-        let lm = if lm_state.re() < self.min_fiber_length { c(self.min_fiber_length) } else { lm_state };
+        let lm = if lm_state.re() < self.min_fiber_length {
+            c(self.min_fiber_length)
+        } else {
+            lm_state
+        };
         let phi = self.pennation(lm);
         let (_, cos_phi) = self.pennation_sin_cos(lm);
         let lt = lmt - lm * cos_phi;
@@ -212,7 +231,11 @@ impl Thelen {
             pennation_angle: phi,
             tendon_length: lt,
             tendon_force: fse * self.f0,
-            active_fiber_force: if clamped { S::zero() } else { ac * fal * fv * self.f0 },
+            active_fiber_force: if clamped {
+                S::zero()
+            } else {
+                ac * fal * fv * self.f0
+            },
             passive_fiber_force: if clamped { S::zero() } else { fpe * self.f0 },
             normalized_fiber_length: ln,
             normalized_fiber_velocity: vn,
@@ -279,7 +302,12 @@ fn clamp<S: Scalar>(x: S, lo: f64, hi: f64) -> S {
 /// contact point (centre velocity plus ω × r: rolling does not slip).
 /// One contact element per sphere, so HuntCrossleyForce's "return" quirk
 /// across spheres does not arise.
-pub fn sphere_ground_force<S: Scalar>(spec: &ContactSpec, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+pub fn sphere_ground_force<S: Scalar>(
+    spec: &ContactSpec,
+    r: f64,
+    p: [S; 3],
+    v: [S; 3],
+) -> ([S; 3], [S; 3]) {
     sphere_ground_force_k(spec, hertz_k(spec.stiffness), r, p, v)
 }
 
@@ -290,11 +318,22 @@ pub fn hertz_k(stiffness: f64) -> f64 {
 
 /// [`sphere_ground_force`] with the combined Hertz constant `k` precomputed.
 #[inline]
-pub fn sphere_ground_force_k<S: Scalar>(spec: &ContactSpec, k: f64, r: f64, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+pub fn sphere_ground_force_k<S: Scalar>(
+    spec: &ContactSpec,
+    k: f64,
+    r: f64,
+    p: [S; 3],
+    v: [S; 3],
+) -> ([S; 3], [S; 3]) {
     let depth = p[1] * -1.0 + r;
     // v_n: penetration rate (the sphere moving into the ground).
     let vn = v[1] * -1.0;
-    let (mus, mud, muv, vt) = (spec.static_friction, spec.dynamic_friction, spec.viscous_friction, spec.transition_velocity);
+    let (mus, mud, muv, vt) = (
+        spec.static_friction,
+        spec.dynamic_friction,
+        spec.viscous_friction,
+        spec.transition_velocity,
+    );
     let point = [p[0], p[1] - (depth * -0.5 + r), p[2]];
     match spec.law {
         ContactLaw::HuntCrossleyForce => {
@@ -312,7 +351,8 @@ pub fn sphere_ground_force_k<S: Scalar>(spec: &ContactSpec, k: f64, r: f64, p: [
             }
             let vs = vs2.sqrt();
             let vr = vs / vt;
-            let ff = f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
+            let ff =
+                f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
             ([v[0] / vs * -ff, f, v[2] / vs * -ff], point)
         }
         ContactLaw::SmoothSphereHalfSpaceForce => {
@@ -320,13 +360,25 @@ pub fn sphere_ground_force_k<S: Scalar>(spec: &ContactSpec, k: f64, r: f64, p: [
             let bd = spec.hertz_smoothing.unwrap_or(300.0);
             let bv = spec.hunt_crossley_smoothing.unwrap_or(50.0);
             let d2 = (depth * depth + cf).sqrt();
-            let fh = d2 * d2.sqrt() * (4.0 / 3.0 * k * (r * k).sqrt()) * ((depth * bd).tanh() * 0.5 + 0.5);
-            let shift = if spec.dissipation == 0.0 { f64::INFINITY } else { 2.0 / (3.0 * spec.dissipation) };
-            let sw = if shift.is_infinite() { S::one() } else { ((vn + shift) * bv).tanh() * 0.5 + 0.5 };
+            let fh = d2
+                * d2.sqrt()
+                * (4.0 / 3.0 * k * (r * k).sqrt())
+                * ((depth * bd).tanh() * 0.5 + 0.5);
+            let shift = if spec.dissipation == 0.0 {
+                f64::INFINITY
+            } else {
+                2.0 / (3.0 * spec.dissipation)
+            };
+            let sw = if shift.is_infinite() {
+                S::one()
+            } else {
+                ((vn + shift) * bv).tanh() * 0.5 + 0.5
+            };
             let f = fh * (vn * (1.5 * spec.dissipation) + 1.0) * sw;
             let vs = (v[0] * v[0] + v[2] * v[2] + cf).sqrt();
             let vr = vs / vt;
-            let ff = f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
+            let ff =
+                f * (min1(vr) * ((vr * vr + 1.0).recip() * (2.0 * (mus - mud)) + mud) + vs * muv);
             ([v[0] / vs * -ff, f, v[2] / vs * -ff], point)
         }
     }
@@ -368,8 +420,18 @@ pub struct DeGroote {
 }
 
 const DG_B: [[f64; 4]; 3] = [
-    [0.8150671134243542, 1.055033428970575, 0.162384573599574, 0.063303448465465],
-    [0.433004984392647, 0.716775413397760, -0.029947116970696, 0.200356847296188],
+    [
+        0.8150671134243542,
+        1.055033428970575,
+        0.162384573599574,
+        0.063303448465465,
+    ],
+    [
+        0.433004984392647,
+        0.716775413397760,
+        -0.029947116970696,
+        0.200356847296188,
+    ],
     [0.1, 1.0, 0.353553390593274, 0.0],
 ];
 const DG_D: [f64; 4] = [-0.3211346127989808, -8.149, -0.374, 0.8825327733249912];
@@ -525,28 +587,55 @@ impl OpenSimLaws {
                 .iter()
                 .map(|m| match model.muscle_model {
                     MuscleModel::Thelen2003Muscle => MuscleLaw::Thelen(Thelen::new(&m.spec)),
-                    MuscleModel::DeGrooteFregly2016Muscle => MuscleLaw::DeGroote(DeGroote::new(&m.spec)),
+                    MuscleModel::DeGrooteFregly2016Muscle => {
+                        MuscleLaw::DeGroote(DeGroote::new(&m.spec))
+                    }
                 })
                 .collect(),
             contact: model.contact.as_ref().map(|c| c.spec.clone()),
-            contact_k: model.contact.as_ref().map(|c| hertz_k(c.spec.stiffness)).unwrap_or(0.0),
-            radii: model.contact.as_ref().map(|c| c.spheres.iter().map(|s| s.radius).collect()).unwrap_or_default(),
+            contact_k: model
+                .contact
+                .as_ref()
+                .map(|c| hertz_k(c.spec.stiffness))
+                .unwrap_or(0.0),
+            radii: model
+                .contact
+                .as_ref()
+                .map(|c| c.spheres.iter().map(|s| s.radius).collect())
+                .unwrap_or_default(),
             ligaments: model.ligaments.iter().map(|l| l.spec.clone()).collect(),
         })
     }
 }
 
 impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
-    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
+    fn muscle(
+        &self,
+        m: usize,
+        a: S,
+        lm: S,
+        lmt: S,
+        vmt: S,
+        u: S,
+    ) -> Result<MuscleRates<S>, String> {
         let r = match &self.muscles[m] {
             MuscleLaw::Thelen(t) => t.rates(a, lm, lmt, u),
             law => {
                 let info = law.calc(a, lm, lmt, vmt, u);
-                MuscleRates { tendon_force: info.tendon_force, fiber_velocity: info.fiber_velocity, activation_rate: info.activation_rate }
+                MuscleRates {
+                    tendon_force: info.tendon_force,
+                    fiber_velocity: info.fiber_velocity,
+                    activation_rate: info.activation_rate,
+                }
             }
         };
         if !r.fiber_velocity.re().is_finite() || !r.tendon_force.re().is_finite() {
-            return Err(format!("non-finite fibre velocity or tendon force (a = {}, l_M = {}, l_MT = {})", a.re(), lm.re(), lmt.re()));
+            return Err(format!(
+                "non-finite fibre velocity or tendon force (a = {}, l_M = {}, l_MT = {})",
+                a.re(),
+                lm.re(),
+                lmt.re()
+            ));
         }
         Ok(r)
     }

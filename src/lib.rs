@@ -8,23 +8,23 @@
 // Index loops mirror the equations they implement.
 #![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
 
-pub mod scalar;
-pub mod spline;
-pub mod path;
+pub mod bench;
+pub mod crosscheck;
+pub mod eval;
+pub mod integrator;
+pub mod io;
+pub mod laws;
 pub mod model;
 pub mod multibody;
-pub mod simbody;
-pub mod crosscheck;
-pub mod bench;
-pub mod io;
-pub mod integrator;
-pub mod ode;
-pub mod laws;
-pub mod simulate;
-pub mod squat;
-pub mod eval;
 pub mod nlp;
-pub mod sqp;
-pub mod testset;
 pub mod ocp;
+pub mod ode;
+pub mod path;
+pub mod scalar;
+pub mod simbody;
+pub mod simulate;
+pub mod spline;
+pub mod sqp;
+pub mod squat;
+pub mod testset;
 pub mod transcription;

@@ -6,7 +6,11 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 #[derive(Parser)]
-#[command(name = "leap", version, about = "Predict human movement by optimal control (OpenSim-compatible models).")]
+#[command(
+    name = "leap",
+    version,
+    about = "Predict human movement by optimal control (OpenSim-compatible models)."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -167,7 +171,12 @@ fn main() -> ExitCode {
 
 fn run(cli: Cli) -> Result<ExitCode> {
     match cli.command {
-        Command::Crosscheck { model, samples, seed, json } => {
+        Command::Crosscheck {
+            model,
+            samples,
+            seed,
+            json,
+        } => {
             if samples == 0 {
                 anyhow::bail!("--samples must be at least 1");
             }
@@ -179,36 +188,91 @@ fn run(cli: Cli) -> Result<ExitCode> {
             } else {
                 println!("{}", report.table());
             }
-            Ok(if report.passed { ExitCode::SUCCESS } else { ExitCode::from(1) })
+            Ok(if report.passed {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(1)
+            })
         }
-        Command::Simulate { study, model, controls, integrator, accuracy, t_max, out, json } => {
-            simulate(study, model, controls, integrator, accuracy, t_max, out, json)
-        }
-        Command::Eval { model, input, full, json } => {
+        Command::Simulate {
+            study,
+            model,
+            controls,
+            integrator,
+            accuracy,
+            t_max,
+            out,
+            json,
+        } => simulate(
+            study, model, controls, integrator, accuracy, t_max, out, json,
+        ),
+        Command::Eval {
+            model,
+            input,
+            full,
+            json,
+        } => {
             let m = leap::model::Model::from_file(&model)?;
             let laws = leap::laws::OpenSimLaws::new(&m)?;
             let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
             let inputs = leap::eval::read_inputs(&eq, &input)?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {
-                reports.push(leap::eval::evaluate(&eq, &laws, x, u).with_context(|| format!("{}: evaluation {k}", input.display()))?);
+                reports.push(
+                    leap::eval::evaluate(&eq, &laws, x, u)
+                        .with_context(|| format!("{}: evaluation {k}", input.display()))?,
+                );
             }
             if json {
-                let v = if reports.len() == 1 { serde_json::to_value(&reports[0])? } else { serde_json::to_value(&reports)? };
+                let v = if reports.len() == 1 {
+                    serde_json::to_value(&reports[0])?
+                } else {
+                    serde_json::to_value(&reports)?
+                };
                 println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 for (k, r) in reports.iter().enumerate() {
                     println!("evaluation {k}");
                     let mut t = comfy_table::Table::new();
-                    t.set_header(["muscle", "L_MT (m)", "v_MT (m/s)", "l_M (m)", "v_M (m/s)", "pennation (rad)", "tendon force (N)", "moment arms (m)"]);
+                    t.set_header([
+                        "muscle",
+                        "L_MT (m)",
+                        "v_MT (m/s)",
+                        "l_M (m)",
+                        "v_M (m/s)",
+                        "pennation (rad)",
+                        "tendon force (N)",
+                        "moment arms (m)",
+                    ]);
                     for (name, mr) in &r.muscles {
-                        let arms: Vec<String> = mr.moment_arms.iter().map(|(c, v)| format!("{c} {v:+.4}")).collect();
-                        t.add_row([name.clone(), format!("{:.5}", mr.length), format!("{:+.4}", mr.lengthening_speed), format!("{:.5}", mr.fiber_length), format!("{:+.4}", mr.fiber_velocity), format!("{:.4}", mr.pennation_angle), format!("{:.2}", mr.tendon_force), arms.join(", ")]);
+                        let arms: Vec<String> = mr
+                            .moment_arms
+                            .iter()
+                            .map(|(c, v)| format!("{c} {v:+.4}"))
+                            .collect();
+                        t.add_row([
+                            name.clone(),
+                            format!("{:.5}", mr.length),
+                            format!("{:+.4}", mr.lengthening_speed),
+                            format!("{:.5}", mr.fiber_length),
+                            format!("{:+.4}", mr.fiber_velocity),
+                            format!("{:.4}", mr.pennation_angle),
+                            format!("{:.2}", mr.tendon_force),
+                            arms.join(", "),
+                        ]);
                     }
                     println!("{t}");
-                    let acc: Vec<String> = r.accelerations.iter().map(|(c, v)| format!("{c} {v:+.4e}")).collect();
+                    let acc: Vec<String> = r
+                        .accelerations
+                        .iter()
+                        .map(|(c, v)| format!("{c} {v:+.4e}"))
+                        .collect();
                     println!("q̈: {}", acc.join(", "));
-                    let lig: Vec<String> = r.ligament_torques.iter().map(|(c, v)| format!("{c} {v:+.3}")).collect();
+                    let lig: Vec<String> = r
+                        .ligament_torques
+                        .iter()
+                        .map(|(c, v)| format!("{c} {v:+.3}"))
+                        .collect();
                     println!("passive torques (N·m): {}", lig.join(", "));
                     let fy: f64 = r.contact_forces.values().map(|f| f[1]).sum();
                     println!("total vertical contact force: {fy:.2} N");
@@ -219,16 +283,39 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Paths { model, pose, json } => {
             let m = leap::model::Model::from_file(&model)?;
             let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
-            let q = m.poses.get(&pose).cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: no pose '{pose}' (have: {})", model.display(), m.poses.keys().cloned().collect::<Vec<_>>().join(", ")))?;
+            let q = m.poses.get(&pose).cloned().ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: poses: no pose '{pose}' (have: {})",
+                    model.display(),
+                    m.poses.keys().cloned().collect::<Vec<_>>().join(", ")
+                )
+            })?;
             let jumps = leap::eval::switch_jumps(&eq, &q);
             let largest = jumps.iter().map(|j| j.jump_m.abs()).fold(0.0, f64::max);
             if json {
-                println!("{}", serde_json::to_string_pretty(&serde_json::json!({"pose": pose, "largest_jump_m": largest, "switches": jumps}))?);
+                println!(
+                    "{}",
+                    serde_json::to_string_pretty(
+                        &serde_json::json!({"pose": pose, "largest_jump_m": largest, "switches": jumps})
+                    )?
+                );
             } else {
                 let mut t = comfy_table::Table::new();
-                t.set_header(["muscle", "point", "coordinate", "switch at (rad)", "length jump (mm)"]);
+                t.set_header([
+                    "muscle",
+                    "point",
+                    "coordinate",
+                    "switch at (rad)",
+                    "length jump (mm)",
+                ]);
                 for j in &jumps {
-                    t.add_row([j.muscle.clone(), format!("P{}", j.point), j.coordinate.clone(), format!("{:.6}", j.at), format!("{:+.4}", 1e3 * j.jump_m)]);
+                    t.add_row([
+                        j.muscle.clone(),
+                        format!("P{}", j.point),
+                        j.coordinate.clone(),
+                        format!("{:.6}", j.at),
+                        format!("{:+.4}", 1e3 * j.jump_m),
+                    ]);
                 }
                 println!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
             }
@@ -238,15 +325,30 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let m = leap::model::Model::from_file(&model)?;
             let laws = leap::laws::OpenSimLaws::new(&m)?;
             let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
-            let pose = m.poses.get("squat").cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: no 'squat' pose", model.display()))?;
+            let pose =
+                m.poses.get("squat").cloned().ok_or_else(|| {
+                    anyhow::anyhow!("{}: poses: no 'squat' pose", model.display())
+                })?;
             let sq = leap::squat::static_squat(&eq, &laws, &pose)?;
-            let state: serde_json::Map<String, serde_json::Value> = eq.state_names().into_iter().zip(sq.x.iter()).map(|(n, v)| (n, serde_json::json!(v))).collect();
-            let exc: serde_json::Map<String, serde_json::Value> = eq.control_names().into_iter().zip(sq.excitation.iter()).map(|(n, v)| (n, serde_json::json!(v))).collect();
+            let state: serde_json::Map<String, serde_json::Value> = eq
+                .state_names()
+                .into_iter()
+                .zip(sq.x.iter())
+                .map(|(n, v)| (n, serde_json::json!(v)))
+                .collect();
+            let exc: serde_json::Map<String, serde_json::Value> = eq
+                .control_names()
+                .into_iter()
+                .zip(sq.excitation.iter())
+                .map(|(n, v)| (n, serde_json::json!(v)))
+                .collect();
             let v = serde_json::json!({"state": state, "excitation": exc, "max_abs_qdd": sq.max_abs_qdd, "vertical_grf_bw": sq.vertical_grf_bw, "qp_iterations": sq.qp_iterations});
             println!("{}", serde_json::to_string_pretty(&v)?);
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::StateEquation { model, json } } => {
+        Command::Bench {
+            which: BenchCommand::StateEquation { model, json },
+        } => {
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::state_equation(&m)?;
             if json {
@@ -256,7 +358,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::Integrators { model, json } } => {
+        Command::Bench {
+            which: BenchCommand::Integrators { model, json },
+        } => {
             let m = leap::model::Model::from_file(&model)?;
             let cases = [
                 ("RungeKuttaMerson", 1e-3),
@@ -278,7 +382,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::Sqp { repeats, json } } => {
+        Command::Bench {
+            which: BenchCommand::Sqp { repeats, json },
+        } => {
             let rows = leap::bench::sqp_test_set(repeats);
             if json {
                 println!("{}", serde_json::to_string_pretty(&rows)?);
@@ -287,10 +393,22 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::SqpJump { model, iterations, hessian, no_equilibrate, json } } => {
+        Command::Bench {
+            which:
+                BenchCommand::SqpJump {
+                    model,
+                    iterations,
+                    hessian,
+                    no_equilibrate,
+                    json,
+                },
+        } => {
             let m = leap::model::Model::from_file(&model)?;
-            let mode: leap::sqp::HessianMode = hessian.parse().map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
-            let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate).map_err(|e| anyhow::anyhow!(e))?;
+            let mode: leap::sqp::HessianMode = hessian
+                .parse()
+                .map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
+            let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate)
+                .map_err(|e| anyhow::anyhow!(e))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
@@ -298,7 +416,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             }
             Ok(ExitCode::SUCCESS)
         }
-        Command::Bench { which: BenchCommand::Dynamics { model, json } } => {
+        Command::Bench {
+            which: BenchCommand::Dynamics { model, json },
+        } => {
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::dynamics(&m)?;
             if json {
@@ -327,14 +447,22 @@ fn simulate(
     // Study file first (paths relative to it), then command-line overrides.
     let (mut st, base) = match &study {
         Some(p) => {
-            let text = std::fs::read_to_string(p).with_context(|| format!("{}: cannot read the study file", p.display()))?;
+            let text = std::fs::read_to_string(p)
+                .with_context(|| format!("{}: cannot read the study file", p.display()))?;
             let de = &mut serde_json::Deserializer::from_str(&text);
-            let st: SimulateStudy = serde_path_to_error::deserialize(de).map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?;
+            let st: SimulateStudy = serde_path_to_error::deserialize(de)
+                .map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?;
             (st, p.parent().map(|d| d.to_path_buf()).unwrap_or_default())
         }
         None => (SimulateStudy::default(), PathBuf::new()),
     };
-    let rel = |s: &str| -> PathBuf { if study.is_some() { base.join(s) } else { PathBuf::from(s) } };
+    let rel = |s: &str| -> PathBuf {
+        if study.is_some() {
+            base.join(s)
+        } else {
+            PathBuf::from(s)
+        }
+    };
     let model_path = model.unwrap_or_else(|| rel(&st.model));
     let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
     let out_dir = out.unwrap_or_else(|| rel(&st.out));
@@ -347,7 +475,10 @@ fn simulate(
     if let Some(t) = t_max {
         st.t_max = t;
     }
-    let where_ = study.as_ref().map(|p| format!("{}: ", p.display())).unwrap_or_default();
+    let where_ = study
+        .as_ref()
+        .map(|p| format!("{}: ", p.display()))
+        .unwrap_or_default();
     if !(st.accuracy.is_finite() && st.accuracy > 0.0) {
         anyhow::bail!("{where_}accuracy: must be positive, got {}", st.accuracy);
     }
@@ -355,19 +486,36 @@ fn simulate(
         anyhow::bail!("{where_}t_max: must be positive, got {}", st.t_max);
     }
     if !(st.report_interval.is_finite() && st.report_interval > 0.0) {
-        anyhow::bail!("{where_}report_interval: must be positive, got {}", st.report_interval);
+        anyhow::bail!(
+            "{where_}report_interval: must be positive, got {}",
+            st.report_interval
+        );
     }
-    let choice = parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
+    let choice =
+        parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
     let m = leap::model::Model::from_file(&model_path)?;
     let laws = leap::laws::OpenSimLaws::new(&m)?;
     let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
-    let pose = m.poses.get("squat").cloned().ok_or_else(|| anyhow::anyhow!("{}: poses: the model has no 'squat' pose to start from", model_path.display()))?;
+    let pose = m.poses.get("squat").cloned().ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: poses: the model has no 'squat' pose to start from",
+            model_path.display()
+        )
+    })?;
     let squat = leap::squat::static_squat(&eq, &laws, &pose)?;
-    let names: Vec<&str> = eq.muscles.iter().map(|&k| m.muscles[k].spec.name.as_str()).collect();
+    let names: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&k| m.muscles[k].spec.name.as_str())
+        .collect();
     let exc = match &controls_path {
         Some(p) => StudyExcitation::Controls(leap::io::Controls::from_file(p, &names)?),
         None => {
-            let bb = st.bang_bang.clone().unwrap_or(BangBangSpec { on: None, on_time: 0.0, off_time: f64::INFINITY });
+            let bb = st.bang_bang.clone().unwrap_or(BangBangSpec {
+                on: None,
+                on_time: 0.0,
+                off_time: f64::INFINITY,
+            });
             let on: Vec<bool> = match &bb.on {
                 Some(list) => {
                     for n in list {
@@ -377,10 +525,22 @@ fn simulate(
                     }
                     names.iter().map(|n| list.iter().any(|l| l == n)).collect()
                 }
-                None => extensor_moments(&eq, &pose).iter().map(|&e| e > 0.0).collect(),
+                None => extensor_moments(&eq, &pose)
+                    .iter()
+                    .map(|&e| e > 0.0)
+                    .collect(),
             };
             StudyExcitation::BangBang(BangBang {
-                intervals: on.iter().map(|&o| if o { Some((bb.on_time, bb.off_time)) } else { None }).collect(),
+                intervals: on
+                    .iter()
+                    .map(|&o| {
+                        if o {
+                            Some((bb.on_time, bb.off_time))
+                        } else {
+                            None
+                        }
+                    })
+                    .collect(),
                 off_level: leap::laws::MIN_ACTIVATION,
             })
         }
@@ -388,31 +548,73 @@ fn simulate(
     let standing = standing_com_height(&eq);
     let result = match choice {
         IntegratorChoice::DormandPrince => {
-            let opts = SimulateOptions { integrator: leap::integrator::Dopri5Options { accuracy: st.accuracy, ..Default::default() }, t_max: st.t_max };
+            let opts = SimulateOptions {
+                integrator: leap::integrator::Dopri5Options {
+                    accuracy: st.accuracy,
+                    ..Default::default()
+                },
+                t_max: st.t_max,
+            };
             simulate_rust(&eq, &laws, &exc, &squat.x, standing, opts)
         }
-        IntegratorChoice::Simbody(which) => {
-            simulate_simbody(&Arc::new(eq.clone()), &Arc::new(laws.clone()), &exc, &squat.x, standing, which, st.accuracy, st.t_max, st.report_interval)
-        }
+        IntegratorChoice::Simbody(which) => simulate_simbody(
+            &Arc::new(eq.clone()),
+            &Arc::new(laws.clone()),
+            &exc,
+            &squat.x,
+            standing,
+            which,
+            st.accuracy,
+            st.t_max,
+            st.report_interval,
+        ),
     };
-    std::fs::create_dir_all(&out_dir).with_context(|| format!("{}: cannot create the results directory", out_dir.display()))?;
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("{}: cannot create the results directory", out_dir.display()))?;
     match result {
         Ok((summary, traj)) => {
             let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
             let mut v = serde_json::to_value(&summary)?;
-            v["files"] = serde_json::json!(files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>());
+            v["files"] = serde_json::json!(files
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect::<Vec<_>>());
             v["static_squat_max_abs_qdd"] = serde_json::json!(squat.max_abs_qdd);
-            std::fs::write(out_dir.join("jump_summary.json"), serde_json::to_string_pretty(&v)?)?;
+            std::fs::write(
+                out_dir.join("jump_summary.json"),
+                serde_json::to_string_pretty(&v)?,
+            )?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&v)?);
             } else {
-                let f = |o: Option<f64>, scale: f64, unit: &str| o.map(|v| format!("{:.3} {unit}", v * scale)).unwrap_or_else(|| "-".into());
-                println!("forward jump ({}, accuracy {:e}) from the static squat", summary.integrator, summary.accuracy);
-                println!("  jump height            {:.1} cm", 100.0 * summary.jump_height_m);
-                println!("  lift-off time          {}", f(summary.liftoff_time_s, 1.0, "s"));
-                println!("  lift-off COM velocity  {}", f(summary.liftoff_com_velocity_mps, 1.0, "m/s"));
-                println!("  peak vertical GRF      {:.2} BW", summary.peak_vertical_grf_bw);
-                println!("  steps {} (rejected {}), f evaluations {}, wall {:.3} s", summary.steps, summary.rejected_steps, summary.f_evals, summary.wall_time_s);
+                let f = |o: Option<f64>, scale: f64, unit: &str| {
+                    o.map(|v| format!("{:.3} {unit}", v * scale))
+                        .unwrap_or_else(|| "-".into())
+                };
+                println!(
+                    "forward jump ({}, accuracy {:e}) from the static squat",
+                    summary.integrator, summary.accuracy
+                );
+                println!(
+                    "  jump height            {:.1} cm",
+                    100.0 * summary.jump_height_m
+                );
+                println!(
+                    "  lift-off time          {}",
+                    f(summary.liftoff_time_s, 1.0, "s")
+                );
+                println!(
+                    "  lift-off COM velocity  {}",
+                    f(summary.liftoff_com_velocity_mps, 1.0, "m/s")
+                );
+                println!(
+                    "  peak vertical GRF      {:.2} BW",
+                    summary.peak_vertical_grf_bw
+                );
+                println!(
+                    "  steps {} (rejected {}), f evaluations {}, wall {:.3} s",
+                    summary.steps, summary.rejected_steps, summary.f_evals, summary.wall_time_s
+                );
                 println!("  results in {}", out_dir.display());
             }
             Ok(ExitCode::SUCCESS)
@@ -420,10 +622,17 @@ fn simulate(
         Err(failure) => {
             let files = write_trajectory(&eq, &failure.trajectory, &out_dir, "jump")?;
             let names = eq.state_names();
-            let state: serde_json::Map<String, serde_json::Value> = names.iter().zip(&failure.state).map(|(n, v)| (n.clone(), serde_json::json!(v))).collect();
+            let state: serde_json::Map<String, serde_json::Value> = names
+                .iter()
+                .zip(&failure.state)
+                .map(|(n, v)| (n.clone(), serde_json::json!(v)))
+                .collect();
             let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
                 "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>()});
-            std::fs::write(out_dir.join("jump_summary.json"), serde_json::to_string_pretty(&v)?)?;
+            std::fs::write(
+                out_dir.join("jump_summary.json"),
+                serde_json::to_string_pretty(&v)?,
+            )?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&v)?);
             }

@@ -108,15 +108,33 @@ pub struct MuscleSpec {
 }
 
 // The legacy OpenSim 3.x values every gait2392 muscle carries (model-data.md §7.2).
-fn d_vmax() -> f64 { 10.0 }
-fn d_tau_act() -> f64 { 0.01 }
-fn d_tau_deact() -> f64 { 0.04 }
-fn d_tendon_strain() -> f64 { 0.033 }
-fn d_muscle_strain() -> f64 { 0.6 }
-fn d_kshape_active() -> f64 { 0.5 }
-fn d_kshape_passive() -> f64 { 4.0 }
-fn d_af() -> f64 { 0.3 }
-fn d_flen() -> f64 { 1.8 }
+fn d_vmax() -> f64 {
+    10.0
+}
+fn d_tau_act() -> f64 {
+    0.01
+}
+fn d_tau_deact() -> f64 {
+    0.04
+}
+fn d_tendon_strain() -> f64 {
+    0.033
+}
+fn d_muscle_strain() -> f64 {
+    0.6
+}
+fn d_kshape_active() -> f64 {
+    0.5
+}
+fn d_kshape_passive() -> f64 {
+    4.0
+}
+fn d_af() -> f64 {
+    0.3
+}
+fn d_flen() -> f64 {
+    1.8
+}
 
 /// A passive joint torque on one coordinate, the Anderson & Pandy (1999)
 /// exponential form with linear damping (model-equations.md §5.3):
@@ -205,9 +223,21 @@ pub struct BodySpec {
 pub enum JointSpec {
     /// Planar base: rotation about z, then translation along ground x and y.
     /// `coordinates` = [rotation, x translation, y translation].
-    Planar { name: String, parent: String, child: String, location_in_parent: [f64; 3], coordinates: [String; 3] },
+    Planar {
+        name: String,
+        parent: String,
+        child: String,
+        location_in_parent: [f64; 3],
+        coordinates: [String; 3],
+    },
     /// Hinge about z.
-    Pin { name: String, parent: String, child: String, location_in_parent: [f64; 3], coordinate: String },
+    Pin {
+        name: String,
+        parent: String,
+        child: String,
+        location_in_parent: [f64; 3],
+        coordinate: String,
+    },
     /// Hinge about z whose child origin translates along the parent's x and y
     /// as `SimmSpline` functions of the hinge angle (OpenSim's knee
     /// CustomJoint: translation1, translation2).
@@ -221,16 +251,44 @@ pub enum JointSpec {
         translation_y: SplineData,
     },
     /// No relative motion (OpenSim WeldJoint, or a locked joint at 0).
-    Weld { name: String, parent: String, child: String, location_in_parent: [f64; 3] },
+    Weld {
+        name: String,
+        parent: String,
+        child: String,
+        location_in_parent: [f64; 3],
+    },
 }
 
 impl JointSpec {
     fn common(&self) -> (&str, &str, &str, &[f64; 3]) {
         match self {
-            JointSpec::Planar { name, parent, child, location_in_parent, .. }
-            | JointSpec::Pin { name, parent, child, location_in_parent, .. }
-            | JointSpec::TranslatingHinge { name, parent, child, location_in_parent, .. }
-            | JointSpec::Weld { name, parent, child, location_in_parent } => (name, parent, child, location_in_parent),
+            JointSpec::Planar {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                ..
+            }
+            | JointSpec::Pin {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                ..
+            }
+            | JointSpec::TranslatingHinge {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                ..
+            }
+            | JointSpec::Weld {
+                name,
+                parent,
+                child,
+                location_in_parent,
+            } => (name, parent, child, location_in_parent),
         }
     }
 }
@@ -259,11 +317,22 @@ pub struct StationSpec {
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error("{file}: cannot read: {source}")]
-    Io { file: PathBuf, source: std::io::Error },
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
     #[error("{file}: {path}: {reason}")]
-    Parse { file: PathBuf, path: String, reason: String },
+    Parse {
+        file: PathBuf,
+        path: String,
+        reason: String,
+    },
     #[error("{file}: {path}: {reason}")]
-    Invalid { file: PathBuf, path: String, reason: String },
+    Invalid {
+        file: PathBuf,
+        path: String,
+        reason: String,
+    },
 }
 
 impl ModelError {
@@ -288,9 +357,17 @@ pub struct Body {
 /// What a validated joint does.
 #[derive(Debug, Clone)]
 pub enum JointKind {
-    Planar { coordinates: [usize; 3] },
-    Pin { coordinate: usize },
-    TranslatingHinge { coordinate: usize, translation_x: SimmSpline, translation_y: SimmSpline },
+    Planar {
+        coordinates: [usize; 3],
+    },
+    Pin {
+        coordinate: usize,
+    },
+    TranslatingHinge {
+        coordinate: usize,
+        translation_x: SimmSpline,
+        translation_y: SimmSpline,
+    },
     Weld,
 }
 
@@ -378,7 +455,10 @@ impl Model {
     /// Read and validate a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { file: path.into(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            file: path.into(),
+            source,
+        })?;
         Self::from_json_str(&text, path)
     }
 
@@ -391,7 +471,11 @@ impl Model {
             let inner = e.into_inner();
             ModelError::Parse {
                 file: file.clone(),
-                path: if path == "." { "(document)".into() } else { path },
+                path: if path == "." {
+                    "(document)".into()
+                } else {
+                    path
+                },
                 reason: inner.to_string(),
             }
         })?;
@@ -400,7 +484,11 @@ impl Model {
 
     /// Validate a deserialized model file.
     pub fn from_spec(spec: ModelFile, file: PathBuf) -> Result<Self, ModelError> {
-        let err = |path: String, reason: String| ModelError::Invalid { file: file.clone(), path, reason };
+        let err = |path: String, reason: String| ModelError::Invalid {
+            file: file.clone(),
+            path,
+            reason,
+        };
 
         if !finite3(&spec.gravity) {
             return Err(err("gravity".into(), "must be finite".into()));
@@ -411,13 +499,22 @@ impl Model {
         for (i, b) in spec.bodies.iter().enumerate() {
             let p = |f: &str| format!("bodies[{i}].{f}");
             if b.name.is_empty() || b.name == "ground" {
-                return Err(err(p("name"), format!("'{}' is not a valid body name", b.name)));
+                return Err(err(
+                    p("name"),
+                    format!("'{}' is not a valid body name", b.name),
+                ));
             }
             if body_index.insert(b.name.clone(), i).is_some() {
-                return Err(err(p("name"), format!("body '{}' is defined twice", b.name)));
+                return Err(err(
+                    p("name"),
+                    format!("body '{}' is defined twice", b.name),
+                ));
             }
             if !(b.mass.is_finite() && b.mass > 0.0) {
-                return Err(err(p("mass"), format!("mass must be positive and finite, got {}", b.mass)));
+                return Err(err(
+                    p("mass"),
+                    format!("mass must be positive and finite, got {}", b.mass),
+                ));
             }
             if !finite3(&b.mass_center) {
                 return Err(err(p("mass_center"), "must be finite".into()));
@@ -425,7 +522,12 @@ impl Model {
             if let Some(reason) = inertia_problem(&b.inertia) {
                 return Err(err(p("inertia"), reason));
             }
-            bodies.push(Body { name: b.name.clone(), mass: b.mass, mass_center: b.mass_center, inertia: b.inertia });
+            bodies.push(Body {
+                name: b.name.clone(),
+                mass: b.mass,
+                mass_center: b.mass_center,
+                inertia: b.inertia,
+            });
         }
         // Coordinates.
         let mut coord_index = HashMap::new();
@@ -436,19 +538,32 @@ impl Model {
                 return Err(err(p("name"), "empty coordinate name".into()));
             }
             if coord_index.insert(c.name.clone(), i).is_some() {
-                return Err(err(p("name"), format!("coordinate '{}' is defined twice", c.name)));
+                return Err(err(
+                    p("name"),
+                    format!("coordinate '{}' is defined twice", c.name),
+                ));
             }
             let [lo, hi] = c.range;
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
-                return Err(err(p("range"), format!("range must be finite with min < max, got [{lo}, {hi}]")));
+                return Err(err(
+                    p("range"),
+                    format!("range must be finite with min < max, got [{lo}, {hi}]"),
+                ));
             }
             if !(c.default_value.is_finite() && lo <= c.default_value && c.default_value <= hi) {
                 return Err(err(
                     p("default_value"),
-                    format!("default_value {} is outside the range [{lo}, {hi}]", c.default_value),
+                    format!(
+                        "default_value {} is outside the range [{lo}, {hi}]",
+                        c.default_value
+                    ),
                 ));
             }
-            coordinates.push(Coordinate { name: c.name.clone(), range: c.range, default_value: c.default_value });
+            coordinates.push(Coordinate {
+                name: c.name.clone(),
+                range: c.range,
+                default_value: c.default_value,
+            });
         }
         // Joints.
         let mut coord_used: Vec<Option<usize>> = vec![None; coordinates.len()];
@@ -464,15 +579,29 @@ impl Model {
             let parent_idx = if parent == "ground" {
                 None
             } else {
-                Some(*body_index.get(parent).ok_or_else(|| err(p("parent"), format!("unknown body '{parent}'")))?)
+                Some(
+                    *body_index
+                        .get(parent)
+                        .ok_or_else(|| err(p("parent"), format!("unknown body '{parent}'")))?,
+                )
             };
-            let child_idx =
-                *body_index.get(child).ok_or_else(|| err(p("child"), format!("unknown body '{child}'")))?;
+            let child_idx = *body_index
+                .get(child)
+                .ok_or_else(|| err(p("child"), format!("unknown body '{child}'")))?;
             if parent_idx == Some(child_idx) {
-                return Err(err(p("child"), format!("body '{child}' cannot be its own parent")));
+                return Err(err(
+                    p("child"),
+                    format!("body '{child}' cannot be its own parent"),
+                ));
             }
             if let Some(other) = child_of[child_idx] {
-                return Err(err(p("child"), format!("body '{child}' is already the child of joint '{}'", spec.joints[other].common().0)));
+                return Err(err(
+                    p("child"),
+                    format!(
+                        "body '{child}' is already the child of joint '{}'",
+                        spec.joints[other].common().0
+                    ),
+                ));
             }
             child_of[child_idx] = Some(j);
             if !finite3(loc) {
@@ -483,15 +612,26 @@ impl Model {
                     .get(cname)
                     .ok_or_else(|| err(field.clone(), format!("unknown coordinate '{cname}'")))?;
                 if let Some(other) = coord_used[ci] {
-                    return Err(err(field, format!("coordinate '{cname}' is already used by joint '{}'", spec.joints[other].common().0)));
+                    return Err(err(
+                        field,
+                        format!(
+                            "coordinate '{cname}' is already used by joint '{}'",
+                            spec.joints[other].common().0
+                        ),
+                    ));
                 }
                 coord_used[ci] = Some(j);
                 Ok(ci)
             };
             let kind = match js {
-                JointSpec::Planar { coordinates: cs, .. } => {
+                JointSpec::Planar {
+                    coordinates: cs, ..
+                } => {
                     if parent_idx.is_some() {
-                        return Err(err(p("parent"), "a planar joint must have ground as its parent".into()));
+                        return Err(err(
+                            p("parent"),
+                            "a planar joint must have ground as its parent".into(),
+                        ));
                     }
                     let mut idx = [0; 3];
                     for (k, cname) in cs.iter().enumerate() {
@@ -499,25 +639,53 @@ impl Model {
                     }
                     JointKind::Planar { coordinates: idx }
                 }
-                JointSpec::Pin { coordinate, .. } => JointKind::Pin { coordinate: use_coord(p("coordinate"), coordinate)? },
-                JointSpec::TranslatingHinge { coordinate, translation_x, translation_y, .. } => {
+                JointSpec::Pin { coordinate, .. } => JointKind::Pin {
+                    coordinate: use_coord(p("coordinate"), coordinate)?,
+                },
+                JointSpec::TranslatingHinge {
+                    coordinate,
+                    translation_x,
+                    translation_y,
+                    ..
+                } => {
                     let coordinate = use_coord(p("coordinate"), coordinate)?;
-                    let tx = SimmSpline::new(translation_x).map_err(|e| err(p("translation_x"), e.to_string()))?;
-                    let ty = SimmSpline::new(translation_y).map_err(|e| err(p("translation_y"), e.to_string()))?;
-                    JointKind::TranslatingHinge { coordinate, translation_x: tx, translation_y: ty }
+                    let tx = SimmSpline::new(translation_x)
+                        .map_err(|e| err(p("translation_x"), e.to_string()))?;
+                    let ty = SimmSpline::new(translation_y)
+                        .map_err(|e| err(p("translation_y"), e.to_string()))?;
+                    JointKind::TranslatingHinge {
+                        coordinate,
+                        translation_x: tx,
+                        translation_y: ty,
+                    }
                 }
                 JointSpec::Weld { .. } => JointKind::Weld,
             };
-            joints.push(Joint { name: name.to_string(), parent: parent_idx, child: child_idx, location_in_parent: *loc, kind });
+            joints.push(Joint {
+                name: name.to_string(),
+                parent: parent_idx,
+                child: child_idx,
+                location_in_parent: *loc,
+                kind,
+            });
         }
         for (i, used) in coord_used.iter().enumerate() {
             if used.is_none() {
-                return Err(err(format!("coordinates[{i}]"), format!("coordinate '{}' is not used by any joint", coordinates[i].name)));
+                return Err(err(
+                    format!("coordinates[{i}]"),
+                    format!(
+                        "coordinate '{}' is not used by any joint",
+                        coordinates[i].name
+                    ),
+                ));
             }
         }
         for (i, c) in child_of.iter().enumerate() {
             if c.is_none() {
-                return Err(err(format!("bodies[{i}]"), format!("body '{}' is not the child of any joint", bodies[i].name)));
+                return Err(err(
+                    format!("bodies[{i}]"),
+                    format!("body '{}' is not the child of any joint", bodies[i].name),
+                ));
             }
         }
         // Every body must reach ground (no cycles).
@@ -528,7 +696,13 @@ impl Model {
                 b = parent;
                 steps += 1;
                 if steps > bodies.len() {
-                    return Err(err(format!("bodies[{start}]"), format!("body '{}' is in a kinematic loop that never reaches ground", bodies[start].name)));
+                    return Err(err(
+                        format!("bodies[{start}]"),
+                        format!(
+                            "body '{}' is in a kinematic loop that never reaches ground",
+                            bodies[start].name
+                        ),
+                    ));
                 }
             }
         }
@@ -538,22 +712,44 @@ impl Model {
         for (i, s) in spec.stations.iter().enumerate() {
             let p = |f: &str| format!("stations[{i}].{f}");
             if station_names.insert(s.name.clone(), i).is_some() {
-                return Err(err(p("name"), format!("station '{}' is defined twice", s.name)));
+                return Err(err(
+                    p("name"),
+                    format!("station '{}' is defined twice", s.name),
+                ));
             }
-            let body = *body_index.get(&s.body).ok_or_else(|| err(p("body"), format!("unknown body '{}'", s.body)))?;
+            let body = *body_index
+                .get(&s.body)
+                .ok_or_else(|| err(p("body"), format!("unknown body '{}'", s.body)))?;
             if !finite3(&s.location) {
                 return Err(err(p("location"), "must be finite".into()));
             }
-            stations.push(Station { name: s.name.clone(), body, location: s.location });
+            stations.push(Station {
+                name: s.name.clone(),
+                body,
+                location: s.location,
+            });
         }
         // Symmetry pairs.
         let mut symmetry = Vec::new();
         let mut in_pair = vec![false; coordinates.len()];
         for (i, [r, l]) in spec.symmetry.iter().enumerate() {
-            let ri = *coord_index.get(r).ok_or_else(|| err(format!("symmetry[{i}][0]"), format!("unknown coordinate '{r}'")))?;
-            let li = *coord_index.get(l).ok_or_else(|| err(format!("symmetry[{i}][1]"), format!("unknown coordinate '{l}'")))?;
+            let ri = *coord_index.get(r).ok_or_else(|| {
+                err(
+                    format!("symmetry[{i}][0]"),
+                    format!("unknown coordinate '{r}'"),
+                )
+            })?;
+            let li = *coord_index.get(l).ok_or_else(|| {
+                err(
+                    format!("symmetry[{i}][1]"),
+                    format!("unknown coordinate '{l}'"),
+                )
+            })?;
             if ri == li || in_pair[ri] || in_pair[li] {
-                return Err(err(format!("symmetry[{i}]"), format!("coordinates '{r}' and '{l}' cannot form a new pair")));
+                return Err(err(
+                    format!("symmetry[{i}]"),
+                    format!("coordinates '{r}' and '{l}' cannot form a new pair"),
+                ));
             }
             in_pair[ri] = true;
             in_pair[li] = true;
@@ -565,10 +761,15 @@ impl Model {
             let mut q: Vec<f64> = coordinates.iter().map(|c| c.default_value).collect();
             for (cname, &v) in values {
                 let path = format!("poses.{pname}.{cname}");
-                let ci = *coord_index.get(cname).ok_or_else(|| err(path.clone(), format!("unknown coordinate '{cname}'")))?;
+                let ci = *coord_index
+                    .get(cname)
+                    .ok_or_else(|| err(path.clone(), format!("unknown coordinate '{cname}'")))?;
                 let [lo, hi] = coordinates[ci].range;
                 if !(v.is_finite() && lo <= v && v <= hi) {
-                    return Err(err(path, format!("value {v} is outside the range [{lo}, {hi}]")));
+                    return Err(err(
+                        path,
+                        format!("value {v} is outside the range [{lo}, {hi}]"),
+                    ));
                 }
                 q[ci] = v;
             }
@@ -582,7 +783,10 @@ impl Model {
         for (i, m) in spec.forces.muscles.iter().enumerate() {
             let p = |f: &str| format!("forces.muscles[{i}].{f}");
             if m.name.is_empty() || muscle_names.insert(m.name.clone(), i).is_some() {
-                return Err(err(p("name"), format!("muscle name '{}' is empty or defined twice", m.name)));
+                return Err(err(
+                    p("name"),
+                    format!("muscle name '{}' is empty or defined twice", m.name),
+                ));
             }
             let positive = [
                 ("max_isometric_force", m.max_isometric_force),
@@ -600,39 +804,82 @@ impl Model {
             ];
             for (name, v) in positive {
                 if !(v.is_finite() && v > 0.0) {
-                    return Err(err(p(name), format!("{name} must be positive and finite, got {v}")));
+                    return Err(err(
+                        p(name),
+                        format!("{name} must be positive and finite, got {v}"),
+                    ));
                 }
             }
             let phi = m.pennation_angle_at_optimal;
             if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
-                return Err(err(p("pennation_angle_at_optimal"), format!("must be in [0, π/2) rad, got {phi}")));
+                return Err(err(
+                    p("pennation_angle_at_optimal"),
+                    format!("must be in [0, π/2) rad, got {phi}"),
+                ));
             }
-            let path = crate::path::GeometryPath::new(&m.path, body_of, coord_of)
-                .map_err(|(k, f, reason)| err(if f.is_empty() { p("path") } else { format!("forces.muscles[{i}].path[{k}].{f}") }, reason))?;
+            let path = crate::path::GeometryPath::new(&m.path, body_of, coord_of).map_err(
+                |(k, f, reason)| {
+                    err(
+                        if f.is_empty() {
+                            p("path")
+                        } else {
+                            format!("forces.muscles[{i}].path[{k}].{f}")
+                        },
+                        reason,
+                    )
+                },
+            )?;
             if path.num_conditional() > 8 {
-                return Err(err(p("path"), "at most 8 conditional path points per muscle".into()));
+                return Err(err(
+                    p("path"),
+                    "at most 8 conditional path points per muscle".into(),
+                ));
             }
-            muscles.push(Muscle { spec: m.clone(), path });
+            muscles.push(Muscle {
+                spec: m.clone(),
+                path,
+            });
         }
         let mut ligaments = Vec::new();
         for (i, l) in spec.forces.ligaments.iter().enumerate() {
             let p = |f: &str| format!("forces.ligaments[{i}].{f}");
-            let c = coord_of(&l.coordinate).ok_or_else(|| err(p("coordinate"), format!("unknown coordinate '{}'", l.coordinate)))?;
-            for (name, v) in [("k1", l.k1), ("k2", l.k2), ("k3", l.k3), ("k4", l.k4), ("theta1", l.theta1), ("theta2", l.theta2)] {
+            let c = coord_of(&l.coordinate).ok_or_else(|| {
+                err(
+                    p("coordinate"),
+                    format!("unknown coordinate '{}'", l.coordinate),
+                )
+            })?;
+            for (name, v) in [
+                ("k1", l.k1),
+                ("k2", l.k2),
+                ("k3", l.k3),
+                ("k4", l.k4),
+                ("theta1", l.theta1),
+                ("theta2", l.theta2),
+            ] {
                 if !v.is_finite() {
                     return Err(err(p(name), format!("{name} must be finite")));
                 }
             }
             if !(l.damping.is_finite() && l.damping >= 0.0) {
-                return Err(err(p("damping"), format!("damping must be non-negative, got {}", l.damping)));
+                return Err(err(
+                    p("damping"),
+                    format!("damping must be non-negative, got {}", l.damping),
+                ));
             }
-            ligaments.push(Ligament { coordinate: c, spec: l.clone() });
+            ligaments.push(Ligament {
+                coordinate: c,
+                spec: l.clone(),
+            });
         }
         let contact = match &spec.forces.contact {
             None => None,
             Some(cs) => {
                 let p = |f: &str| format!("forces.contact.{f}");
-                for (name, v) in [("stiffness", cs.stiffness), ("transition_velocity", cs.transition_velocity)] {
+                for (name, v) in [
+                    ("stiffness", cs.stiffness),
+                    ("transition_velocity", cs.transition_velocity),
+                ] {
                     if !(v.is_finite() && v > 0.0) {
                         return Err(err(p(name), format!("{name} must be positive, got {v}")));
                     }
@@ -644,13 +891,23 @@ impl Model {
                     ("viscous_friction", cs.viscous_friction),
                 ] {
                     if !(v.is_finite() && v >= 0.0) {
-                        return Err(err(p(name), format!("{name} must be non-negative, got {v}")));
+                        return Err(err(
+                            p(name),
+                            format!("{name} must be non-negative, got {v}"),
+                        ));
                     }
                 }
                 if cs.dynamic_friction > cs.static_friction {
-                    return Err(err(p("dynamic_friction"), "dynamic_friction must not exceed static_friction".into()));
+                    return Err(err(
+                        p("dynamic_friction"),
+                        "dynamic_friction must not exceed static_friction".into(),
+                    ));
                 }
-                for (name, v) in [("hertz_smoothing", cs.hertz_smoothing), ("hunt_crossley_smoothing", cs.hunt_crossley_smoothing), ("derivative_smoothing", cs.derivative_smoothing)] {
+                for (name, v) in [
+                    ("hertz_smoothing", cs.hertz_smoothing),
+                    ("hunt_crossley_smoothing", cs.hunt_crossley_smoothing),
+                    ("derivative_smoothing", cs.derivative_smoothing),
+                ] {
                     if let Some(v) = v {
                         if !(v.is_finite() && v > 0.0) {
                             return Err(err(p(name), format!("{name} must be positive, got {v}")));
@@ -660,16 +917,28 @@ impl Model {
                 let mut spheres = Vec::new();
                 for (i, sp) in cs.spheres.iter().enumerate() {
                     let q = |f: &str| format!("forces.contact.spheres[{i}].{f}");
-                    let body = body_of(&sp.body).ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
+                    let body = body_of(&sp.body)
+                        .ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
                     if !finite3(&sp.location) {
                         return Err(err(q("location"), "must be finite".into()));
                     }
                     if !(sp.radius.is_finite() && sp.radius > 0.0) {
-                        return Err(err(q("radius"), format!("radius must be positive, got {}", sp.radius)));
+                        return Err(err(
+                            q("radius"),
+                            format!("radius must be positive, got {}", sp.radius),
+                        ));
                     }
-                    spheres.push(Sphere { name: sp.name.clone(), body, location: sp.location, radius: sp.radius });
+                    spheres.push(Sphere {
+                        name: sp.name.clone(),
+                        body,
+                        location: sp.location,
+                        radius: sp.radius,
+                    });
                 }
-                Some(Contact { spec: cs.clone(), spheres })
+                Some(Contact {
+                    spec: cs.clone(),
+                    spheres,
+                })
             }
         };
         let model = Model {
@@ -732,7 +1001,9 @@ fn inertia_problem(i: &[f64; 6]) -> Option<String> {
     }
     let tol = 1e-12 * (xx + yy + zz);
     if xx + yy + tol < zz || yy + zz + tol < xx || xx + zz + tol < yy {
-        return Some(format!("inertia {i:?} violates the triangle inequality (Ixx + Iyy >= Izz, ...)"));
+        return Some(format!(
+            "inertia {i:?} violates the triangle inequality (Ixx + Iyy >= Izz, ...)"
+        ));
     }
     None
 }
@@ -745,7 +1016,11 @@ pub enum Mobilizer {
     /// Rotation about z by q.
     Pin { q: usize },
     /// Rotation about z by q, origin at `location + (tx(q), ty(q), 0)`.
-    TranslatingHinge { q: usize, translation_x: SimmSpline, translation_y: SimmSpline },
+    TranslatingHinge {
+        q: usize,
+        translation_x: SimmSpline,
+        translation_y: SimmSpline,
+    },
     /// Rigidly attached.
     Weld,
 }
@@ -776,7 +1051,11 @@ pub struct SystemSpec {
 
 impl SystemSpec {
     fn build(model: &Model, symmetric: bool) -> Result<Self, ModelError> {
-        let err = |path: String, reason: String| ModelError::Invalid { file: model.file.clone(), path, reason };
+        let err = |path: String, reason: String| ModelError::Invalid {
+            file: model.file.clone(),
+            path,
+            reason,
+        };
         let nc = model.coordinates.len();
         // Which coordinates follow another.
         let mut follows: Vec<Option<usize>> = vec![None; nc];
@@ -804,7 +1083,8 @@ impl SystemSpec {
                 .iter()
                 .position(|j| match &j.kind {
                     JointKind::Planar { coordinates } => coordinates.contains(&c),
-                    JointKind::Pin { coordinate } | JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
+                    JointKind::Pin { coordinate }
+                    | JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
                     JointKind::Weld => false,
                 })
                 .unwrap_or(usize::MAX)
@@ -828,10 +1108,15 @@ impl SystemSpec {
                 };
                 let jpath = format!("joints[{j}]");
                 let follow = match &joint.kind {
-                    JointKind::Pin { coordinate } | JointKind::TranslatingHinge { coordinate, .. } => follows[*coordinate],
+                    JointKind::Pin { coordinate }
+                    | JointKind::TranslatingHinge { coordinate, .. } => follows[*coordinate],
                     JointKind::Planar { coordinates } => {
                         if coordinates.iter().any(|c| follows[*c].is_some()) {
-                            return Err(err(jpath, "a planar joint's coordinates cannot follow symmetry partners".into()));
+                            return Err(err(
+                                jpath,
+                                "a planar joint's coordinates cannot follow symmetry partners"
+                                    .into(),
+                            ));
                         }
                         None
                     }
@@ -847,8 +1132,16 @@ impl SystemSpec {
                     let same_kind = match (&joint.kind, &partner.kind) {
                         (JointKind::Pin { .. }, JointKind::Pin { .. }) => true,
                         (
-                            JointKind::TranslatingHinge { translation_x: ax, translation_y: ay, .. },
-                            JointKind::TranslatingHinge { translation_x: bx, translation_y: by, .. },
+                            JointKind::TranslatingHinge {
+                                translation_x: ax,
+                                translation_y: ay,
+                                ..
+                            },
+                            JointKind::TranslatingHinge {
+                                translation_x: bx,
+                                translation_y: by,
+                                ..
+                            },
                         ) => ax == bx && ay == by,
                         _ => false,
                     };
@@ -870,19 +1163,37 @@ impl SystemSpec {
                     }
                     let dz = parent_dz + a[2] - b[2];
                     mirror_of[joint.child] = Some((partner.child, dz));
-                    SystemBody { body: joint.child, parent: Some(sys_of[partner.child]), location: [0.0, 0.0, dz], mobilizer: Mobilizer::Weld }
+                    SystemBody {
+                        body: joint.child,
+                        parent: Some(sys_of[partner.child]),
+                        location: [0.0, 0.0, dz],
+                        mobilizer: Mobilizer::Weld,
+                    }
                 } else {
                     let mobilizer = match &joint.kind {
-                        JointKind::Planar { coordinates: c } => Mobilizer::Planar { q: [q_of[c[0]], q_of[c[1]], q_of[c[2]]] },
-                        JointKind::Pin { coordinate } => Mobilizer::Pin { q: q_of[*coordinate] },
-                        JointKind::TranslatingHinge { coordinate, translation_x, translation_y } => Mobilizer::TranslatingHinge {
+                        JointKind::Planar { coordinates: c } => Mobilizer::Planar {
+                            q: [q_of[c[0]], q_of[c[1]], q_of[c[2]]],
+                        },
+                        JointKind::Pin { coordinate } => Mobilizer::Pin {
+                            q: q_of[*coordinate],
+                        },
+                        JointKind::TranslatingHinge {
+                            coordinate,
+                            translation_x,
+                            translation_y,
+                        } => Mobilizer::TranslatingHinge {
                             q: q_of[*coordinate],
                             translation_x: translation_x.clone(),
                             translation_y: translation_y.clone(),
                         },
                         JointKind::Weld => Mobilizer::Weld,
                     };
-                    SystemBody { body: joint.child, parent: parent_sys, location: joint.location_in_parent, mobilizer }
+                    SystemBody {
+                        body: joint.child,
+                        parent: parent_sys,
+                        location: joint.location_in_parent,
+                        mobilizer,
+                    }
                 };
                 sys_of[joint.child] = bodies.len();
                 bodies.push(sb);
@@ -897,7 +1208,13 @@ impl SystemSpec {
                 return Err(err(format!("joints[{j}]"), format!("joint '{}' cannot be placed in the symmetric system (its symmetry partner is not reachable)", model.joints[j].name)));
             }
         }
-        Ok(SystemSpec { symmetric, bodies, coordinates, q_of_model_coordinate: q_of, system_body_of: sys_of })
+        Ok(SystemSpec {
+            symmetric,
+            bodies,
+            coordinates,
+            q_of_model_coordinate: q_of,
+            system_body_of: sys_of,
+        })
     }
 
     /// Number of generalized coordinates.

@@ -27,9 +27,17 @@ pub type V2<S> = [S; 2];
 #[derive(Debug, Clone)]
 enum Joint {
     /// Base: rotation q[0] about z, translation (q[1], q[2]) in ground.
-    Planar { q: [usize; 3] },
-    Pin { q: usize },
-    TranslatingHinge { q: usize, tx: SimmSpline, ty: SimmSpline },
+    Planar {
+        q: [usize; 3],
+    },
+    Pin {
+        q: usize,
+    },
+    TranslatingHinge {
+        q: usize,
+        tx: SimmSpline,
+        ty: SimmSpline,
+    },
 }
 
 /// A composite body: a mobilized body with everything welded to it.
@@ -133,7 +141,11 @@ impl Multibody {
                     (Some(ci), off, bodies[ci].z_origin)
                 }
             };
-            let loc = [parent_off[0] + sb.location[0], parent_off[1] + sb.location[1], parent_off[2] + sb.location[2]];
+            let loc = [
+                parent_off[0] + sb.location[0],
+                parent_off[1] + sb.location[1],
+                parent_off[2] + sb.location[2],
+            ];
             let joint = match &sb.mobilizer {
                 Mobilizer::Weld => {
                     let ci = parent_comp.expect("validated: a weld has a parent body");
@@ -142,9 +154,15 @@ impl Multibody {
                 }
                 Mobilizer::Planar { q } => Joint::Planar { q: *q },
                 Mobilizer::Pin { q } => Joint::Pin { q: *q },
-                Mobilizer::TranslatingHinge { q, translation_x, translation_y } => {
-                    Joint::TranslatingHinge { q: *q, tx: translation_x.clone(), ty: translation_y.clone() }
-                }
+                Mobilizer::TranslatingHinge {
+                    q,
+                    translation_x,
+                    translation_y,
+                } => Joint::TranslatingHinge {
+                    q: *q,
+                    tx: translation_x.clone(),
+                    ty: translation_y.clone(),
+                },
             };
             let (mut dofs, mut rots) = match parent_comp {
                 Some(p) => (bodies[p].dofs.clone(), bodies[p].rot.clone()),
@@ -202,7 +220,14 @@ impl Multibody {
             .iter()
             .map(|s| {
                 let (ci, off) = frame_of[system.system_body_of[s.body]];
-                (ci, [off[0] + s.location[0], off[1] + s.location[1], off[2] + s.location[2]])
+                (
+                    ci,
+                    [
+                        off[0] + s.location[0],
+                        off[1] + s.location[1],
+                        off[2] + s.location[2],
+                    ],
+                )
             })
             .collect();
         let total_mass = bodies.iter().map(|b| b.mass).sum();
@@ -237,7 +262,14 @@ impl Multibody {
     /// A point fixed on a model body, as (composite body, location in its frame).
     pub fn body_point(&self, model_body: usize, location: [f64; 3]) -> (usize, [f64; 3]) {
         let (ci, off) = self.frame_of[self.system_body_of[model_body]];
-        (ci, [off[0] + location[0], off[1] + location[1], off[2] + location[2]])
+        (
+            ci,
+            [
+                off[0] + location[0],
+                off[1] + location[1],
+                off[2] + location[2],
+            ],
+        )
     }
 
     /// The model's stations as (composite body, location) pairs.
@@ -286,7 +318,15 @@ impl Multibody {
             // Parent quantities (ground: identity, at rest).
             let (th_p, om_p, cs_p, sn_p, p_p, v_p, a_p) = match b.parent {
                 None => (z, z, S::one(), z, [z; 2], [z; 2], [z; 2]),
-                Some(pi) => (ws.theta[pi], ws.omega[pi], ws.cos[pi], ws.sin[pi], ws.p[pi], ws.v[pi], ws.a0[pi]),
+                Some(pi) => (
+                    ws.theta[pi],
+                    ws.omega[pi],
+                    ws.cos[pi],
+                    ws.sin[pi],
+                    ws.p[pi],
+                    ws.v[pi],
+                    ws.a0[pi],
+                ),
             };
             let loc: [S; 2] = [c(b.location[0]), c(b.location[1])];
             // Joint: origin offset d (ground axes), its rate and the own Jacobian columns.
@@ -300,7 +340,10 @@ impl Multibody {
                     ws.jp[o + s0] = [z; 2];
                     ws.jp[o + s0 + 1] = ex;
                     ws.jp[o + s0 + 2] = ey;
-                    let vrel = [ex[0] * u[*qx] + ey[0] * u[*qy], ex[1] * u[*qx] + ey[1] * u[*qy]];
+                    let vrel = [
+                        ex[0] * u[*qx] + ey[0] * u[*qy],
+                        ex[1] * u[*qx] + ey[1] * u[*qy],
+                    ];
                     (d, vrel, [z; 2], q[*qr], u[*qr])
                 }
                 Joint::Pin { q: qi } | Joint::TranslatingHinge { q: qi, .. } => {
@@ -317,7 +360,13 @@ impl Multibody {
                     let rddt = rot(cs_p, sn_p, ddt);
                     ws.jp[o + b.own_start] = rdt;
                     let qd = u[*qi];
-                    ([d[0], d[1]], [rdt[0] * qd, rdt[1] * qd], [rddt[0] * qd * qd, rddt[1] * qd * qd], q[*qi], qd)
+                    (
+                        [d[0], d[1]],
+                        [rdt[0] * qd, rdt[1] * qd],
+                        [rddt[0] * qd * qd, rddt[1] * qd * qd],
+                        q[*qi],
+                        qd,
+                    )
                 }
             };
             let pd = perp(d);
@@ -335,7 +384,10 @@ impl Multibody {
                 }
             }
             ws.p[i] = [p_p[0] + d[0], p_p[1] + d[1]];
-            ws.v[i] = [v_p[0] + pd[0] * om_p + vrel[0], v_p[1] + pd[1] * om_p + vrel[1]];
+            ws.v[i] = [
+                v_p[0] + pd[0] * om_p + vrel[0],
+                v_p[1] + pd[1] * om_p + vrel[1],
+            ];
             let pv = perp(vrel);
             let om2 = om_p * om_p;
             ws.a0[i] = [
@@ -357,7 +409,11 @@ impl Multibody {
             ws.a0c[i] = [ws.a0[i][0] - s[0] * om * om, ws.a0[i][1] - s[1] * om * om];
             for k in 0..b.dofs.len() {
                 let j = ws.jp[o + k];
-                ws.jc[o + k] = if b.rot[k] { [j[0] + ps[0], j[1] + ps[1]] } else { j };
+                ws.jc[o + k] = if b.rot[k] {
+                    [j[0] + ps[0], j[1] + ps[1]]
+                } else {
+                    j
+                };
             }
         }
         // Mass matrix and bias forces.
@@ -405,29 +461,57 @@ impl Multibody {
     }
 
     /// Position of a point fixed on composite body `body` (3D, ground).
-    pub fn point_position<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3]) -> [S; 3] {
+    pub fn point_position<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [f64; 3],
+    ) -> [S; 3] {
         self.point_position_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])])
     }
 
     /// Velocity of a point fixed on composite body `body` (3D, ground).
-    pub fn point_velocity<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3]) -> [S; 3] {
+    pub fn point_velocity<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [f64; 3],
+    ) -> [S; 3] {
         self.point_velocity_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])])
     }
 
     /// [`Self::point_position`] for a location of scalar type.
     #[inline]
-    pub fn point_position_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3]) -> [S; 3] {
+    pub fn point_position_s<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [S; 3],
+    ) -> [S; 3] {
         let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
-        [ws.p[body][0] + s[0], ws.p[body][1] + s[1], loc[2] + self.bodies[body].z_origin]
+        [
+            ws.p[body][0] + s[0],
+            ws.p[body][1] + s[1],
+            loc[2] + self.bodies[body].z_origin,
+        ]
     }
 
     /// [`Self::point_velocity`] for a location of scalar type.
     #[inline]
-    pub fn point_velocity_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3]) -> [S; 3] {
+    pub fn point_velocity_s<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [S; 3],
+    ) -> [S; 3] {
         let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
         let ps = perp(s);
         let om = ws.omega[body];
-        [ws.v[body][0] + ps[0] * om, ws.v[body][1] + ps[1] * om, S::zero()]
+        [
+            ws.v[body][0] + ps[0] * om,
+            ws.v[body][1] + ps[1] * om,
+            S::zero(),
+        ]
     }
 
     /// A vector fixed in composite body `body`, expressed in ground.
@@ -450,13 +534,27 @@ impl Multibody {
 
     /// Add the generalized force `J_pᵀ F` of a force `F` (ground frame; only
     /// x and y act on planar motion) applied at a point fixed on `body`.
-    pub fn add_point_force<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [f64; 3], force: [S; 3], tau: &mut [S]) {
+    pub fn add_point_force<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [f64; 3],
+        force: [S; 3],
+        tau: &mut [S],
+    ) {
         self.add_point_force_s(ws, body, [c(loc[0]), c(loc[1]), c(loc[2])], force, tau)
     }
 
     /// [`Self::add_point_force`] for a location of scalar type.
     #[inline]
-    pub fn add_point_force_s<S: Scalar>(&self, ws: &Workspace<S>, body: usize, loc: [S; 3], force: [S; 3], tau: &mut [S]) {
+    pub fn add_point_force_s<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [S; 3],
+        force: [S; 3],
+        tau: &mut [S],
+    ) {
         let s = rot(ws.cos[body], ws.sin[body], [loc[0], loc[1]]);
         let ps = perp(s);
         let b = &self.bodies[body];
@@ -520,7 +618,12 @@ impl Multibody {
 
     /// Forward dynamics: solve `M q̈ = tau − b` (tau already holds every
     /// applied generalized force, including `J_pᵀF` of point forces).
-    pub fn forward_dynamics<S: Scalar>(&self, ws: &mut Workspace<S>, tau: &[S], qdd: &mut [S]) -> Result<(), SingularMassMatrix> {
+    pub fn forward_dynamics<S: Scalar>(
+        &self,
+        ws: &mut Workspace<S>,
+        tau: &[S],
+        qdd: &mut [S],
+    ) -> Result<(), SingularMassMatrix> {
         let n = self.nq;
         for k in 0..n {
             ws.rhs[k] = tau[k] - ws.bias[k];
@@ -534,7 +637,10 @@ impl Multibody {
                 d -= l[j * n + k] * l[j * n + k];
             }
             if d.re().is_nan() || d.re() <= 0.0 {
-                return Err(SingularMassMatrix { pivot: j, value: d.re() });
+                return Err(SingularMassMatrix {
+                    pivot: j,
+                    value: d.re(),
+                });
             }
             let djj = d.sqrt();
             l[j * n + j] = djj;
@@ -634,7 +740,13 @@ pub struct GeneralizedForces<'a, S: Scalar> {
 impl<'a, S: Scalar> crate::path::ForceSink<S> for GeneralizedForces<'a, S> {
     fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
         let (ci, off) = self.mb.frame_of_model_body(body);
-        self.mb.add_point_force_s(self.ws, ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]], force, self.tau);
+        self.mb.add_point_force_s(
+            self.ws,
+            ci,
+            [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]],
+            force,
+            self.tau,
+        );
     }
     fn add_generalized_force(&mut self, coordinate: usize, force: S) {
         self.tau[self.q_of[coordinate]] += force;
@@ -661,7 +773,11 @@ impl<'a, S: Scalar> crate::path::ForceSink<S> for UnitGeneralizedForces<'a, S> {
     #[inline]
     fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {
         let (ci, off) = self.mb.frame_of_model_body(body);
-        let s = rot(self.ws.cos[ci], self.ws.sin[ci], [loc[0] + off[0], loc[1] + off[1]]);
+        let s = rot(
+            self.ws.cos[ci],
+            self.ws.sin[ci],
+            [loc[0] + off[0], loc[1] + off[1]],
+        );
         let w = &mut self.wrench[ci];
         w[0] += force[0];
         w[1] += force[1];
@@ -673,7 +789,9 @@ impl<'a, S: Scalar> crate::path::ForceSink<S> for UnitGeneralizedForces<'a, S> {
     }
 }
 
-impl<'a, 'b, S: Scalar> crate::path::UnitForces<S, GeneralizedForces<'b, S>> for UnitGeneralizedForces<'a, S> {
+impl<'a, 'b, S: Scalar> crate::path::UnitForces<S, GeneralizedForces<'b, S>>
+    for UnitGeneralizedForces<'a, S>
+{
     fn clear(&mut self) {
         for t in self.tau.iter_mut() {
             *t = S::zero();

@@ -37,7 +37,10 @@ pub struct EvalError {
 
 impl EvalError {
     pub fn new(what: impl Into<String>, reason: impl Into<String>) -> Self {
-        EvalError { what: what.into(), reason: reason.into() }
+        EvalError {
+            what: what.into(),
+            reason: reason.into(),
+        }
     }
 }
 
@@ -91,8 +94,18 @@ pub trait Nlp {
     /// σ f (if the element holds the objective) + Σ_{i ∈ element} λ_i c_i,
     /// over the element's variables, row-major k×k (k = number of element
     /// variables; both triangles). `lambda` has length m.
-    fn element_hessian(&mut self, _x: &[f64], _e: usize, _sigma: f64, _lambda: &[f64], _h: &mut [f64]) -> Result<(), EvalError> {
-        Err(EvalError::new("hessian", "this problem provides no Hessian"))
+    fn element_hessian(
+        &mut self,
+        _x: &[f64],
+        _e: usize,
+        _sigma: f64,
+        _lambda: &[f64],
+        _h: &mut [f64],
+    ) -> Result<(), EvalError> {
+        Err(EvalError::new(
+            "hessian",
+            "this problem provides no Hessian",
+        ))
     }
     /// A name for variable `i` in messages.
     fn variable_name(&self, i: usize) -> String {
@@ -107,7 +120,11 @@ pub trait Nlp {
 impl Element {
     /// One element with everything.
     pub fn whole(n: usize, m: usize) -> Vec<Element> {
-        vec![Element { variables: (0..n).collect(), constraints: (0..m).collect(), objective: true }]
+        vec![Element {
+            variables: (0..n).collect(),
+            constraints: (0..m).collect(),
+            objective: true,
+        }]
     }
 }
 
@@ -118,17 +135,24 @@ pub fn check_elements(elements: &[Element], n: usize, m: usize) -> Result<(), St
     let mut objective = None;
     for (e, el) in elements.iter().enumerate() {
         if el.variables.windows(2).any(|w| w[0] >= w[1]) {
-            return Err(format!("element {e}: variables are not strictly increasing"));
+            return Err(format!(
+                "element {e}: variables are not strictly increasing"
+            ));
         }
         if let Some(&v) = el.variables.iter().find(|&&v| v >= n) {
             return Err(format!("element {e}: variable {v} out of range (n = {n})"));
         }
         for &i in &el.constraints {
             if i >= m {
-                return Err(format!("element {e}: constraint {i} out of range (m = {m})"));
+                return Err(format!(
+                    "element {e}: constraint {i} out of range (m = {m})"
+                ));
             }
             if owner[i] != usize::MAX {
-                return Err(format!("constraint {i} belongs to elements {} and {e}", owner[i]));
+                return Err(format!(
+                    "constraint {i} belongs to elements {} and {e}",
+                    owner[i]
+                ));
             }
             owner[i] = e;
         }
@@ -205,7 +229,11 @@ impl<P: AdProblem> Nlp for AdNlp<P> {
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
         let mut c = vec![Dual64::from(0.0); self.m];
         for j in 0..self.n {
-            let xd: Vec<Dual64> = x.iter().enumerate().map(|(k, &v)| Dual64::new(v, if k == j { 1.0 } else { 0.0 })).collect();
+            let xd: Vec<Dual64> = x
+                .iter()
+                .enumerate()
+                .map(|(k, &v)| Dual64::new(v, if k == j { 1.0 } else { 0.0 }))
+                .collect();
             g[j] = self.problem.eval(&xd, &mut c).eps;
         }
         finite_check("gradient", g)
@@ -215,12 +243,18 @@ impl<P: AdProblem> Nlp for AdNlp<P> {
         finite_check("constraints", c)
     }
     fn jacobian_structure(&self) -> Vec<(usize, usize)> {
-        (0..self.m).flat_map(|i| (0..self.n).map(move |j| (i, j))).collect()
+        (0..self.m)
+            .flat_map(|i| (0..self.n).map(move |j| (i, j)))
+            .collect()
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
         let mut c = vec![Dual64::from(0.0); self.m];
         for j in 0..self.n {
-            let xd: Vec<Dual64> = x.iter().enumerate().map(|(k, &v)| Dual64::new(v, if k == j { 1.0 } else { 0.0 })).collect();
+            let xd: Vec<Dual64> = x
+                .iter()
+                .enumerate()
+                .map(|(k, &v)| Dual64::new(v, if k == j { 1.0 } else { 0.0 }))
+                .collect();
             self.problem.eval(&xd, &mut c);
             for i in 0..self.m {
                 values[i * self.n + j] = c[i].eps;
@@ -231,7 +265,14 @@ impl<P: AdProblem> Nlp for AdNlp<P> {
     fn has_hessian(&self) -> bool {
         true
     }
-    fn element_hessian(&mut self, x: &[f64], _e: usize, sigma: f64, lambda: &[f64], h: &mut [f64]) -> Result<(), EvalError> {
+    fn element_hessian(
+        &mut self,
+        x: &[f64],
+        _e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
         let n = self.n;
         let mut c = vec![HyperDual64::from(0.0); self.m];
         for j in 0..n {
@@ -239,7 +280,14 @@ impl<P: AdProblem> Nlp for AdNlp<P> {
                 let xd: Vec<HyperDual64> = x
                     .iter()
                     .enumerate()
-                    .map(|(i, &v)| HyperDual64::new(v, if i == j { 1.0 } else { 0.0 }, if i == k { 1.0 } else { 0.0 }, 0.0))
+                    .map(|(i, &v)| {
+                        HyperDual64::new(
+                            v,
+                            if i == j { 1.0 } else { 0.0 },
+                            if i == k { 1.0 } else { 0.0 },
+                            0.0,
+                        )
+                    })
                     .collect();
                 let f = self.problem.eval(&xd, &mut c);
                 let mut v = sigma * f.eps1eps2;
@@ -271,7 +319,12 @@ pub struct DerivativeCheck {
 /// Compare the derivatives of `nlp` at `x` with central differences of
 /// step `h` (relative to max(1, |x_j|)); the Hessian with multipliers
 /// `lambda` against differences of the Lagrangian gradient.
-pub fn check_derivatives<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], lambda: &[f64], h: f64) -> Result<DerivativeCheck, EvalError> {
+pub fn check_derivatives<N: Nlp + ?Sized>(
+    nlp: &mut N,
+    x: &[f64],
+    lambda: &[f64],
+    h: f64,
+) -> Result<DerivativeCheck, EvalError> {
     let (n, m) = (nlp.num_variables(), nlp.num_constraints());
     let pattern = nlp.jacobian_structure();
     let mut g = vec![0.0; n];
@@ -298,25 +351,39 @@ pub fn check_derivatives<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], lambda: &[f64]
         }
         Ok(g)
     };
-    let hess = if nlp.has_hessian() { Some(assemble_hessian(nlp, x, 1.0, lambda)?) } else { None };
+    let hess = if nlp.has_hessian() {
+        Some(assemble_hessian(nlp, x, 1.0, lambda)?)
+    } else {
+        None
+    };
     let mut hess_err: f64 = 0.0;
     for j in 0..n {
         let step = h * x[j].abs().max(1.0);
         xp[j] = x[j] + step;
         let fp = nlp.objective(&xp)?;
         nlp.constraints(&xp, &mut cp)?;
-        let gp = if hess.is_some() { Some(lag_grad(nlp, &xp)?) } else { None };
+        let gp = if hess.is_some() {
+            Some(lag_grad(nlp, &xp)?)
+        } else {
+            None
+        };
         xp[j] = x[j] - step;
         let fm = nlp.objective(&xp)?;
         nlp.constraints(&xp, &mut cm)?;
-        let gm = if hess.is_some() { Some(lag_grad(nlp, &xp)?) } else { None };
+        let gm = if hess.is_some() {
+            Some(lag_grad(nlp, &xp)?)
+        } else {
+            None
+        };
         xp[j] = x[j];
         let fd = (fp - fm) / (2.0 * step);
         report.gradient = report.gradient.max((g[j] - fd).abs() / fd.abs().max(1.0));
         for i in 0..m {
             let fd = (cp[i] - cm[i]) / (2.0 * step);
             if in_pattern[i * n + j] {
-                report.jacobian = report.jacobian.max((jac[i * n + j] - fd).abs() / fd.abs().max(1.0));
+                report.jacobian = report
+                    .jacobian
+                    .max((jac[i * n + j] - fd).abs() / fd.abs().max(1.0));
             } else {
                 report.jacobian_outside_pattern = report.jacobian_outside_pattern.max(fd.abs());
             }
@@ -333,7 +400,12 @@ pub fn check_derivatives<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], lambda: &[f64]
 }
 
 /// The dense n×n Lagrangian Hessian summed from the element Hessians.
-pub fn assemble_hessian<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], sigma: f64, lambda: &[f64]) -> Result<Vec<f64>, EvalError> {
+pub fn assemble_hessian<N: Nlp + ?Sized>(
+    nlp: &mut N,
+    x: &[f64],
+    sigma: f64,
+    lambda: &[f64],
+) -> Result<Vec<f64>, EvalError> {
     let n = nlp.num_variables();
     let mut out = vec![0.0; n * n];
     for (e, el) in nlp.elements().iter().enumerate() {

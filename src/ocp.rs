@@ -37,7 +37,10 @@ use crate::model::{Model, ModelError};
 use crate::ode::{ForceLaws, OdeError, StateEquation, StateWorkspace};
 use crate::path::PathSmoothing;
 use crate::scalar::Scalar;
-use crate::simulate::{extensor_moments, simulate_rust, BangBang, JumpSummary, SimulateOptions, SimulationFailure, Trajectory};
+use crate::simulate::{
+    extensor_moments, simulate_rust, BangBang, JumpSummary, SimulateOptions, SimulationFailure,
+    Trajectory,
+};
 use crate::squat::{static_squat, SquatError, StaticSquat};
 
 /// How the final time is tied to lift-off.
@@ -155,17 +158,23 @@ impl JumpOcp {
     pub fn new(model: &Model, options: OcpOptions) -> Result<Self, OcpError> {
         let laws = OpenSimLaws::new(model)?;
         let eq = StateEquation::new(model, true, options.smoothing)?;
-        let pose = model
-            .poses
-            .get("squat")
-            .cloned()
-            .ok_or_else(|| OcpError::Invalid(format!("{}: poses: the model has no 'squat' pose to start from", model.file.display())))?;
+        let pose = model.poses.get("squat").cloned().ok_or_else(|| {
+            OcpError::Invalid(format!(
+                "{}: poses: the model has no 'squat' pose to start from",
+                model.file.display()
+            ))
+        })?;
         let squat = static_squat(&eq, &laws, &pose)?;
         Self::from_parts(eq, laws, squat, options)
     }
 
     /// The jump problem from its parts (the start need not be a squat).
-    pub fn from_parts(eq: StateEquation, laws: OpenSimLaws, squat: StaticSquat, options: OcpOptions) -> Result<Self, OcpError> {
+    pub fn from_parts(
+        eq: StateEquation,
+        laws: OpenSimLaws,
+        squat: StaticSquat,
+        options: OcpOptions,
+    ) -> Result<Self, OcpError> {
         let (n, nm) = (eq.nq(), eq.nm());
         let nx = eq.nx();
         if squat.x.len() != nx || squat.excitation.len() != nm {
@@ -177,25 +186,38 @@ impl JumpOcp {
         }
         let [t0, t1] = options.final_time_bounds;
         if !(t0.is_finite() && t1.is_finite() && 0.0 < t0 && t0 <= t1) {
-            return Err(OcpError::Invalid(format!("final_time_bounds: need 0 < t_min ≤ t_max, got [{t0}, {t1}]")));
+            return Err(OcpError::Invalid(format!(
+                "final_time_bounds: need 0 < t_min ≤ t_max, got [{t0}, {t1}]"
+            )));
         }
         if options.speed_bound.is_nan() || options.speed_bound <= 0.0 {
-            return Err(OcpError::Invalid(format!("speed_bound: must be positive, got {}", options.speed_bound)));
+            return Err(OcpError::Invalid(format!(
+                "speed_bound: must be positive, got {}",
+                options.speed_bound
+            )));
         }
         let [f0, f1] = options.fiber_length_bounds;
         if !(0.0 <= f0 && f0 < f1 && f1.is_finite()) {
-            return Err(OcpError::Invalid(format!("fiber_length_bounds: need 0 ≤ lower < upper, got [{f0}, {f1}]")));
+            return Err(OcpError::Invalid(format!(
+                "fiber_length_bounds: need 0 ≤ lower < upper, got [{f0}, {f1}]"
+            )));
         }
         let fraction = match options.liftoff {
             LiftOff::ForceAtMost { fraction } | LiftOff::ForceEquals { fraction } => fraction,
         };
         if !(fraction.is_finite() && fraction >= 0.0) {
-            return Err(OcpError::Invalid(format!("liftoff: the force fraction must be ≥ 0, got {fraction}")));
+            return Err(OcpError::Invalid(format!(
+                "liftoff: the force fraction must be ≥ 0, got {fraction}"
+            )));
         }
         let model = &eq.model;
-        let gravity = (model.gravity[0].powi(2) + model.gravity[1].powi(2) + model.gravity[2].powi(2)).sqrt();
+        let gravity =
+            (model.gravity[0].powi(2) + model.gravity[1].powi(2) + model.gravity[2].powi(2)).sqrt();
         if gravity.is_nan() || gravity <= 0.0 {
-            return Err(OcpError::Invalid(format!("{}: gravity is zero; the jump objective needs g > 0", model.file.display())));
+            return Err(OcpError::Invalid(format!(
+                "{}: gravity is zero; the jump objective needs g > 0",
+                model.file.display()
+            )));
         }
         let body_weight = model.total_mass() * gravity;
         let mut lo = vec![0.0; nx];
@@ -214,7 +236,10 @@ impl JumpOcp {
             let lopt = spec.optimal_fiber_length;
             let (lmin, umin) = match &laws.muscles[mi] {
                 MuscleLaw::Thelen(t) => (t.min_fiber_length, laws.muscles[mi].min_excitation()),
-                MuscleLaw::DeGroote(_) => (lopt * spec.pennation_angle_at_optimal.sin(), laws.muscles[mi].min_excitation()),
+                MuscleLaw::DeGroote(_) => (
+                    lopt * spec.pennation_angle_at_optimal.sin(),
+                    laws.muscles[mi].min_excitation(),
+                ),
             };
             lo[2 * n + k] = (f0 * lopt).max(lmin * (1.0 + options.min_fiber_length_margin));
             hi[2 * n + k] = f1 * lopt;
@@ -225,14 +250,20 @@ impl JumpOcp {
         let names = eq.state_names();
         for i in 0..nx {
             if !(lo[i] <= squat.x[i] && squat.x[i] <= hi[i]) {
-                return Err(OcpError::Invalid(format!("the start violates the bounds of {}: {} not in [{}, {}]", names[i], squat.x[i], lo[i], hi[i])));
+                return Err(OcpError::Invalid(format!(
+                    "the start violates the bounds of {}: {} not in [{}, {}]",
+                    names[i], squat.x[i], lo[i], hi[i]
+                )));
             }
         }
         let cnames = eq.control_names();
         for k in 0..nm {
             let v = squat.excitation[k];
             if !(ulo[k] <= v && v <= uhi[k]) {
-                return Err(OcpError::Invalid(format!("the start violates the bounds of {}: {v} not in [{}, {}]", cnames[k], ulo[k], uhi[k])));
+                return Err(OcpError::Invalid(format!(
+                    "the start violates the bounds of {}: {v} not in [{}, {}]",
+                    cnames[k], ulo[k], uhi[k]
+                )));
             }
         }
         let standing_com_height = crate::simulate::standing_com_height(&eq);
@@ -274,7 +305,11 @@ impl JumpOcp {
     }
 
     /// Y_C, Ẏ_C and J = Y_C + Ẏ_C²/(2g) at state x (eq. 3).
-    pub fn jump_objective<S: Scalar>(&self, ws: &mut crate::multibody::Workspace<S>, x: &[S]) -> (S, S, S) {
+    pub fn jump_objective<S: Scalar>(
+        &self,
+        ws: &mut crate::multibody::Workspace<S>,
+        x: &[S],
+    ) -> (S, S, S) {
         let n = self.nq();
         self.eq.multibody.set_state(ws, &x[..n], &x[n..2 * n]);
         let y = self.eq.multibody.com_position(ws)[1];
@@ -285,7 +320,13 @@ impl JumpOcp {
     /// ẋ = f(x, u) into `xdot`, and the node outputs the constraints use:
     /// Ÿ_C (m/s², from q, q̇ and the q̈ just computed) and the total vertical
     /// ground force over body weight.
-    pub fn state_rates<S: Scalar>(&self, ws: &mut StateWorkspace<S>, x: &[S], u: &[S], xdot: &mut [S]) -> Result<(S, S), OdeError>
+    pub fn state_rates<S: Scalar>(
+        &self,
+        ws: &mut StateWorkspace<S>,
+        x: &[S],
+        u: &[S],
+        xdot: &mut [S],
+    ) -> Result<(S, S), OdeError>
     where
         OpenSimLaws: ForceLaws<S>,
     {
@@ -313,13 +354,41 @@ impl JumpOcp {
     pub fn bang_bang(&self) -> BangBang {
         let pose = self.eq.system.model_from_q(&self.squat.x[..self.nq()]);
         let ext = extensor_moments(&self.eq, &pose);
-        BangBang { intervals: ext.iter().map(|&e| if e > 0.0 { Some((0.0, f64::INFINITY)) } else { None }).collect(), off_level: MIN_ACTIVATION }
+        BangBang {
+            intervals: ext
+                .iter()
+                .map(|&e| {
+                    if e > 0.0 {
+                        Some((0.0, f64::INFINITY))
+                    } else {
+                        None
+                    }
+                })
+                .collect(),
+            off_level: MIN_ACTIVATION,
+        }
     }
 
     /// Integrate the bang-bang jump from the fixed start with the
     /// Rust-native Dormand–Prince 5(4) (`accuracy` as `leap simulate`).
-    pub fn simulate_bang_bang(&self, accuracy: f64) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
-        let opts = SimulateOptions { integrator: crate::integrator::Dopri5Options { accuracy, ..Default::default() }, t_max: 2.0 };
-        simulate_rust(&self.eq, &self.laws, &self.bang_bang(), &self.squat.x, self.standing_com_height, opts)
+    pub fn simulate_bang_bang(
+        &self,
+        accuracy: f64,
+    ) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
+        let opts = SimulateOptions {
+            integrator: crate::integrator::Dopri5Options {
+                accuracy,
+                ..Default::default()
+            },
+            t_max: 2.0,
+        };
+        simulate_rust(
+            &self.eq,
+            &self.laws,
+            &self.bang_bang(),
+            &self.squat.x,
+            self.standing_com_height,
+            opts,
+        )
     }
 }

@@ -31,11 +31,17 @@ pub struct MuscleRates<S> {
 pub trait ForceLaws<S: Scalar> {
     /// Muscle `m` with activation `a`, fibre length `lm`, muscle-tendon
     /// length `lmt` and lengthening speed `vmt`, under excitation `u`.
-    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String>;
+    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S)
+        -> Result<MuscleRates<S>, String>;
     /// Contact sphere `k` with its centre at `p_ground_centre` and the
     /// velocity (ground) of its material point at the contact point: the
     /// force on the sphere and its point of application, in ground.
-    fn sphere(&self, k: usize, p_ground_centre: [S; 3], v_ground_contact: [S; 3]) -> ([S; 3], [S; 3]);
+    fn sphere(
+        &self,
+        k: usize,
+        p_ground_centre: [S; 3],
+        v_ground_contact: [S; 3],
+    ) -> ([S; 3], [S; 3]);
     /// Passive torque of ligament `l` at coordinate value `q` and speed `qd`.
     fn ligament(&self, l: usize, q: S, qd: S) -> S;
 }
@@ -52,7 +58,11 @@ pub enum OdeError {
     #[error(transparent)]
     Singular(#[from] SingularMassMatrix),
     #[error("wrong length of {what}: {got} (expected {want})")]
-    Length { what: &'static str, got: usize, want: usize },
+    Length {
+        what: &'static str,
+        got: usize,
+        want: usize,
+    },
 }
 
 /// The state equation of a model's full or symmetric system.
@@ -93,7 +103,10 @@ impl StateEquation {
         let system = model.system(symmetric)?;
         let multibody = Multibody::new(model, &system);
         if multibody.num_composite_bodies() > 64 {
-            return Err(OdeError::Symmetry(format!("{}: more than 64 moving bodies are not supported", model.file.display())));
+            return Err(OdeError::Symmetry(format!(
+                "{}: more than 64 moving bodies are not supported",
+                model.file.display()
+            )));
         }
         let mut muscles = Vec::new();
         let mut multiplicity = Vec::new();
@@ -101,12 +114,20 @@ impl StateEquation {
             let name = &m.spec.name;
             if symmetric {
                 if let Some(stem) = name.strip_suffix("_l") {
-                    if model.muscles.iter().any(|o| o.spec.name == format!("{stem}_r")) {
+                    if model
+                        .muscles
+                        .iter()
+                        .any(|o| o.spec.name == format!("{stem}_r"))
+                    {
                         continue; // carried by its right partner
                     }
                 }
                 if let Some(stem) = name.strip_suffix("_r") {
-                    if let Some(j) = model.muscles.iter().position(|o| o.spec.name == format!("{stem}_l")) {
+                    if let Some(j) = model
+                        .muscles
+                        .iter()
+                        .position(|o| o.spec.name == format!("{stem}_l"))
+                    {
                         check_mirror(model, &system, &multibody, i, j)?;
                         muscles.push(i);
                         multiplicity.push(2.0);
@@ -117,7 +138,14 @@ impl StateEquation {
             muscles.push(i);
             multiplicity.push(1.0);
         }
-        Ok(StateEquation { model: model.clone(), system, multibody, muscles, multiplicity, smoothing })
+        Ok(StateEquation {
+            model: model.clone(),
+            system,
+            multibody,
+            muscles,
+            multiplicity,
+            smoothing,
+        })
     }
 
     /// Number of generalized coordinates.
@@ -142,10 +170,14 @@ impl StateEquation {
             let name = &self.model.coordinates[c].name;
             let joint = self.model.joints.iter().find(|j| match &j.kind {
                 crate::model::JointKind::Planar { coordinates } => coordinates.contains(&c),
-                crate::model::JointKind::Pin { coordinate } | crate::model::JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
+                crate::model::JointKind::Pin { coordinate }
+                | crate::model::JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
                 crate::model::JointKind::Weld => false,
             });
-            format!("/jointset/{}/{name}/{what}", joint.map(|j| j.name.as_str()).unwrap_or("?"))
+            format!(
+                "/jointset/{}/{name}/{what}",
+                joint.map(|j| j.name.as_str()).unwrap_or("?")
+            )
         };
         for &c in &self.system.coordinates {
             out.push(coord_path(c, "value"));
@@ -154,17 +186,26 @@ impl StateEquation {
             out.push(coord_path(c, "speed"));
         }
         for &m in &self.muscles {
-            out.push(format!("/forceset/{}/fiber_length", self.model.muscles[m].spec.name));
+            out.push(format!(
+                "/forceset/{}/fiber_length",
+                self.model.muscles[m].spec.name
+            ));
         }
         for &m in &self.muscles {
-            out.push(format!("/forceset/{}/activation", self.model.muscles[m].spec.name));
+            out.push(format!(
+                "/forceset/{}/activation",
+                self.model.muscles[m].spec.name
+            ));
         }
         out
     }
 
     /// Control names (Moco: `/forceset/<muscle>`).
     pub fn control_names(&self) -> Vec<String> {
-        self.muscles.iter().map(|&m| format!("/forceset/{}", self.model.muscles[m].spec.name)).collect()
+        self.muscles
+            .iter()
+            .map(|&m| format!("/forceset/{}", self.model.muscles[m].spec.name))
+            .collect()
     }
 
     /// Buffers for evaluations with scalar type `S`.
@@ -172,7 +213,12 @@ impl StateEquation {
         let n = self.nq();
         let nm = self.nm();
         let z = S::zero();
-        let ns = self.model.contact.as_ref().map(|c| c.spheres.len()).unwrap_or(0);
+        let ns = self
+            .model
+            .contact
+            .as_ref()
+            .map(|c| c.spheres.len())
+            .unwrap_or(0);
         StateWorkspace {
             mb: self.multibody.workspace(),
             tau: vec![z; n],
@@ -188,16 +234,35 @@ impl StateEquation {
     }
 
     /// ẋ = f(x, u): writes `xdot` (length [`Self::nx`]).
-    pub fn rhs<S: Scalar, L: ForceLaws<S>>(&self, laws: &L, ws: &mut StateWorkspace<S>, x: &[S], u: &[S], xdot: &mut [S]) -> Result<(), OdeError> {
+    pub fn rhs<S: Scalar, L: ForceLaws<S>>(
+        &self,
+        laws: &L,
+        ws: &mut StateWorkspace<S>,
+        x: &[S],
+        u: &[S],
+        xdot: &mut [S],
+    ) -> Result<(), OdeError> {
         let (n, nm) = (self.nq(), self.nm());
         if x.len() != self.nx() {
-            return Err(OdeError::Length { what: "x", got: x.len(), want: self.nx() });
+            return Err(OdeError::Length {
+                what: "x",
+                got: x.len(),
+                want: self.nx(),
+            });
         }
         if u.len() != nm {
-            return Err(OdeError::Length { what: "u", got: u.len(), want: nm });
+            return Err(OdeError::Length {
+                what: "u",
+                got: u.len(),
+                want: nm,
+            });
         }
         if xdot.len() != self.nx() {
-            return Err(OdeError::Length { what: "xdot", got: xdot.len(), want: self.nx() });
+            return Err(OdeError::Length {
+                what: "xdot",
+                got: xdot.len(),
+                want: self.nx(),
+            });
         }
         let (q, rest) = x.split_at(n);
         let (qd, rest) = rest.split_at(n);
@@ -208,18 +273,45 @@ impl StateEquation {
         }
         let q_of = &self.system.q_of_model_coordinate;
         {
-            let view = ModelView { mb: &self.multibody, ws: &ws.mb, q_of };
-            let mut sink = GeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau };
-            let mut unit = crate::multibody::UnitGeneralizedForces { mb: &self.multibody, ws: &ws.mb, q_of, tau: &mut ws.tau_unit, wrench: &mut ws.wrench, touched: all_bodies(self.multibody.num_composite_bodies()) };
-            self.apply_forces(laws, &view, &mut sink, lm, act, u, &mut xdot[2 * n..], Outputs {
-                mtu_length: &mut ws.mtu_length,
-                mtu_speed: &mut ws.mtu_speed,
-                tendon_force: &mut ws.tendon_force,
-                sphere_force: &mut ws.sphere_force,
-                ligament_torque: &mut ws.ligament_torque,
-            }, &mut unit)?;
+            let view = ModelView {
+                mb: &self.multibody,
+                ws: &ws.mb,
+                q_of,
+            };
+            let mut sink = GeneralizedForces {
+                mb: &self.multibody,
+                ws: &ws.mb,
+                q_of,
+                tau: &mut ws.tau,
+            };
+            let mut unit = crate::multibody::UnitGeneralizedForces {
+                mb: &self.multibody,
+                ws: &ws.mb,
+                q_of,
+                tau: &mut ws.tau_unit,
+                wrench: &mut ws.wrench,
+                touched: all_bodies(self.multibody.num_composite_bodies()),
+            };
+            self.apply_forces(
+                laws,
+                &view,
+                &mut sink,
+                lm,
+                act,
+                u,
+                &mut xdot[2 * n..],
+                Outputs {
+                    mtu_length: &mut ws.mtu_length,
+                    mtu_speed: &mut ws.mtu_speed,
+                    tendon_force: &mut ws.tendon_force,
+                    sphere_force: &mut ws.sphere_force,
+                    ligament_torque: &mut ws.ligament_torque,
+                },
+                &mut unit,
+            )?;
         }
-        self.multibody.forward_dynamics(&mut ws.mb, &ws.tau, &mut ws.qdd)?;
+        self.multibody
+            .forward_dynamics(&mut ws.mb, &ws.tau, &mut ws.qdd)?;
         xdot[..n].copy_from_slice(qd);
         xdot[n..2 * n].copy_from_slice(&ws.qdd);
         Ok(())
@@ -228,7 +320,13 @@ impl StateEquation {
     /// The forces of every element at the state `view` shows, into `sink`;
     /// muscle rates into `zdot` = [d l^M/dt, da/dt]. Shared by both backends.
     #[allow(clippy::too_many_arguments)]
-    pub fn apply_forces<S: Scalar, L: ForceLaws<S>, K: BodyKinematics<S>, F: ForceSink<S>, U: crate::path::UnitForces<S, F>>(
+    pub fn apply_forces<
+        S: Scalar,
+        L: ForceLaws<S>,
+        K: BodyKinematics<S>,
+        F: ForceSink<S>,
+        U: crate::path::UnitForces<S, F>,
+    >(
         &self,
         laws: &L,
         view: &K,
@@ -251,7 +349,11 @@ impl StateEquation {
         // Foot-ground contact.
         if let Some(contact) = &self.model.contact {
             for (k, sp) in contact.spheres.iter().enumerate() {
-                let loc = [S::from(sp.location[0]), S::from(sp.location[1]), S::from(sp.location[2])];
+                let loc = [
+                    S::from(sp.location[0]),
+                    S::from(sp.location[1]),
+                    S::from(sp.location[2]),
+                ];
                 let p = view.position(sp.body, loc);
                 // Simbody's contact point is mid-overlap, R − δ/2 below the
                 // centre; its slip includes the foot's rotation.
@@ -270,10 +372,15 @@ impl StateEquation {
         for (k, &mi) in self.muscles.iter().enumerate() {
             let muscle = &self.model.muscles[mi];
             unit.clear();
-            let pv = muscle.path.calc(view, self.smoothing, Some((S::one(), &mut *unit)));
+            let pv = muscle
+                .path
+                .calc(view, self.smoothing, Some((S::one(), &mut *unit)));
             let rates = laws
                 .muscle(mi, act[k], lm[k], pv.length, pv.lengthening_speed, u[k])
-                .map_err(|reason| OdeError::Muscle { muscle: muscle.spec.name.clone(), reason })?;
+                .map_err(|reason| OdeError::Muscle {
+                    muscle: muscle.spec.name.clone(),
+                    reason,
+                })?;
             out.mtu_length[k] = pv.length;
             out.mtu_speed[k] = pv.lengthening_speed;
             out.tendon_force[k] = rates.tendon_force;
@@ -305,7 +412,13 @@ pub struct Outputs<'a, S> {
 
 /// Check that muscle `j` (left) mirrors muscle `i` (right) in the symmetric
 /// system: equal parameters and equal path lengths at several poses.
-fn check_mirror(model: &Model, system: &SystemSpec, mb: &Multibody, i: usize, j: usize) -> Result<(), OdeError> {
+fn check_mirror(
+    model: &Model,
+    system: &SystemSpec,
+    mb: &Multibody,
+    i: usize,
+    j: usize,
+) -> Result<(), OdeError> {
     let (a, b) = (&model.muscles[i].spec, &model.muscles[j].spec);
     let params = |m: &crate::model::MuscleSpec| {
         [
@@ -340,10 +453,20 @@ fn check_mirror(model: &Model, system: &SystemSpec, mb: &Multibody, i: usize, j:
             })
             .collect();
         mb.set_state(&mut ws, &q, &vec![0.0; n]);
-        let view = ModelView { mb, ws: &ws, q_of: &system.q_of_model_coordinate };
+        let view = ModelView {
+            mb,
+            ws: &ws,
+            q_of: &system.q_of_model_coordinate,
+        };
         let sm = PathSmoothing::Smooth { delta: 0.02 };
-        let li = model.muscles[i].path.calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None).length;
-        let lj = model.muscles[j].path.calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None).length;
+        let li = model.muscles[i]
+            .path
+            .calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None)
+            .length;
+        let lj = model.muscles[j]
+            .path
+            .calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None)
+            .length;
         if (li - lj).abs() > 1e-12 * li.abs().max(1.0) {
             return Err(OdeError::Symmetry(format!(
                 "{}: muscle '{}' is not the mirror image of '{}' (path lengths {lj} m and {li} m at the same symmetric pose)",
@@ -376,7 +499,10 @@ pub struct SimbodyStateEquation {
 
 impl SimbodyStateEquation {
     /// Build Simbody's system for `equation` with force laws `laws`.
-    pub fn new<L>(equation: std::sync::Arc<StateEquation>, laws: std::sync::Arc<L>) -> Result<Self, crate::simbody::SimbodyError>
+    pub fn new<L>(
+        equation: std::sync::Arc<StateEquation>,
+        laws: std::sync::Arc<L>,
+    ) -> Result<Self, crate::simbody::SimbodyError>
     where
         L: ForceLaws<f64> + Send + Sync + 'static,
     {
@@ -385,30 +511,62 @@ impl SimbodyStateEquation {
         let q_index: Vec<usize> = sys.q_of_model_coordinate.iter().map(|&k| perm[k]).collect();
         let mobod: Vec<i32> = sys.system_body_of.iter().map(|&s| s as i32 + 1).collect();
         let nm = equation.nm();
-        let excitation = std::sync::Arc::new(std::sync::Mutex::new(Excitation::Constant(vec![0.0; nm])));
+        let excitation =
+            std::sync::Arc::new(std::sync::Mutex::new(Excitation::Constant(vec![0.0; nm])));
         let exc = excitation.clone();
         let eq = equation.clone();
         let mut buf = crate::simbody::ForceBuffer::default();
         let mut unit = crate::path::CollectedForces::<f64>::default();
         let mut u = vec![0.0; nm];
-        let ns = eq.model.contact.as_ref().map(|c| c.spheres.len()).unwrap_or(0);
-        let (mut o1, mut o2, mut o3, mut o4, mut o5) = (vec![0.0; nm], vec![0.0; nm], vec![0.0; nm], vec![[0.0; 3]; ns], vec![0.0; eq.model.ligaments.len()]);
+        let ns = eq
+            .model
+            .contact
+            .as_ref()
+            .map(|c| c.spheres.len())
+            .unwrap_or(0);
+        let (mut o1, mut o2, mut o3, mut o4, mut o5) = (
+            vec![0.0; nm],
+            vec![0.0; nm],
+            vec![0.0; nm],
+            vec![[0.0; 3]; ns],
+            vec![0.0; eq.model.ligaments.len()],
+        );
         let f: Box<crate::simbody::ForceFn> = Box::new(move |ctx, t, q, qd, z, zdot| {
-            match &*exc.lock().map_err(|_| "excitation lock poisoned".to_string())? {
+            match &*exc
+                .lock()
+                .map_err(|_| "excitation lock poisoned".to_string())?
+            {
                 Excitation::Constant(v) => u.copy_from_slice(v),
                 Excitation::OfTime(g) => g(t, &mut u),
             }
             buf.clear();
             {
-                let kin = crate::simbody::SimbodyKinematics { ctx, mobod: &mobod, q_index: &q_index, q, u: qd, error: Default::default() };
+                let kin = crate::simbody::SimbodyKinematics {
+                    ctx,
+                    mobod: &mobod,
+                    q_index: &q_index,
+                    q,
+                    u: qd,
+                    error: Default::default(),
+                };
                 let (lm, act) = z.split_at(nm);
-                eq.apply_forces(&*laws, &kin, &mut buf, lm, act, &u, zdot, Outputs {
-                    mtu_length: &mut o1,
-                    mtu_speed: &mut o2,
-                    tendon_force: &mut o3,
-                    sphere_force: &mut o4,
-                    ligament_torque: &mut o5,
-                }, &mut unit)
+                eq.apply_forces(
+                    &*laws,
+                    &kin,
+                    &mut buf,
+                    lm,
+                    act,
+                    &u,
+                    zdot,
+                    Outputs {
+                        mtu_length: &mut o1,
+                        mtu_speed: &mut o2,
+                        tendon_force: &mut o3,
+                        sphere_force: &mut o4,
+                        ligament_torque: &mut o5,
+                    },
+                    &mut unit,
+                )
                 .map_err(|e| e.to_string())?;
                 if let Some(e) = kin.error.into_inner() {
                     return Err(e);
@@ -416,8 +574,17 @@ impl SimbodyStateEquation {
             }
             buf.flush(ctx, &mobod, &q_index)
         });
-        let simbody = crate::simbody::SimbodyModel::with_force(&equation.model, &equation.system, Some((f, 2 * nm)))?;
-        Ok(SimbodyStateEquation { equation, simbody, excitation, perm })
+        let simbody = crate::simbody::SimbodyModel::with_force(
+            &equation.model,
+            &equation.system,
+            Some((f, 2 * nm)),
+        )?;
+        Ok(SimbodyStateEquation {
+            equation,
+            simbody,
+            excitation,
+            perm,
+        })
     }
 
     /// Set the excitations the force element sees.
@@ -436,7 +603,11 @@ impl SimbodyStateEquation {
     pub fn set_state(&mut self, t: f64, x: &[f64]) -> Result<(), crate::simbody::SimbodyError> {
         let n = self.equation.nq();
         if x.len() != self.equation.nx() {
-            return Err(crate::simbody::SimbodyError::Input(format!("x has length {}, expected {}", x.len(), self.equation.nx())));
+            return Err(crate::simbody::SimbodyError::Input(format!(
+                "x has length {}, expected {}",
+                x.len(),
+                self.equation.nx()
+            )));
         }
         self.simbody.set_state(t, &x[..n], &x[n..2 * n])?;
         self.simbody.set_z(&x[2 * n..])
@@ -453,10 +624,17 @@ impl SimbodyStateEquation {
     }
 
     /// ẋ = f(x, u) computed by Simbody.
-    pub fn rhs(&mut self, x: &[f64], u: &[f64], xdot: &mut [f64]) -> Result<(), crate::simbody::SimbodyError> {
+    pub fn rhs(
+        &mut self,
+        x: &[f64],
+        u: &[f64],
+        xdot: &mut [f64],
+    ) -> Result<(), crate::simbody::SimbodyError> {
         let n = self.equation.nq();
         if u.len() != self.equation.nm() || xdot.len() != self.equation.nx() {
-            return Err(crate::simbody::SimbodyError::Input("wrong length of u or xdot".into()));
+            return Err(crate::simbody::SimbodyError::Input(
+                "wrong length of u or xdot".into(),
+            ));
         }
         self.set_excitation(Excitation::Constant(u.to_vec()));
         // Setting the state invalidates every cached force (the excitation

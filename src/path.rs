@@ -28,17 +28,36 @@ pub enum PathPointSpec {
     /// OpenSim `PathPoint`: fixed in `body` at `location` (m).
     Fixed { body: String, location: [f64; 3] },
     /// OpenSim `ConditionalPathPoint`: active iff `range[0] ≤ coordinate ≤ range[1]`.
-    Conditional { body: String, location: [f64; 3], coordinate: String, range: [f64; 2] },
+    Conditional {
+        body: String,
+        location: [f64; 3],
+        coordinate: String,
+        range: [f64; 2],
+    },
     /// OpenSim `MovingPathPoint`: location components are SimmSplines of `coordinate`.
-    Moving { body: String, coordinate: String, x_location: SplineData, y_location: SplineData, z_location: SplineData },
+    Moving {
+        body: String,
+        coordinate: String,
+        x_location: SplineData,
+        y_location: SplineData,
+        z_location: SplineData,
+    },
 }
 
 /// What makes a validated path point move.
 #[derive(Debug, Clone)]
 pub enum PointKind {
     Fixed,
-    Conditional { coordinate: usize, range: [f64; 2] },
-    Moving { coordinate: usize, x: SimmSpline, y: SimmSpline, z: SimmSpline },
+    Conditional {
+        coordinate: usize,
+        range: [f64; 2],
+    },
+    Moving {
+        coordinate: usize,
+        x: SimmSpline,
+        y: SimmSpline,
+        z: SimmSpline,
+    },
 }
 
 /// A validated path point on model body `body`.
@@ -108,7 +127,10 @@ fn smoothstep<S: Scalar>(x: S) -> (S, S) {
     } else {
         let u2 = u * u;
         let one_minus = S::one() - u;
-        ((u * 6.0 - 15.0) * u2 * u2 + u2 * u * 10.0, u2 * one_minus * one_minus * 15.0)
+        (
+            (u * 6.0 - 15.0) * u2 * u2 + u2 * u * 10.0,
+            u2 * one_minus * one_minus * 15.0,
+        )
     }
 }
 
@@ -145,31 +167,73 @@ impl GeometryPath {
         coordinate: impl Fn(&str) -> Option<usize>,
     ) -> Result<Self, (usize, String, String)> {
         if points.len() < 2 {
-            return Err((0, String::new(), format!("a path needs at least 2 points, got {}", points.len())));
+            return Err((
+                0,
+                String::new(),
+                format!("a path needs at least 2 points, got {}", points.len()),
+            ));
         }
         let mut out = Vec::with_capacity(points.len());
         for (i, p) in points.iter().enumerate() {
-            let b = |name: &str| body(name).ok_or_else(|| (i, "body".to_string(), format!("unknown body '{name}'")));
-            let cd = |name: &str| coordinate(name).ok_or_else(|| (i, "coordinate".to_string(), format!("unknown coordinate '{name}'")));
+            let b = |name: &str| {
+                body(name).ok_or_else(|| (i, "body".to_string(), format!("unknown body '{name}'")))
+            };
+            let cd = |name: &str| {
+                coordinate(name).ok_or_else(|| {
+                    (
+                        i,
+                        "coordinate".to_string(),
+                        format!("unknown coordinate '{name}'"),
+                    )
+                })
+            };
             let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
             let pp = match p {
                 PathPointSpec::Fixed { body, location } => {
                     if !finite(location) {
                         return Err((i, "location".into(), "must be finite".into()));
                     }
-                    PathPoint { body: b(body)?, location: *location, kind: PointKind::Fixed }
+                    PathPoint {
+                        body: b(body)?,
+                        location: *location,
+                        kind: PointKind::Fixed,
+                    }
                 }
-                PathPointSpec::Conditional { body, location, coordinate, range } => {
+                PathPointSpec::Conditional {
+                    body,
+                    location,
+                    coordinate,
+                    range,
+                } => {
                     if !finite(location) {
                         return Err((i, "location".into(), "must be finite".into()));
                     }
                     if !(range[0].is_finite() && range[1].is_finite() && range[0] < range[1]) {
-                        return Err((i, "range".into(), format!("range must be finite with min < max, got {range:?}")));
+                        return Err((
+                            i,
+                            "range".into(),
+                            format!("range must be finite with min < max, got {range:?}"),
+                        ));
                     }
-                    PathPoint { body: b(body)?, location: *location, kind: PointKind::Conditional { coordinate: cd(coordinate)?, range: *range } }
+                    PathPoint {
+                        body: b(body)?,
+                        location: *location,
+                        kind: PointKind::Conditional {
+                            coordinate: cd(coordinate)?,
+                            range: *range,
+                        },
+                    }
                 }
-                PathPointSpec::Moving { body, coordinate, x_location, y_location, z_location } => {
-                    let s = |d: &SplineData, f: &str| SimmSpline::new(d).map_err(|e| (i, f.to_string(), e.to_string()));
+                PathPointSpec::Moving {
+                    body,
+                    coordinate,
+                    x_location,
+                    y_location,
+                    z_location,
+                } => {
+                    let s = |d: &SplineData, f: &str| {
+                        SimmSpline::new(d).map_err(|e| (i, f.to_string(), e.to_string()))
+                    };
                     PathPoint {
                         body: b(body)?,
                         location: [0.0; 3],
@@ -184,9 +248,20 @@ impl GeometryPath {
             };
             out.push(pp);
         }
-        let conditional: Vec<usize> = out.iter().enumerate().filter(|(_, p)| matches!(p.kind, PointKind::Conditional { .. })).map(|(i, _)| i).collect();
-        let conditional_of = (0..out.len()).map(|i| conditional.iter().position(|&c| c == i).map(|j| j as u32)).collect();
-        Ok(GeometryPath { points: out, conditional, conditional_of })
+        let conditional: Vec<usize> = out
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| matches!(p.kind, PointKind::Conditional { .. }))
+            .map(|(i, _)| i)
+            .collect();
+        let conditional_of = (0..out.len())
+            .map(|i| conditional.iter().position(|&c| c == i).map(|j| j as u32))
+            .collect();
+        Ok(GeometryPath {
+            points: out,
+            conditional,
+            conditional_of,
+        })
     }
 
     /// Number of conditional points.
@@ -208,7 +283,8 @@ impl GeometryPath {
         } else {
             mask &= !(1 << j);
         }
-        self.subpath::<S, K, CollectedForces<S>>(k, mask, None).length
+        self.subpath::<S, K, CollectedForces<S>>(k, mask, None)
+            .length
     }
 
     /// The conditional points: (point index, coordinate, range).
@@ -225,17 +301,30 @@ impl GeometryPath {
     /// Location in the body frame and its derivative with respect to the
     /// point's coordinate (zero unless moving).
     #[inline]
-    fn local<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, i: usize) -> ([S; 3], [S; 3], Option<usize>) {
+    fn local<S: Scalar, K: BodyKinematics<S>>(
+        &self,
+        k: &K,
+        i: usize,
+    ) -> ([S; 3], [S; 3], Option<usize>) {
         let p = &self.points[i];
         match &p.kind {
-            PointKind::Moving { coordinate, x, y, z } => {
+            PointKind::Moving {
+                coordinate,
+                x,
+                y,
+                z,
+            } => {
                 let (q, _) = k.coordinate(*coordinate);
                 let (x0, x1, _) = x.eval(q);
                 let (y0, y1, _) = y.eval(q);
                 let (z0, z1, _) = z.eval(q);
                 ([x0, y0, z0], [x1, y1, z1], Some(*coordinate))
             }
-            _ => ([c(p.location[0]), c(p.location[1]), c(p.location[2])], [S::zero(); 3], None),
+            _ => (
+                [c(p.location[0]), c(p.location[1]), c(p.location[2])],
+                [S::zero(); 3],
+                None,
+            ),
         }
     }
 
@@ -256,14 +345,29 @@ impl GeometryPath {
                 v[d] += slide[d] * qd;
             }
         }
-        PointState { i, p, v, loc, slide, coord }
+        PointState {
+            i,
+            p,
+            v,
+            loc,
+            slide,
+            coord,
+        }
     }
 
     /// Weight of each conditional point (1 = active) under `smoothing`,
     /// written into `w` (length [`Self::num_conditional`]).
-    fn weights<S: Scalar, K: BodyKinematics<S>>(&self, k: &K, smoothing: PathSmoothing, w: &mut [S], dw: &mut [S]) {
+    fn weights<S: Scalar, K: BodyKinematics<S>>(
+        &self,
+        k: &K,
+        smoothing: PathSmoothing,
+        w: &mut [S],
+        dw: &mut [S],
+    ) {
         for (j, &i) in self.conditional.iter().enumerate() {
-            let PointKind::Conditional { coordinate, range } = &self.points[i].kind else { continue };
+            let PointKind::Conditional { coordinate, range } = &self.points[i].kind else {
+                continue;
+            };
             let (q, _) = k.coordinate(*coordinate);
             match smoothing {
                 PathSmoothing::Exact => {
@@ -285,7 +389,12 @@ impl GeometryPath {
 
     /// Length and speed of the path with conditional points on where bit j of
     /// `mask` is set; optionally applies `tension` along it.
-    fn subpath<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(&self, k: &K, mask: u32, tension: Option<(S, &mut F)>) -> PathValue<S> {
+    fn subpath<S: Scalar, K: BodyKinematics<S>, F: ForceSink<S>>(
+        &self,
+        k: &K,
+        mask: u32,
+        tension: Option<(S, &mut F)>,
+    ) -> PathValue<S> {
         let mut length = S::zero();
         let mut speed = S::zero();
         let active = |i: usize| -> bool {
@@ -309,7 +418,9 @@ impl GeometryPath {
                 let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
                 let e = [d[0] / len, d[1] / len, d[2] / len];
                 length += len;
-                speed += e[0] * (cur.v[0] - pp.v[0]) + e[1] * (cur.v[1] - pp.v[1]) + e[2] * (cur.v[2] - pp.v[2]);
+                speed += e[0] * (cur.v[0] - pp.v[0])
+                    + e[1] * (cur.v[1] - pp.v[1])
+                    + e[2] * (cur.v[2] - pp.v[2]);
                 dir_out = Some(e);
                 // Force on the previous point: tension toward this one.
                 if let Some((t, sink)) = sink.as_mut() {
@@ -325,13 +436,23 @@ impl GeometryPath {
             let pull = [e[0] * -*t, e[1] * -*t, e[2] * -*t];
             self.apply(last, pull, None, *sink, *t);
         }
-        PathValue { length, lengthening_speed: speed }
+        PathValue {
+            length,
+            lengthening_speed: speed,
+        }
     }
 
     /// Apply the force on a point: `pull` toward its successor plus, if
     /// `incoming` (unit vector from its predecessor) is given, `−T·incoming`.
     #[inline]
-    fn apply<S: Scalar, F: ForceSink<S>>(&self, pt: &PointState<S>, pull: [S; 3], incoming: Option<[S; 3]>, sink: &mut F, t: S) {
+    fn apply<S: Scalar, F: ForceSink<S>>(
+        &self,
+        pt: &PointState<S>,
+        pull: [S; 3],
+        incoming: Option<[S; 3]>,
+        sink: &mut F,
+        t: S,
+    ) {
         let mut f = pull;
         if let Some(e) = incoming {
             for d in 0..3 {
@@ -362,7 +483,10 @@ impl GeometryPath {
         let mut w = [S::zero(); 8];
         let mut dw = [S::zero(); 8];
         self.weights(k, smoothing, &mut w[..nc], &mut dw[..nc]);
-        let mut total = PathValue { length: S::zero(), lengthening_speed: S::zero() };
+        let mut total = PathValue {
+            length: S::zero(),
+            lengthening_speed: S::zero(),
+        };
         let mut sink = tension;
         // Σ over subsets S of Π weights · L(S); the weights' rates add
         // Σ_i ∂Π/∂w_i · ẇ_i · L(S) to the speed and −T Σ ∂Π/∂w_i w_i' L(S)
@@ -370,7 +494,11 @@ impl GeometryPath {
         for mask in 0u32..(1 << nc) {
             let mut prod = S::one();
             for j in 0..nc {
-                prod *= if mask & (1 << j) != 0 { w[j] } else { S::one() - w[j] };
+                prod *= if mask & (1 << j) != 0 {
+                    w[j]
+                } else {
+                    S::one() - w[j]
+                };
             }
             // A saturated weight is exactly 0 with a zero derivative.
             if prod.re() == 0.0 {
@@ -388,12 +516,24 @@ impl GeometryPath {
                     let mut dp = S::one();
                     for m in 0..nc {
                         if m == j {
-                            dp *= if mask & (1 << m) != 0 { S::one() } else { -S::one() };
+                            dp *= if mask & (1 << m) != 0 {
+                                S::one()
+                            } else {
+                                -S::one()
+                            };
                         } else {
-                            dp *= if mask & (1 << m) != 0 { w[m] } else { S::one() - w[m] };
+                            dp *= if mask & (1 << m) != 0 {
+                                w[m]
+                            } else {
+                                S::one() - w[m]
+                            };
                         }
                     }
-                    let PointKind::Conditional { coordinate, .. } = &self.points[self.conditional[j]].kind else { continue };
+                    let PointKind::Conditional { coordinate, .. } =
+                        &self.points[self.conditional[j]].kind
+                    else {
+                        continue;
+                    };
                     let (_, qd) = k.coordinate(*coordinate);
                     let dl_dq = dp * dw[j] * sub.length;
                     total.lengthening_speed += dl_dq * qd;

@@ -44,14 +44,33 @@ mod ffi {
         type SimbodySystem;
         type ForceCtx;
 
-        fn station_position(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
-        fn station_velocity(self: &ForceCtx, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn station_position(
+            self: &ForceCtx,
+            body: i32,
+            point: &[f64],
+            out: &mut [f64],
+        ) -> Result<()>;
+        fn station_velocity(
+            self: &ForceCtx,
+            body: i32,
+            point: &[f64],
+            out: &mut [f64],
+        ) -> Result<()>;
         fn express_in_ground(self: &ForceCtx, body: i32, v: &[f64], out: &mut [f64]) -> Result<()>;
         fn express_in_body(self: &ForceCtx, body: i32, v: &[f64], out: &mut [f64]) -> Result<()>;
-        fn add_station_force(self: Pin<&mut ForceCtx>, body: i32, point: &[f64], force: &[f64]) -> Result<()>;
+        fn add_station_force(
+            self: Pin<&mut ForceCtx>,
+            body: i32,
+            point: &[f64],
+            force: &[f64],
+        ) -> Result<()>;
         fn add_mobility_force(self: Pin<&mut ForceCtx>, u_index: i32, force: f64) -> Result<()>;
 
-        fn add_rust_force(self: Pin<&mut SimbodySystem>, callback: Box<ForceCallback>, nz: i32) -> Result<()>;
+        fn add_rust_force(
+            self: Pin<&mut SimbodySystem>,
+            callback: Box<ForceCallback>,
+            nz: i32,
+        ) -> Result<()>;
         fn set_z(self: Pin<&mut SimbodySystem>, z: &[f64]) -> Result<()>;
         fn get_z(self: &SimbodySystem, z: &mut [f64]) -> Result<()>;
         fn calc_zdot(self: Pin<&mut SimbodySystem>, zdot: &mut [f64]) -> Result<()>;
@@ -85,15 +104,36 @@ mod ffi {
             forces: &[f64],
         ) -> Result<()>;
         fn calc_udot(self: Pin<&mut SimbodySystem>, udot: &mut [f64]) -> Result<()>;
-        fn station_position(self: Pin<&mut SimbodySystem>, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
-        fn station_velocity(self: Pin<&mut SimbodySystem>, body: i32, point: &[f64], out: &mut [f64]) -> Result<()>;
+        fn station_position(
+            self: Pin<&mut SimbodySystem>,
+            body: i32,
+            point: &[f64],
+            out: &mut [f64],
+        ) -> Result<()>;
+        fn station_velocity(
+            self: Pin<&mut SimbodySystem>,
+            body: i32,
+            point: &[f64],
+            out: &mut [f64],
+        ) -> Result<()>;
         fn com_position(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
         fn com_velocity(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
         fn com_acceleration(self: Pin<&mut SimbodySystem>, out: &mut [f64]) -> Result<()>;
         fn total_mass(self: Pin<&mut SimbodySystem>) -> Result<f64>;
         fn energy(self: Pin<&mut SimbodySystem>) -> Result<f64>;
-        fn integrate(self: Pin<&mut SimbodySystem>, method: i32, accuracy: f64, t_final: f64) -> Result<IntegratorStats>;
-        fn integration_start(self: Pin<&mut SimbodySystem>, method: i32, accuracy: f64, min_step: f64, max_step: f64) -> Result<()>;
+        fn integrate(
+            self: Pin<&mut SimbodySystem>,
+            method: i32,
+            accuracy: f64,
+            t_final: f64,
+        ) -> Result<IntegratorStats>;
+        fn integration_start(
+            self: Pin<&mut SimbodySystem>,
+            method: i32,
+            accuracy: f64,
+            min_step: f64,
+            max_step: f64,
+        ) -> Result<()>;
         fn integration_step_to(self: Pin<&mut SimbodySystem>, t: f64) -> Result<IntegratorStats>;
         fn throw_for_test(self: Pin<&mut SimbodySystem>, kind: i32) -> Result<()>;
     }
@@ -155,7 +195,8 @@ pub struct ForceCallback {
 
 /// The signature of a Rust force element: context, t, q, u, z (Simbody's
 /// order) and the z derivatives to write.
-pub type ForceFn = dyn FnMut(&mut ForceContext<'_>, f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), String> + Send;
+pub type ForceFn = dyn FnMut(&mut ForceContext<'_>, f64, &[f64], &[f64], &[f64], &mut [f64]) -> Result<(), String>
+    + Send;
 
 impl ForceCallback {
     fn calc_forces(
@@ -167,10 +208,13 @@ impl ForceCallback {
         z: &[f64],
         zdot: &mut [f64],
     ) -> Result<(), String> {
-        self.calls.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.calls
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let mut context = ForceContext { ctx };
         let f = &mut self.f;
-        let r = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| f(&mut context, t, q, u, z, zdot))) {
+        let r = match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            f(&mut context, t, q, u, z, zdot)
+        })) {
             Ok(r) => r,
             Err(p) => {
                 let what = p
@@ -199,29 +243,48 @@ pub struct ForceContext<'a> {
 impl ForceContext<'_> {
     pub fn station_position(&self, body: i32, point: [f64; 3]) -> Result<[f64; 3], String> {
         let mut out = [0.0; 3];
-        self.ctx.station_position(body, &point, &mut out).map_err(|e| e.what().to_string())?;
+        self.ctx
+            .station_position(body, &point, &mut out)
+            .map_err(|e| e.what().to_string())?;
         Ok(out)
     }
     pub fn station_velocity(&self, body: i32, point: [f64; 3]) -> Result<[f64; 3], String> {
         let mut out = [0.0; 3];
-        self.ctx.station_velocity(body, &point, &mut out).map_err(|e| e.what().to_string())?;
+        self.ctx
+            .station_velocity(body, &point, &mut out)
+            .map_err(|e| e.what().to_string())?;
         Ok(out)
     }
     pub fn express_in_ground(&self, body: i32, v: [f64; 3]) -> Result<[f64; 3], String> {
         let mut out = [0.0; 3];
-        self.ctx.express_in_ground(body, &v, &mut out).map_err(|e| e.what().to_string())?;
+        self.ctx
+            .express_in_ground(body, &v, &mut out)
+            .map_err(|e| e.what().to_string())?;
         Ok(out)
     }
     pub fn express_in_body(&self, body: i32, v: [f64; 3]) -> Result<[f64; 3], String> {
         let mut out = [0.0; 3];
-        self.ctx.express_in_body(body, &v, &mut out).map_err(|e| e.what().to_string())?;
+        self.ctx
+            .express_in_body(body, &v, &mut out)
+            .map_err(|e| e.what().to_string())?;
         Ok(out)
     }
-    pub fn add_station_force(&mut self, body: i32, point: [f64; 3], force: [f64; 3]) -> Result<(), String> {
-        self.ctx.as_mut().add_station_force(body, &point, &force).map_err(|e| e.what().to_string())
+    pub fn add_station_force(
+        &mut self,
+        body: i32,
+        point: [f64; 3],
+        force: [f64; 3],
+    ) -> Result<(), String> {
+        self.ctx
+            .as_mut()
+            .add_station_force(body, &point, &force)
+            .map_err(|e| e.what().to_string())
     }
     pub fn add_mobility_force(&mut self, u_index: i32, force: f64) -> Result<(), String> {
-        self.ctx.as_mut().add_mobility_force(u_index, force).map_err(|e| e.what().to_string())
+        self.ctx
+            .as_mut()
+            .add_mobility_force(u_index, force)
+            .map_err(|e| e.what().to_string())
     }
 }
 
@@ -259,7 +322,11 @@ impl SimbodyModel {
     /// Build the system with a Rust force element with `nz` auxiliary states.
     /// The closure sees q and u in Simbody's order: use [`Self::simbody_q_index`]
     /// (computed by [`simbody_q_order`] before building) to map.
-    pub fn with_force(model: &Model, system: &SystemSpec, force: Option<(Box<ForceFn>, usize)>) -> Result<Self, SimbodyError> {
+    pub fn with_force(
+        model: &Model,
+        system: &SystemSpec,
+        force: Option<(Box<ForceFn>, usize)>,
+    ) -> Result<Self, SimbodyError> {
         let mut sys = ffi::new_simbody_system();
         let mut q_slots: Vec<(i32, Vec<usize>)> = Vec::new();
         for (k, sb) in system.bodies.iter().enumerate() {
@@ -268,12 +335,28 @@ impl SimbodyModel {
             let (kind, sx, sy, qs) = match &sb.mobilizer {
                 Mobilizer::Planar { q } => (0, Vec::new(), Vec::new(), q.to_vec()),
                 Mobilizer::Pin { q } => (1, Vec::new(), Vec::new(), vec![*q]),
-                Mobilizer::TranslatingHinge { q, translation_x, translation_y } => {
-                    (2, translation_x.coefficient_blocks(), translation_y.coefficient_blocks(), vec![*q])
-                }
+                Mobilizer::TranslatingHinge {
+                    q,
+                    translation_x,
+                    translation_y,
+                } => (
+                    2,
+                    translation_x.coefficient_blocks(),
+                    translation_y.coefficient_blocks(),
+                    vec![*q],
+                ),
                 Mobilizer::Weld => (3, Vec::new(), Vec::new(), Vec::new()),
             };
-            let idx = sys.pin_mut().add_body(parent, kind, &sb.location, b.mass, &b.mass_center, &b.inertia, &sx, &sy)?;
+            let idx = sys.pin_mut().add_body(
+                parent,
+                kind,
+                &sb.location,
+                b.mass,
+                &b.mass_center,
+                &b.inertia,
+                &sx,
+                &sy,
+            )?;
             debug_assert_eq!(idx as usize, k + 1);
             if !qs.is_empty() {
                 q_slots.push((idx, qs));
@@ -284,14 +367,20 @@ impl SimbodyModel {
         let mut nz = 0;
         if let Some((f, n)) = force {
             nz = n;
-            let cb = Box::new(ForceCallback { f, last_error: last_error.clone(), calls: callback_calls.clone() });
+            let cb = Box::new(ForceCallback {
+                f,
+                last_error: last_error.clone(),
+                calls: callback_calls.clone(),
+            });
             sys.pin_mut().add_rust_force(cb, n as i32)?;
         }
         sys.pin_mut().finalize(&model.gravity)?;
         let n = system.nq();
         let nq_sb = sys.nq()? as usize;
         if nq_sb != n {
-            return Err(SimbodyError::Input(format!("Simbody built {nq_sb} coordinates, leap expects {n}")));
+            return Err(SimbodyError::Input(format!(
+                "Simbody built {nq_sb} coordinates, leap expects {n}"
+            )));
         }
         let mut perm = vec![usize::MAX; n];
         for (body, qs) in &q_slots {
@@ -301,12 +390,21 @@ impl SimbodyModel {
             }
         }
         if perm.contains(&usize::MAX) {
-            return Err(SimbodyError::Input("a coordinate has no Simbody mobility".into()));
+            return Err(SimbodyError::Input(
+                "a coordinate has no Simbody mobility".into(),
+            ));
         }
         if perm != simbody_q_order(system) {
-            return Err(SimbodyError::Input(format!("Simbody ordered the coordinates {perm:?}, leap predicted {:?}", simbody_q_order(system))));
+            return Err(SimbodyError::Input(format!(
+                "Simbody ordered the coordinates {perm:?}, leap predicted {:?}",
+                simbody_q_order(system)
+            )));
         }
-        let mobod_of_model_body = system.system_body_of.iter().map(|&s| s as i32 + 1).collect();
+        let mobod_of_model_body = system
+            .system_body_of
+            .iter()
+            .map(|&s| s as i32 + 1)
+            .collect();
         Ok(SimbodyModel {
             sys,
             n,
@@ -354,7 +452,10 @@ impl SimbodyModel {
     /// The auxiliary states' derivatives at the current state.
     pub fn zdot(&mut self, zdot: &mut [f64]) -> Result<(), SimbodyError> {
         self.check("zdot", zdot.len(), self.nz)?;
-        self.sys.pin_mut().calc_zdot(zdot).map_err(|e| self.with_callback_error(e))
+        self.sys
+            .pin_mut()
+            .calc_zdot(zdot)
+            .map_err(|e| self.with_callback_error(e))
     }
 
     /// The last error the Rust force element reported, if any (taken).
@@ -364,7 +465,8 @@ impl SimbodyModel {
 
     /// How often Simbody called the Rust force element.
     pub fn force_calls(&self) -> u64 {
-        self.callback_calls.load(std::sync::atomic::Ordering::Relaxed)
+        self.callback_calls
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     fn with_callback_error(&self, e: cxx::Exception) -> SimbodyError {
@@ -381,7 +483,9 @@ impl SimbodyModel {
 
     fn check(&self, what: &str, len: usize, want: usize) -> Result<(), SimbodyError> {
         if len != want {
-            return Err(SimbodyError::Input(format!("{what}: wrong length {len} (expected {want})")));
+            return Err(SimbodyError::Input(format!(
+                "{what}: wrong length {len} (expected {want})"
+            )));
         }
         Ok(())
     }
@@ -436,7 +540,11 @@ impl SimbodyModel {
     /// Apply generalized forces `tau` (leap order) and point forces
     /// `(model body, point in body frame, force in ground)`; they stay applied
     /// for later evaluations and integration.
-    pub fn set_applied_forces(&mut self, tau: &[f64], point_forces: &[(usize, [f64; 3], [f64; 3])]) -> Result<(), SimbodyError> {
+    pub fn set_applied_forces(
+        &mut self,
+        tau: &[f64],
+        point_forces: &[(usize, [f64; 3], [f64; 3])],
+    ) -> Result<(), SimbodyError> {
         self.check("tau", tau.len(), self.n)?;
         for k in 0..self.n {
             self.u_sb[self.perm[k]] = tau[k];
@@ -453,7 +561,12 @@ impl SimbodyModel {
             self.points_buf.extend_from_slice(p);
             self.forces_buf.extend_from_slice(f);
         }
-        let r = self.sys.pin_mut().set_applied_forces(&self.u_sb, &self.bodies_buf, &self.points_buf, &self.forces_buf);
+        let r = self.sys.pin_mut().set_applied_forces(
+            &self.u_sb,
+            &self.bodies_buf,
+            &self.points_buf,
+            &self.forces_buf,
+        );
         // u_sb was borrowed as scratch: restore the state's speeds.
         self.sys.get_state(&mut self.q_sb, &mut self.u_sb)?;
         r.map_err(Into::into)
@@ -473,23 +586,38 @@ impl SimbodyModel {
     }
 
     /// Position in ground of a point fixed on a model body.
-    pub fn station_position(&mut self, body: usize, point: [f64; 3]) -> Result<[f64; 3], SimbodyError> {
+    pub fn station_position(
+        &mut self,
+        body: usize,
+        point: [f64; 3],
+    ) -> Result<[f64; 3], SimbodyError> {
         let mobod = self.mobod(body)?;
         let mut out = [0.0; 3];
-        self.sys.pin_mut().station_position(mobod, &point, &mut out)?;
+        self.sys
+            .pin_mut()
+            .station_position(mobod, &point, &mut out)?;
         Ok(out)
     }
 
     /// Velocity in ground of a point fixed on a model body.
-    pub fn station_velocity(&mut self, body: usize, point: [f64; 3]) -> Result<[f64; 3], SimbodyError> {
+    pub fn station_velocity(
+        &mut self,
+        body: usize,
+        point: [f64; 3],
+    ) -> Result<[f64; 3], SimbodyError> {
         let mobod = self.mobod(body)?;
         let mut out = [0.0; 3];
-        self.sys.pin_mut().station_velocity(mobod, &point, &mut out)?;
+        self.sys
+            .pin_mut()
+            .station_velocity(mobod, &point, &mut out)?;
         Ok(out)
     }
 
     fn mobod(&self, body: usize) -> Result<i32, SimbodyError> {
-        self.mobod_of_model_body.get(body).copied().ok_or_else(|| SimbodyError::Input(format!("no model body {body}")))
+        self.mobod_of_model_body
+            .get(body)
+            .copied()
+            .ok_or_else(|| SimbodyError::Input(format!("no model body {body}")))
     }
 
     /// Whole-body centre of mass position.
@@ -524,9 +652,18 @@ impl SimbodyModel {
     }
 
     /// Integrate to `t_final` with the applied forces held constant.
-    pub fn integrate(&mut self, integrator: SimbodyIntegrator, accuracy: f64, t_final: f64) -> Result<IntegratorStats, SimbodyError> {
+    pub fn integrate(
+        &mut self,
+        integrator: SimbodyIntegrator,
+        accuracy: f64,
+        t_final: f64,
+    ) -> Result<IntegratorStats, SimbodyError> {
         self.take_force_error();
-        match self.sys.pin_mut().integrate(integrator.code(), accuracy, t_final) {
+        match self
+            .sys
+            .pin_mut()
+            .integrate(integrator.code(), accuracy, t_final)
+        {
             Ok(s) => Ok(s),
             Err(e) => Err(self.with_callback_error(e)),
         }
@@ -534,9 +671,18 @@ impl SimbodyModel {
 
     /// Start a persistent integration from the current state (and applied
     /// forces); `min_step`/`max_step` ≤ 0 keep Simbody's defaults.
-    pub fn integration_start(&mut self, integrator: SimbodyIntegrator, accuracy: f64, min_step: f64, max_step: f64) -> Result<(), SimbodyError> {
+    pub fn integration_start(
+        &mut self,
+        integrator: SimbodyIntegrator,
+        accuracy: f64,
+        min_step: f64,
+        max_step: f64,
+    ) -> Result<(), SimbodyError> {
         self.take_force_error();
-        self.sys.pin_mut().integration_start(integrator.code(), accuracy, min_step, max_step).map_err(|e| self.with_callback_error(e))
+        self.sys
+            .pin_mut()
+            .integration_start(integrator.code(), accuracy, min_step, max_step)
+            .map_err(|e| self.with_callback_error(e))
     }
 
     /// Advance the persistent integration to `t`; the model's state is then
@@ -634,7 +780,12 @@ impl ForceBuffer {
     }
 
     /// Apply the collected forces (model bodies and model coordinates).
-    pub fn flush(&self, ctx: &mut ForceContext<'_>, mobod: &[i32], u_index: &[usize]) -> Result<(), String> {
+    pub fn flush(
+        &self,
+        ctx: &mut ForceContext<'_>,
+        mobod: &[i32],
+        u_index: &[usize],
+    ) -> Result<(), String> {
         for (b, p, f) in &self.points {
             ctx.add_station_force(mobod[*b], *p, *f)?;
         }

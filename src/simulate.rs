@@ -63,12 +63,27 @@ pub fn extensor_moments(eq: &StateEquation, pose: &[f64]) -> Vec<f64> {
         .map(|&mi| {
             let mut tau = vec![0.0; q.len()];
             {
-                let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &sys.q_of_model_coordinate };
-                let mut sink = GeneralizedForces { mb: &eq.multibody, ws: &ws, q_of: &sys.q_of_model_coordinate, tau: &mut tau };
-                eq.model.muscles[mi].path.calc(&view, eq.smoothing, Some((1.0, &mut sink)));
+                let view = ModelView {
+                    mb: &eq.multibody,
+                    ws: &ws,
+                    q_of: &sys.q_of_model_coordinate,
+                };
+                let mut sink = GeneralizedForces {
+                    mb: &eq.multibody,
+                    ws: &ws,
+                    q_of: &sys.q_of_model_coordinate,
+                    tau: &mut tau,
+                };
+                eq.model.muscles[mi]
+                    .path
+                    .calc(&view, eq.smoothing, Some((1.0, &mut sink)));
             }
             let f0 = eq.model.muscles[mi].spec.max_isometric_force;
-            sys.coordinates.iter().enumerate().map(|(k, &c)| sign_of(&eq.model.coordinates[c].name) * tau[k] * f0).sum()
+            sys.coordinates
+                .iter()
+                .enumerate()
+                .map(|(k, &c)| sign_of(&eq.model.coordinates[c].name) * tau[k] * f0)
+                .sum()
         })
         .collect()
 }
@@ -136,23 +151,39 @@ impl<L: ForceLaws<f64>, E: ExcitationSource> OdeSystem for Rhs<'_, L, E> {
         for v in self.u.iter_mut() {
             *v = v.clamp(crate::laws::MIN_ACTIVATION, 1.0);
         }
-        self.eq.rhs(self.laws, &mut self.ws, x, &self.u, dx).map_err(|e| e.to_string())
+        self.eq
+            .rhs(self.laws, &mut self.ws, x, &self.u, dx)
+            .map_err(|e| e.to_string())
     }
 }
 
 /// Ground forces per foot from the workspace of the last evaluation.
 fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 12] {
     let mut out = [0.0; 12];
-    let Some(contact) = &eq.model.contact else { return out };
+    let Some(contact) = &eq.model.contact else {
+        return out;
+    };
     let n = eq.nq();
     let mut mbw = eq.multibody.workspace::<f64>();
     eq.multibody.set_state(&mut mbw, &x[..n], &x[n..2 * n]);
     let mut moment = [[0.0f64; 2]; 2]; // Σ x·Fy, Σ z·Fy per side
     for (k, sp) in contact.spheres.iter().enumerate() {
         let f = ws.sphere_force[k];
-        let side = if eq.model.bodies[sp.body].name.ends_with("_l") { 1 } else { 0 };
+        let side = if eq.model.bodies[sp.body].name.ends_with("_l") {
+            1
+        } else {
+            0
+        };
         let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
-        let p = eq.multibody.point_position(&mbw, ci, [sp.location[0] + off[0], sp.location[1] + off[1], sp.location[2] + off[2]]);
+        let p = eq.multibody.point_position(
+            &mbw,
+            ci,
+            [
+                sp.location[0] + off[0],
+                sp.location[1] + off[1],
+                sp.location[2] + off[2],
+            ],
+        );
         for d in 0..3 {
             out[6 * side + d] += f[d];
         }
@@ -179,8 +210,14 @@ fn com_at(eq: &StateEquation, x: &[f64]) -> ([f64; 3], [f64; 3]) {
 
 /// Lift-off time, COM velocity and height, and the apex: the highest COM
 /// seen, or the ballistic rise from lift-off (closed form in flight).
-fn liftoff_and_apex(eq: &StateEquation, liftoff: &Option<(f64, Vec<f64>)>, seen: f64) -> (Option<f64>, Option<f64>, Option<f64>, f64) {
-    let Some((t, xl)) = liftoff else { return (None, None, None, seen) };
+fn liftoff_and_apex(
+    eq: &StateEquation,
+    liftoff: &Option<(f64, Vec<f64>)>,
+    seen: f64,
+) -> (Option<f64>, Option<f64>, Option<f64>, f64) {
+    let Some((t, xl)) = liftoff else {
+        return (None, None, None, seen);
+    };
     let (c, v) = com_at(eq, xl);
     let g = eq.model.gravity[1].abs();
     let rise = v[1].max(0.0) * v[1].max(0.0) / (2.0 * g);
@@ -197,7 +234,10 @@ pub struct SimulateOptions {
 
 impl Default for SimulateOptions {
     fn default() -> Self {
-        SimulateOptions { integrator: Dopri5Options::default(), t_max: 2.0 }
+        SimulateOptions {
+            integrator: Dopri5Options::default(),
+            t_max: 2.0,
+        }
     }
 }
 
@@ -212,15 +252,32 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
 ) -> Result<(JumpSummary, Trajectory), Box<SimulationFailure>> {
     let start = std::time::Instant::now();
     let nm = eq.nm();
-    let mut sys = Rhs { eq, laws, exc, ws: eq.workspace(), u: vec![0.0; nm] };
+    let mut sys = Rhs {
+        eq,
+        laws,
+        exc,
+        ws: eq.workspace(),
+        u: vec![0.0; nm],
+    };
     let mut traj = Trajectory::default();
-    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| Box::new(SimulationFailure { t, state: x.to_vec(), cause, trajectory: traj });
+    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| {
+        Box::new(SimulationFailure {
+            t,
+            state: x.to_vec(),
+            cause,
+            trajectory: traj,
+        })
+    };
     let mut ig = match Dopri5::new(&mut sys, 0.0, x0, opts.integrator) {
         Ok(ig) => ig,
         Err(e) => return Err(fail(0.0, x0, e.to_string(), traj)),
     };
     let weight = eq.model.total_mass() * (eq.model.gravity[1].abs());
-    let record = |traj: &mut Trajectory, sys: &mut Rhs<'_, L, E>, t: f64, x: &[f64]| -> Result<f64, String> {
+    let record = |traj: &mut Trajectory,
+                  sys: &mut Rhs<'_, L, E>,
+                  t: f64,
+                  x: &[f64]|
+     -> Result<f64, String> {
         let mut dx = vec![0.0; x.len()];
         sys.rhs(t, x, &mut dx)?;
         let g = grf_of(sys.eq, &sys.ws, x);
@@ -314,8 +371,16 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
 
 /// Write states and controls (.sto, OpenSim 4 names) and ground reaction
 /// forces (.mot) of a trajectory into `dir` with file prefix `name`.
-pub fn write_trajectory(eq: &StateEquation, traj: &Trajectory, dir: &Path, name: &str) -> Result<Vec<std::path::PathBuf>, crate::io::StoError> {
-    let mut states = StoTable { name: None, ..Default::default() };
+pub fn write_trajectory(
+    eq: &StateEquation,
+    traj: &Trajectory,
+    dir: &Path,
+    name: &str,
+) -> Result<Vec<std::path::PathBuf>, crate::io::StoError> {
+    let mut states = StoTable {
+        name: None,
+        ..Default::default()
+    };
     states.metadata.insert("inDegrees".into(), "no".into());
     states.labels = eq.state_names();
     states.time = traj.time.clone();
@@ -325,7 +390,10 @@ pub fn write_trajectory(eq: &StateEquation, traj: &Trajectory, dir: &Path, name:
     controls.labels = eq.control_names();
     controls.time = traj.time.clone();
     controls.rows = traj.controls.clone();
-    let mut grf = StoTable { name: Some(format!("{name}_grf")), ..Default::default() };
+    let mut grf = StoTable {
+        name: Some(format!("{name}_grf")),
+        ..Default::default()
+    };
     for side in ["r", "l"] {
         for l in ["vx", "vy", "vz", "px", "py", "pz"] {
             grf.labels.push(format!("ground_force_{side}_{l}"));
@@ -333,7 +401,11 @@ pub fn write_trajectory(eq: &StateEquation, traj: &Trajectory, dir: &Path, name:
     }
     grf.time = traj.time.clone();
     grf.rows = traj.grf.iter().map(|g| g.to_vec()).collect();
-    let paths = [dir.join(format!("{name}_states.sto")), dir.join(format!("{name}_controls.sto")), dir.join(format!("{name}_grf.mot"))];
+    let paths = [
+        dir.join(format!("{name}_states.sto")),
+        dir.join(format!("{name}_controls.sto")),
+        dir.join(format!("{name}_grf.mot")),
+    ];
     states.write_sto(&paths[0])?;
     controls.write_sto(&paths[1])?;
     grf.write_mot(&paths[2])?;
@@ -361,7 +433,14 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
     let n = eq.nq();
     let nm = eq.nm();
     let mut traj = Trajectory::default();
-    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| Box::new(SimulationFailure { t, state: x.to_vec(), cause, trajectory: traj });
+    let fail = |t: f64, x: &[f64], cause: String, traj: Trajectory| {
+        Box::new(SimulationFailure {
+            t,
+            state: x.to_vec(),
+            cause,
+            trajectory: traj,
+        })
+    };
     let mut sb = match SimbodyStateEquation::new(eq.clone(), laws.clone()) {
         Ok(s) => s,
         Err(e) => return Err(fail(0.0, x0, e.to_string(), traj)),
@@ -383,13 +462,18 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
         for v in u.iter_mut() {
             *v = v.clamp(crate::laws::MIN_ACTIVATION, 1.0);
         }
-        eq.rhs(&**laws, &mut ws, x, u, &mut dx).map_err(|e| e.to_string())?;
+        eq.rhs(&**laws, &mut ws, x, u, &mut dx)
+            .map_err(|e| e.to_string())?;
         Ok(grf_of(eq, &ws, x))
     };
     let start_at = |sb: &mut SimbodyStateEquation, t: f64, x: &[f64]| -> Result<(), String> {
         sb.set_state(t, x).map_err(|e| e.to_string())?;
-        sb.simbody.set_applied_forces(&vec![0.0; n], &[]).map_err(|e| e.to_string())?;
-        sb.simbody.integration_start(integrator, accuracy, 1e-8, 1.0).map_err(|e| e.to_string())
+        sb.simbody
+            .set_applied_forces(&vec![0.0; n], &[])
+            .map_err(|e| e.to_string())?;
+        sb.simbody
+            .integration_start(integrator, accuracy, 1e-8, 1.0)
+            .map_err(|e| e.to_string())
     };
     if let Err(e) = start_at(&mut sb, 0.0, x0) {
         return Err(fail(0.0, x0, e, traj));
@@ -515,7 +599,13 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
 /// Whole-body COM height of the model standing (its `standing` pose, or
 /// the coordinates' defaults).
 pub fn standing_com_height(eq: &StateEquation) -> f64 {
-    let pose = eq.model.poses.get("standing").cloned().unwrap_or_else(|| eq.model.coordinates.iter().map(|c| c.default_value).collect());
+    let pose = eq.model.poses.get("standing").cloned().unwrap_or_else(|| {
+        eq.model
+            .coordinates
+            .iter()
+            .map(|c| c.default_value)
+            .collect()
+    });
     let mut w = eq.multibody.workspace::<f64>();
     let q = eq.system.q_from_model(&pose);
     eq.multibody.set_state(&mut w, &q, &vec![0.0; q.len()]);

@@ -30,7 +30,11 @@ pub enum SplineError {
     #[error("at least 2 knots are needed, got {0}")]
     TooFewKnots(usize),
     #[error("knots are not strictly increasing: x[{index}] = {value} does not exceed x[{prev}] = {prev_value}", prev = index - 1)]
-    NotIncreasing { index: usize, value: f64, prev_value: f64 },
+    NotIncreasing {
+        index: usize,
+        value: f64,
+        prev_value: f64,
+    },
     #[error("knot {index} is not finite")]
     NotFinite { index: usize },
 }
@@ -50,7 +54,10 @@ impl SimmSpline {
     pub fn new(data: &SplineData) -> Result<Self, SplineError> {
         let (x, y) = (&data.x, &data.y);
         if x.len() != y.len() {
-            return Err(SplineError::LengthMismatch { nx: x.len(), ny: y.len() });
+            return Err(SplineError::LengthMismatch {
+                nx: x.len(),
+                ny: y.len(),
+            });
         }
         let n = x.len();
         if n < 2 {
@@ -61,11 +68,21 @@ impl SimmSpline {
                 return Err(SplineError::NotFinite { index: i });
             }
             if i > 0 && x[i] <= x[i - 1] {
-                return Err(SplineError::NotIncreasing { index: i, value: x[i], prev_value: x[i - 1] });
+                return Err(SplineError::NotIncreasing {
+                    index: i,
+                    value: x[i],
+                    prev_value: x[i - 1],
+                });
             }
         }
         let (b, c, d) = fmm_coefficients(x, y);
-        Ok(Self { x: x.clone(), y: y.clone(), b, c, d })
+        Ok(Self {
+            x: x.clone(),
+            y: y.clone(),
+            b,
+            c,
+            d,
+        })
     }
 
     /// The knots' abscissae.
@@ -122,7 +139,11 @@ impl SimmSpline {
         }
         if xv > self.x[n - 1] {
             let dx = x - self.x[n - 1];
-            return (dx * self.b[n - 1] + self.y[n - 1], c(self.b[n - 1]), S::zero());
+            return (
+                dx * self.b[n - 1] + self.y[n - 1],
+                c(self.b[n - 1]),
+                S::zero(),
+            );
         }
         let k = self.interval(xv);
         let dx = x - self.x[k];
@@ -204,8 +225,12 @@ mod tests {
 
     fn knee_ty() -> SimmSpline {
         SimmSpline::new(&SplineData {
-            x: vec![-2.0944, -1.22173, -0.523599, -0.349066, -0.174533, 0.159149, 2.0944],
-            y: vec![-0.4226, -0.4082, -0.399, -0.3976, -0.3966, -0.395264, -0.396],
+            x: vec![
+                -2.0944, -1.22173, -0.523599, -0.349066, -0.174533, 0.159149, 2.0944,
+            ],
+            y: vec![
+                -0.4226, -0.4082, -0.399, -0.3976, -0.3966, -0.395264, -0.396,
+            ],
         })
         .unwrap()
     }
@@ -228,7 +253,11 @@ mod tests {
         // FMM end conditions are exact for cubic data (third divided differences).
         let f = |x: f64| 0.3 - 1.2 * x + 0.7 * x * x - 0.25 * x * x * x;
         let x: Vec<f64> = vec![-1.0, -0.3, 0.2, 0.9, 1.4, 2.5];
-        let s = SimmSpline::new(&SplineData { x: x.clone(), y: x.iter().map(|&v| f(v)).collect() }).unwrap();
+        let s = SimmSpline::new(&SplineData {
+            x: x.clone(),
+            y: x.iter().map(|&v| f(v)).collect(),
+        })
+        .unwrap();
         for i in 0..50 {
             let t = -1.0 + 3.5 * i as f64 / 49.0;
             assert!((s.value(t) - f(t)).abs() < 1e-12, "t = {t}");

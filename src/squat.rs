@@ -53,8 +53,20 @@ impl Setup<'_> {
         let eq = self.eq;
         let mut ws = eq.multibody.workspace::<f64>();
         eq.multibody.set_state(&mut ws, q, &vec![0.0; self.n]);
-        let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &eq.system.q_of_model_coordinate };
-        eq.muscles.iter().map(|&m| eq.model.muscles[m].path.calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None).length).collect()
+        let view = ModelView {
+            mb: &eq.multibody,
+            ws: &ws,
+            q_of: &eq.system.q_of_model_coordinate,
+        };
+        eq.muscles
+            .iter()
+            .map(|&m| {
+                eq.model.muscles[m]
+                    .path
+                    .calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None)
+                    .length
+            })
+            .collect()
     }
 
     /// The state at q, q̇ = 0, activations a, fibres in equilibrium.
@@ -79,7 +91,9 @@ impl Setup<'_> {
         let n = self.n;
         let m = eq.multibody.mass_matrix(&ws.mb);
         let qdd = dx[n..2 * n].to_vec();
-        let r = (0..n).map(|i| (0..n).map(|j| m[i * n + j] * qdd[j]).sum()).collect();
+        let r = (0..n)
+            .map(|i| (0..n).map(|j| m[i * n + j] * qdd[j]).sum())
+            .collect();
         let fy: f64 = ws.sphere_force.iter().map(|f| f[1]).sum();
         Ok((r, qdd, fy))
     }
@@ -87,22 +101,37 @@ impl Setup<'_> {
 
 /// Compute the static squat of `eq` from the model's pose `pose` (model
 /// coordinate values).
-pub fn static_squat(eq: &StateEquation, laws: &OpenSimLaws, pose: &[f64]) -> Result<StaticSquat, SquatError> {
+pub fn static_squat(
+    eq: &StateEquation,
+    laws: &OpenSimLaws,
+    pose: &[f64],
+) -> Result<StaticSquat, SquatError> {
     let (n, nm) = (eq.nq(), eq.nm());
     let s = Setup { eq, laws, n, nm };
     let model = &eq.model;
     let idx = |name: &str| -> Result<usize, SquatError> {
-        model.coordinate_index(name).map(|c| eq.system.q_of_model_coordinate[c]).ok_or_else(|| SquatError::Failed(format!("the model has no coordinate '{name}'")))
+        model
+            .coordinate_index(name)
+            .map(|c| eq.system.q_of_model_coordinate[c])
+            .ok_or_else(|| SquatError::Failed(format!("the model has no coordinate '{name}'")))
     };
     let (i_ty, i_tilt) = (idx("pelvis_ty")?, idx("pelvis_tilt")?);
     let ankles: Vec<usize> = {
-        let mut v: Vec<usize> = model.coordinates.iter().enumerate().filter(|(_, c)| c.name.starts_with("ankle_angle")).map(|(i, _)| eq.system.q_of_model_coordinate[i]).collect();
+        let mut v: Vec<usize> = model
+            .coordinates
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.name.starts_with("ankle_angle"))
+            .map(|(i, _)| eq.system.q_of_model_coordinate[i])
+            .collect();
         v.sort();
         v.dedup();
         v
     };
     if ankles.is_empty() {
-        return Err(SquatError::Failed("the model has no ankle_angle coordinate".into()));
+        return Err(SquatError::Failed(
+            "the model has no ankle_angle coordinate".into(),
+        ));
     }
     let mut q = eq.system.q_from_model(pose);
     let a_min = vec![MIN_ACTIVATION; nm];
@@ -135,10 +164,15 @@ pub fn static_squat(eq: &StateEquation, laws: &OpenSimLaws, pose: &[f64]) -> Res
         let ra = base(&qa)?;
         set(&mut qa, ty, ank + h);
         let rb = base(&qa)?;
-        let j = [[(ra[0] - r0[0]) / h, (rb[0] - r0[0]) / h], [(ra[1] - r0[1]) / h, (rb[1] - r0[1]) / h]];
+        let j = [
+            [(ra[0] - r0[0]) / h, (rb[0] - r0[0]) / h],
+            [(ra[1] - r0[1]) / h, (rb[1] - r0[1]) / h],
+        ];
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         if det.abs() < 1e-300 || !det.is_finite() {
-            return Err(SquatError::Failed("the feet do not touch the ground near the squat pose".into()));
+            return Err(SquatError::Failed(
+                "the feet do not touch the ground near the squat pose".into(),
+            ));
         }
         let d_ty = -(j[1][1] * r0[0] - j[0][1] * r0[1]) / det;
         let d_an = -(-j[1][0] * r0[0] + j[0][0] * r0[1]) / det;
@@ -147,15 +181,20 @@ pub fn static_squat(eq: &StateEquation, laws: &OpenSimLaws, pose: &[f64]) -> Res
         ank += d_an.clamp(-0.05, 0.05);
     }
     if !converged {
-        return Err(SquatError::Failed("no pelvis height and ankle angle put the centre of pressure under the centre of mass".into()));
+        return Err(SquatError::Failed(
+            "no pelvis height and ankle angle put the centre of pressure under the centre of mass"
+                .into(),
+        ));
     }
     set(&mut q, ty, ank);
     // 3. Static optimisation.
     let lmt = s.mtu_lengths(&q);
-    let joints: Vec<usize> = (0..n).filter(|&i| {
-        let name = &model.coordinates[eq.system.coordinates[i]].name;
-        !name.starts_with("pelvis_")
-    }).collect();
+    let joints: Vec<usize> = (0..n)
+        .filter(|&i| {
+            let name = &model.coordinates[eq.system.coordinates[i]].name;
+            !name.starts_with("pelvis_")
+        })
+        .collect();
     // Generalized force per unit tension of each carried muscle (×multiplicity).
     let arms: Vec<Vec<f64>> = {
         let mut ws = eq.multibody.workspace::<f64>();
@@ -165,9 +204,22 @@ pub fn static_squat(eq: &StateEquation, laws: &OpenSimLaws, pose: &[f64]) -> Res
             .enumerate()
             .map(|(k, &m)| {
                 let mut tau = vec![0.0; n];
-                let view = ModelView { mb: &eq.multibody, ws: &ws, q_of: &eq.system.q_of_model_coordinate };
-                let mut sink = GeneralizedForces { mb: &eq.multibody, ws: &ws, q_of: &eq.system.q_of_model_coordinate, tau: &mut tau };
-                eq.model.muscles[m].path.calc(&view, eq.smoothing, Some((eq.multiplicity[k], &mut sink)));
+                let view = ModelView {
+                    mb: &eq.multibody,
+                    ws: &ws,
+                    q_of: &eq.system.q_of_model_coordinate,
+                };
+                let mut sink = GeneralizedForces {
+                    mb: &eq.multibody,
+                    ws: &ws,
+                    q_of: &eq.system.q_of_model_coordinate,
+                    tau: &mut tau,
+                };
+                eq.model.muscles[m].path.calc(
+                    &view,
+                    eq.smoothing,
+                    Some((eq.multiplicity[k], &mut sink)),
+                );
                 tau
             })
             .collect()
@@ -228,23 +280,44 @@ pub fn static_squat(eq: &StateEquation, laws: &OpenSimLaws, pose: &[f64]) -> Res
             b[ne + nv + m] = -MIN_ACTIVATION;
         }
         use clarabel::algebra::CscMatrix;
-        use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, ZeroConeT};
+        use clarabel::solver::{
+            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+            ZeroConeT,
+        };
         let amat = CscMatrix::new_from_triplets(ne + 2 * nv, nv, trip_i, trip_j, trip_v);
-        let pmat = CscMatrix::new_from_triplets(nv, nv, (0..nv).collect(), (0..nv).collect(), vec![2.0; nv]);
+        let pmat = CscMatrix::new_from_triplets(
+            nv,
+            nv,
+            (0..nv).collect(),
+            (0..nv).collect(),
+            vec![2.0; nv],
+        );
         let qv = vec![0.0; nv];
         let cones = [ZeroConeT(ne), NonnegativeConeT(2 * nv)];
-        let settings = DefaultSettingsBuilder::default().verbose(false).max_threads(1).build().map_err(|e| SquatError::Failed(format!("{e:?}")))?;
-        let mut solver = DefaultSolver::new(&pmat, &qv, &amat, &b, &cones, settings).map_err(|e| SquatError::Failed(e.to_string()))?;
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .max_threads(1)
+            .build()
+            .map_err(|e| SquatError::Failed(format!("{e:?}")))?;
+        let mut solver = DefaultSolver::new(&pmat, &qv, &amat, &b, &cones, settings)
+            .map_err(|e| SquatError::Failed(e.to_string()))?;
         solver.solve();
         match solver.solution.status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
             other => return Err(SquatError::Failed(format!("the muscles cannot hold the squat (static optimisation QP: {other:?}, joint residual {res:.3e} N·m)"))),
         }
-        let anew: Vec<f64> = solver.solution.x.iter().map(|v| v.clamp(MIN_ACTIVATION, 1.0)).collect();
+        let anew: Vec<f64> = solver
+            .solution
+            .x
+            .iter()
+            .map(|v| v.clamp(MIN_ACTIVATION, 1.0))
+            .collect();
         a = anew;
     }
     if last_res >= 1e-9 {
-        return Err(SquatError::Failed(format!("static optimisation did not converge: joint residual {last_res:.3e} N·m")));
+        return Err(SquatError::Failed(format!(
+            "static optimisation did not converge: joint residual {last_res:.3e} N·m"
+        )));
     }
     let x = s.state(&q, &a, &lmt);
     let (_, qdd, fy) = s.residual(&x, &a)?;

@@ -256,7 +256,10 @@ impl HsProblem {
 
     /// Whether some variable has a finite bound.
     pub fn has_bounds(&self) -> bool {
-        self.x_lower.iter().chain(&self.x_upper).any(|b| b.is_finite())
+        self.x_lower
+            .iter()
+            .chain(&self.x_upper)
+            .any(|b| b.is_finite())
     }
 }
 
@@ -881,7 +884,10 @@ fn hs008_x_star() -> Vec<f64> {
 
 fn hs011_x_star() -> Vec<f64> {
     let a = (7.5 * 6f64.sqrt() + 338.5f64.sqrt()).cbrt();
-    vec![(a - 1.0 / a) / 6f64.sqrt(), (a * a - 2.0 + 1.0 / (a * a)) / 6.0]
+    vec![
+        (a - 1.0 / a) / 6f64.sqrt(),
+        (a * a - 2.0 + 1.0 / (a * a)) / 6.0,
+    ]
 }
 
 fn hs056_x0() -> Vec<f64> {
@@ -1267,7 +1273,13 @@ fn hs034<D: Scalar>(x: &[D], c: &mut [D]) -> D {
 fn hs035<D: Scalar>(x: &[D], c: &mut [D]) -> D {
     let (x1, x2, x3) = (x[0], x[1], x[2]);
     c[0] = -x1 - x2 - x3 * 2.0 + 3.0;
-    -x1 * 8.0 - x2 * 6.0 - x3 * 4.0 + sq(x1) * 2.0 + sq(x2) * 2.0 + sq(x3) + x1 * x2 * 2.0 + x1 * x3 * 2.0 + 9.0
+    -x1 * 8.0 - x2 * 6.0 - x3 * 4.0
+        + sq(x1) * 2.0
+        + sq(x2) * 2.0
+        + sq(x3)
+        + x1 * x2 * 2.0
+        + x1 * x3 * 2.0
+        + 9.0
 }
 
 fn hs036<D: Scalar>(x: &[D], c: &mut [D]) -> D {
@@ -1515,7 +1527,8 @@ fn hs106<D: Scalar>(x: &[D], c: &mut [D]) -> D {
 }
 
 fn hs113<D: Scalar>(x: &[D], c: &mut [D]) -> D {
-    let (x1, x2, x3, x4, x5, x6, x7, x8, x9, x10) = (x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9]);
+    let (x1, x2, x3, x4, x5, x6, x7, x8, x9, x10) =
+        (x[0], x[1], x[2], x[3], x[4], x[5], x[6], x[7], x[8], x[9]);
     c[0] = -x1 * 4.0 - x2 * 5.0 + x7 * 3.0 - x8 * 9.0 + 105.0;
     c[1] = -x1 * 10.0 + x2 * 8.0 + x7 * 17.0 - x8 * 2.0;
     c[2] = x1 * 8.0 - x2 * 2.0 - x9 * 5.0 + x10 * 2.0 + 12.0;
@@ -1611,12 +1624,20 @@ mod tests {
     /// The largest bound or constraint violation at `x`, each scaled by
     /// its tolerance `tol_x(j)` / `tol_c(i)`; feasible within tolerance
     /// when at most 1.
-    fn scaled_violation(p: &HsProblem, x: &[f64], tol_x: impl Fn(usize) -> f64, tol_c: impl Fn(usize) -> f64) -> (f64, String) {
+    fn scaled_violation(
+        p: &HsProblem,
+        x: &[f64],
+        tol_x: impl Fn(usize) -> f64,
+        tol_c: impl Fn(usize) -> f64,
+    ) -> (f64, String) {
         let (_, c) = evaluate(p, x);
         let mut worst = (0.0, String::from("none"));
         let mut see = |v: f64, tol: f64, what: String| {
             if v / tol > worst.0 {
-                worst = (v / tol, format!("{what}: violation {v:e}, tolerance {tol:e}"));
+                worst = (
+                    v / tol,
+                    format!("{what}: violation {v:e}, tolerance {tol:e}"),
+                );
             }
         };
         for j in 0..p.n {
@@ -1625,7 +1646,14 @@ mod tests {
         }
         for i in 0..p.m {
             let v = (p.c_lower[i] - c[i]).max(c[i] - p.c_upper[i]).max(0.0);
-            see(v, tol_c(i), format!("row {i}: c = {}, [{}, {}]", c[i], p.c_lower[i], p.c_upper[i]));
+            see(
+                v,
+                tol_c(i),
+                format!(
+                    "row {i}: c = {}, [{}, {}]",
+                    c[i], p.c_lower[i], p.c_upper[i]
+                ),
+            );
         }
         worst
     }
@@ -1647,11 +1675,23 @@ mod tests {
             assert_eq!(p.c_upper.len(), p.m, "{}: c_upper", p.name);
             for j in 0..p.n {
                 assert!(p.x_lower[j] <= p.x_upper[j], "{}: bounds of x[{j}]", p.name);
-                assert!(p.x_lower[j] < INF && p.x_upper[j] > -INF, "{}: infinite bound of x[{j}] on the wrong side", p.name);
+                assert!(
+                    p.x_lower[j] < INF && p.x_upper[j] > -INF,
+                    "{}: infinite bound of x[{j}] on the wrong side",
+                    p.name
+                );
             }
             for i in 0..p.m {
-                assert!(p.c_lower[i] <= p.c_upper[i], "{}: bounds of row {i}", p.name);
-                assert!(p.c_lower[i] < INF && p.c_upper[i] > -INF, "{}: row {i} bounded on the wrong side", p.name);
+                assert!(
+                    p.c_lower[i] <= p.c_upper[i],
+                    "{}: bounds of row {i}",
+                    p.name
+                );
+                assert!(
+                    p.c_lower[i] < INF && p.c_upper[i] > -INF,
+                    "{}: row {i} bounded on the wrong side",
+                    p.name
+                );
             }
             // Every row is written, f and c are finite at x0.
             let (f, c) = evaluate(p, &p.x0);
@@ -1660,17 +1700,30 @@ mod tests {
             match p.status {
                 Status::Optimal => assert!(p.f_star.is_finite(), "{}: f*", p.name),
                 Status::Infeasible | Status::Unbounded => {
-                    assert!(p.f_star.is_nan() && p.x_star.is_none(), "{}: no optimum expected", p.name)
+                    assert!(
+                        p.f_star.is_nan() && p.x_star.is_none(),
+                        "{}: no optimum expected",
+                        p.name
+                    )
                 }
             }
             if let Some(x) = &p.x_star {
                 assert_eq!(x.len(), p.n, "{}: x*", p.name);
             }
-            assert!(p.x_star_precision >= 0.0 && p.x_star_precision < 1e-5, "{}: x* precision", p.name);
+            assert!(
+                p.x_star_precision >= 0.0 && p.x_star_precision < 1e-5,
+                "{}: x* precision",
+                p.name
+            );
             assert!(!p.source.is_empty(), "{}: source", p.name);
             // The AdProblem accessors agree with the fields.
             let nlp = AdNlp::new(p.clone());
-            assert_eq!((nlp.num_variables(), nlp.num_constraints()), (p.n, p.m), "{}", p.name);
+            assert_eq!(
+                (nlp.num_variables(), nlp.num_constraints()),
+                (p.n, p.m),
+                "{}",
+                p.name
+            );
             let (mut l, mut u) = (vec![0.0; p.n], vec![0.0; p.n]);
             nlp.variable_bounds(&mut l, &mut u);
             assert_eq!((&l, &u), (&p.x_lower, &p.x_upper), "{}", p.name);
@@ -1686,8 +1739,12 @@ mod tests {
             assert_eq!(p.name, format!("hs{k:03}"));
             assert_eq!(p.status, Status::Optimal);
         }
-        assert!(infeasible_problems().iter().all(|p| p.status == Status::Infeasible && p.number.is_none()));
-        assert!(unbounded_problems().iter().all(|p| p.status == Status::Unbounded && p.number.is_none()));
+        assert!(infeasible_problems()
+            .iter()
+            .all(|p| p.status == Status::Infeasible && p.number.is_none()));
+        assert!(unbounded_problems()
+            .iter()
+            .all(|p| p.status == Status::Unbounded && p.number.is_none()));
         assert_eq!(by_name("hs071").and_then(|p| p.number), Some(71));
     }
 
@@ -1696,13 +1753,28 @@ mod tests {
         let hs = hock_schittkowski();
         assert!(hs.len() >= 32, "{} problems", hs.len());
         let count = |pred: &dyn Fn(&HsProblem) -> bool| hs.iter().filter(|p| pred(p)).count();
-        assert!(count(&|p| p.m == 0) >= 5, "bound constrained / unconstrained");
-        assert!(count(&|p| p.has_equalities() && !p.has_inequalities()) >= 20, "equality constrained");
-        assert!(count(&|p| p.has_inequalities()) >= 25, "inequality constrained");
-        assert!(count(&|p| p.has_equalities() && p.has_inequalities()) >= 3, "mixed");
+        assert!(
+            count(&|p| p.m == 0) >= 5,
+            "bound constrained / unconstrained"
+        );
+        assert!(
+            count(&|p| p.has_equalities() && !p.has_inequalities()) >= 20,
+            "equality constrained"
+        );
+        assert!(
+            count(&|p| p.has_inequalities()) >= 25,
+            "inequality constrained"
+        );
+        assert!(
+            count(&|p| p.has_equalities() && p.has_inequalities()) >= 3,
+            "mixed"
+        );
         assert!(count(&|p| p.has(Feature::Nonconvex)) >= 20, "nonconvex");
         assert!(count(&|p| p.has(Feature::Degenerate)) >= 2, "degenerate");
-        assert!(count(&|p| p.has(Feature::RankDeficient)) >= 1, "rank deficient");
+        assert!(
+            count(&|p| p.has(Feature::RankDeficient)) >= 1,
+            "rank deficient"
+        );
         assert!(by_name("hs013").unwrap().has(Feature::Degenerate));
         assert!(infeasible_problems().len() >= 2);
         assert!(unbounded_problems().len() >= 2);
@@ -1722,10 +1794,15 @@ mod tests {
             nlp.gradient(&x, &mut g).unwrap();
             let mut jac = vec![0.0; p.m * p.n];
             nlp.jacobian_values(&x, &mut jac).unwrap();
-            let sensitivity = |row: &[f64]| -> f64 { row.iter().zip(&x).map(|(a, b)| (a * b).abs()).sum() };
+            let sensitivity =
+                |row: &[f64]| -> f64 { row.iter().zip(&x).map(|(a, b)| (a * b).abs()).sum() };
 
             let (f, _) = evaluate(&p, &x);
-            let base = if p.f_star == 0.0 { 1e-6 } else { 1e-6 * p.f_star.abs() };
+            let base = if p.f_star == 0.0 {
+                1e-6
+            } else {
+                1e-6 * p.f_star.abs()
+            };
             let tol_f = base + prec * sensitivity(&g);
             if (f - p.f_star).abs() > tol_f {
                 failures.push(format!(
@@ -1767,7 +1844,10 @@ mod tests {
             }
             let (f, _) = evaluate(&p, x);
             if (f - p.f_star).abs() > 1e-9 * p.f_star.abs().max(1.0) {
-                failures.push(format!("{}: f(x*) = {f:.15}, f* = {:.15}", p.name, p.f_star));
+                failures.push(format!(
+                    "{}: f(x*) = {f:.15}, f* = {:.15}",
+                    p.name, p.f_star
+                ));
             }
         }
         assert!(failures.is_empty(), "{}", failures.join("\n"));
@@ -1777,7 +1857,13 @@ mod tests {
     #[test]
     fn known_points_below_the_published_optimum() {
         let hs047 = by_name("hs047").unwrap();
-        let x = [0.67700461670128, 0.726089640962586, 1.215491109042481, 1.75132899519799, 1.477094801614824];
+        let x = [
+            0.67700461670128,
+            0.726089640962586,
+            1.215491109042481,
+            1.75132899519799,
+            1.477094801614824,
+        ];
         assert!(feasible(&hs047, &x, 1e-10));
         let (f, _) = evaluate(&hs047, &x);
         assert!((f - -0.0267141826940).abs() < 1e-10, "hs047: f = {f}");
@@ -1795,7 +1881,11 @@ mod tests {
             286.4165259278685,
             395.6011737027467,
         ];
-        assert!(feasible(&hs106, &x, 1e-6), "{}", scaled_violation(&hs106, &x, |_| 1e-6, |_| 1e-6).1);
+        assert!(
+            feasible(&hs106, &x, 1e-6),
+            "{}",
+            scaled_violation(&hs106, &x, |_| 1e-6, |_| 1e-6).1
+        );
         let (f, _) = evaluate(&hs106, &x);
         assert!((f - 7049.24802052867).abs() < 1e-8, "hs106: f = {f}");
         assert!(f < hs106.f_star - 0.08);
@@ -1815,9 +1905,14 @@ mod tests {
             let name = p.name;
             let mut nlp = AdNlp::new(p);
             for (which, x) in points {
-                let r = check_derivatives(&mut nlp, &x, &lambda, 1e-6).unwrap_or_else(|e| panic!("{name} at {which}: {e}"));
+                let r = check_derivatives(&mut nlp, &x, &lambda, 1e-6)
+                    .unwrap_or_else(|e| panic!("{name} at {which}: {e}"));
                 let hessian = r.hessian.expect("AdNlp has a Hessian");
-                if r.gradient >= 1e-5 || r.jacobian >= 1e-5 || r.jacobian_outside_pattern != 0.0 || hessian >= 1e-5 {
+                if r.gradient >= 1e-5
+                    || r.jacobian >= 1e-5
+                    || r.jacobian_outside_pattern != 0.0
+                    || hessian >= 1e-5
+                {
                     failures.push(format!("{name} at {which}: {r:?}"));
                 }
             }
@@ -1829,7 +1924,10 @@ mod tests {
     struct Lcg(u64);
     impl Lcg {
         fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-            self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
         }
     }

@@ -100,7 +100,14 @@ pub struct TranscriptionOptions {
 
 impl Default for TranscriptionOptions {
     fn default() -> Self {
-        TranscriptionOptions { num_mesh_intervals: 28, scheme: Scheme::MidpointEuler, threads: 2, compress_columns: true, pattern_samples: 60, pattern_seed: 1 }
+        TranscriptionOptions {
+            num_mesh_intervals: 28,
+            scheme: Scheme::MidpointEuler,
+            threads: 2,
+            compress_columns: true,
+            pattern_samples: 60,
+            pattern_seed: 1,
+        }
     }
 }
 
@@ -197,7 +204,9 @@ impl StatePattern {
             mark_significant(&dense, &jac, nin, |r, c, _| found[r][c] = true);
         }
         if used == 0 {
-            return Err(TranscriptionError::Pattern(format!("the model rejected all {samples} sample states")));
+            return Err(TranscriptionError::Pattern(format!(
+                "the model rejected all {samples} sample states"
+            )));
         }
         // Ÿ_C depends on whatever q̈ depends on.
         for i in 0..n {
@@ -207,8 +216,17 @@ impl StatePattern {
                 }
             }
         }
-        let rows = found.iter().map(|r| (0..nin).filter(|&c| r[c]).collect()).collect();
-        Ok(StatePattern { nx, nu, rows, samples_used: used, samples_rejected: rejected })
+        let rows = found
+            .iter()
+            .map(|r| (0..nin).filter(|&c| r[c]).collect())
+            .collect();
+        Ok(StatePattern {
+            nx,
+            nu,
+            rows,
+            samples_used: used,
+            samples_rejected: rejected,
+        })
     }
 
     /// Entries outside the pattern that are significant (see
@@ -235,7 +253,10 @@ impl StatePattern {
                 }
             });
         }
-        (0..nout * nin).filter(|&i| worst[i] > 0.0).map(|i| (i / nin, i % nin, worst[i])).collect()
+        (0..nout * nin)
+            .filter(|&i| worst[i] > 0.0)
+            .map(|i| (i / nin, i % nin, worst[i]))
+            .collect()
     }
 }
 
@@ -249,10 +270,18 @@ pub const ROUNDOFF: f64 = 1e-10;
 /// Call `mark(row, column, |J_rc| / max_c' |J_rc'|)` for every entry of a
 /// dense sampled Jacobian above [`ROUNDOFF`] relative to its row (and every
 /// non-finite entry).
-fn mark_significant(dense: &Compiled, jac: &[f64], nin: usize, mut mark: impl FnMut(usize, usize, f64)) {
+fn mark_significant(
+    dense: &Compiled,
+    jac: &[f64],
+    nin: usize,
+    mut mark: impl FnMut(usize, usize, f64),
+) {
     for r in 0..dense.row_start.len() - 1 {
         let row = &jac[r * nin..(r + 1) * nin];
-        let big = row.iter().filter(|v| v.is_finite()).fold(0.0f64, |m, v| m.max(v.abs()));
+        let big = row
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
         for (c, &v) in row.iter().enumerate() {
             if !v.is_finite() {
                 mark(r, c, f64::INFINITY);
@@ -278,20 +307,35 @@ fn sample_state(ocp: &JumpOcp, kind: usize, rng: &mut ChaCha8Rng, x: &mut [f64],
             x[n + i] = uni(-3.0, 3.0);
         } else {
             // Ranges beyond ±π say nothing new about a rotation.
-            x[i] = uni(lo[i].max(-std::f64::consts::PI), hi[i].min(std::f64::consts::PI));
-            let s = if kind == 0 { ocp.options.speed_bound.min(5.0) } else { ocp.options.speed_bound };
+            x[i] = uni(
+                lo[i].max(-std::f64::consts::PI),
+                hi[i].min(std::f64::consts::PI),
+            );
+            let s = if kind == 0 {
+                ocp.options.speed_bound.min(5.0)
+            } else {
+                ocp.options.speed_bound
+            };
             x[n + i] = uni(-s, s);
         }
     }
     for k in 0..nm {
         let j = 2 * n + k;
-        x[j] = if kind == 2 { (ocp.squat.x[j] * uni(0.9, 1.1)).clamp(lo[j], hi[j]) } else { uni(lo[j], hi[j]) };
+        x[j] = if kind == 2 {
+            (ocp.squat.x[j] * uni(0.9, 1.1)).clamp(lo[j], hi[j])
+        } else {
+            uni(lo[j], hi[j])
+        };
         let a = 2 * n + nm + k;
         x[a] = uni(lo[a], hi[a]);
         u[k] = uni(ocp.control_lower[k], ocp.control_upper[k]);
     }
     if kind != 1 {
-        let depth = if kind == 0 { uni(-0.01, 0.01) } else { uni(0.0, 0.01) };
+        let depth = if kind == 0 {
+            uni(-0.01, 0.01)
+        } else {
+            uni(0.0, 0.01)
+        };
         place_feet(ocp, x, depth);
     }
 }
@@ -301,7 +345,10 @@ fn sample_state(ocp: &JumpOcp, kind: usize, rng: &mut ChaCha8Rng, x: &mut [f64],
 fn place_feet(ocp: &JumpOcp, x: &mut [f64], depth: f64) {
     let eq = &ocp.eq;
     let n = eq.nq();
-    let (Some(contact), Some(c)) = (&eq.model.contact, eq.model.coordinate_index("pelvis_ty")) else { return };
+    let (Some(contact), Some(c)) = (&eq.model.contact, eq.model.coordinate_index("pelvis_ty"))
+    else {
+        return;
+    };
     let ty = eq.system.q_of_model_coordinate[c];
     let mut ws = eq.multibody.workspace::<f64>();
     for _ in 0..3 {
@@ -311,7 +358,15 @@ fn place_feet(ocp: &JumpOcp, x: &mut [f64], depth: f64) {
             .iter()
             .map(|sp| {
                 let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
-                let p: [f64; 3] = eq.multibody.point_position(&ws, ci, [sp.location[0] + off[0], sp.location[1] + off[1], sp.location[2] + off[2]]);
+                let p: [f64; 3] = eq.multibody.point_position(
+                    &ws,
+                    ci,
+                    [
+                        sp.location[0] + off[0],
+                        sp.location[1] + off[1],
+                        sp.location[2] + off[2],
+                    ],
+                );
                 p[1] - sp.radius
             })
             .fold(f64::INFINITY, f64::min);
@@ -380,15 +435,25 @@ impl Compiled {
             passes[color[j] / lanes].seeds.push((j, color[j] % lanes));
         }
         for (e, &(r, c)) in entries.iter().enumerate() {
-            passes[color[c] / lanes].extract.push((e, r, color[c] % lanes));
+            passes[color[c] / lanes]
+                .extract
+                .push((e, r, color[c] % lanes));
         }
-        Compiled { entries, row_start, num_colors, passes }
+        Compiled {
+            entries,
+            row_start,
+            num_colors,
+            passes,
+        }
     }
 
     /// Entry index of (r, c), if in the pattern.
     fn entry(&self, r: usize, c: usize) -> Option<usize> {
         let s = self.row_start[r];
-        self.entries[s..self.row_start[r + 1]].binary_search_by_key(&c, |&(_, cc)| cc).ok().map(|i| s + i)
+        self.entries[s..self.row_start[r + 1]]
+            .binary_search_by_key(&c, |&(_, cc)| cc)
+            .ok()
+            .map(|i| s + i)
     }
 }
 
@@ -422,9 +487,15 @@ impl<const W: usize> Worker<W> {
 }
 
 /// g(x, u) = (f, Ÿ_C, F_y/(m g)) at the worker's (x, u) into `out`.
-fn eval_value<const W: usize>(ocp: &JumpOcp, w: &mut Worker<W>, out: &mut [f64]) -> Result<(), String> {
+fn eval_value<const W: usize>(
+    ocp: &JumpOcp,
+    w: &mut Worker<W>,
+    out: &mut [f64],
+) -> Result<(), String> {
     let nx = w.x.len();
-    let (ydd, fy) = ocp.state_rates(&mut w.ws, &w.x, &w.u, &mut w.xdot).map_err(|e| e.to_string())?;
+    let (ydd, fy) = ocp
+        .state_rates(&mut w.ws, &w.x, &w.u, &mut w.xdot)
+        .map_err(|e| e.to_string())?;
     out[..nx].copy_from_slice(&w.xdot);
     out[nx] = ydd;
     out[nx + 1] = fy;
@@ -439,7 +510,14 @@ fn lane<const W: usize>(d: &DualSVec64<W>, l: usize) -> f64 {
 /// g and its Jacobian entries in `cp`'s pattern at the worker's (x, u).
 /// With `path_columns`, marks the fibre-length rows' dependence on every
 /// coordinate its muscle-tendon length depends on (pattern detection).
-fn eval_jac<const W: usize>(ocp: &JumpOcp, cp: &Compiled, w: &mut Worker<W>, out: &mut [f64], jac: &mut [f64], mut path_columns: Option<&mut Vec<Vec<bool>>>) -> Result<(), String> {
+fn eval_jac<const W: usize>(
+    ocp: &JumpOcp,
+    cp: &Compiled,
+    w: &mut Worker<W>,
+    out: &mut [f64],
+    jac: &mut [f64],
+    mut path_columns: Option<&mut Vec<Vec<bool>>>,
+) -> Result<(), String> {
     let (nx, nu) = (w.x.len(), w.u.len());
     let (n, nm) = (ocp.nq(), ocp.nm());
     for (s, pass) in cp.passes.iter().enumerate() {
@@ -456,7 +534,9 @@ fn eval_jac<const W: usize>(ocp: &JumpOcp, cp: &Compiled, w: &mut Worker<W>, out
                 w.ud[c - nx] = DualSVec64::from_re(w.u[c - nx]).derivative(l);
             }
         }
-        let (ydd, fy) = ocp.state_rates(&mut w.wd, &w.xd, &w.ud, &mut w.xdotd).map_err(|e| e.to_string())?;
+        let (ydd, fy) = ocp
+            .state_rates(&mut w.wd, &w.xd, &w.ud, &mut w.xdotd)
+            .map_err(|e| e.to_string())?;
         if s == 0 {
             for i in 0..nx {
                 out[i] = w.xdotd[i].re;
@@ -505,13 +585,26 @@ enum Point {
 #[derive(Debug, Clone, Copy)]
 enum Src {
     /// diag − (h/2)·J_point[entry] (defect w.r.t. a node variable).
-    Dyn { point: usize, entry: Option<usize>, diag: f64 },
+    Dyn {
+        point: usize,
+        entry: Option<usize>,
+        diag: f64,
+    },
     /// −(f_row at `a` + f_row at `b`)·`scale` (defect w.r.t. t_f).
-    Tf { a: Term, b: usize, row: usize, scale: f64 },
+    Tf {
+        a: Term,
+        b: usize,
+        row: usize,
+        scale: f64,
+    },
     /// A Hermite–Simpson defect entry (filled block by block).
     Hs,
     /// scale·J_point[entry] (Ÿ_C and lift-off rows).
-    Out { point: usize, entry: usize, scale: f64 },
+    Out {
+        point: usize,
+        entry: usize,
+        scale: f64,
+    },
 }
 
 /// The first term of a t_f column entry.
@@ -603,18 +696,27 @@ pub struct Transcription {
 
 impl Transcription {
     /// Transcribe `ocp`, detecting the pattern of ∂f/∂(x, u) first.
-    pub fn new(ocp: Arc<JumpOcp>, options: TranscriptionOptions) -> Result<Self, TranscriptionError> {
+    pub fn new(
+        ocp: Arc<JumpOcp>,
+        options: TranscriptionOptions,
+    ) -> Result<Self, TranscriptionError> {
         let pattern = StatePattern::detect(&ocp, options.pattern_samples, options.pattern_seed)?;
         Self::with_pattern(ocp, options, pattern)
     }
 
     /// Transcribe `ocp` with a known pattern (e.g. shared between meshes).
-    pub fn with_pattern(ocp: Arc<JumpOcp>, options: TranscriptionOptions, pattern: StatePattern) -> Result<Self, TranscriptionError> {
+    pub fn with_pattern(
+        ocp: Arc<JumpOcp>,
+        options: TranscriptionOptions,
+        pattern: StatePattern,
+    ) -> Result<Self, TranscriptionError> {
         let (nx, nu) = (ocp.nx(), ocp.nu());
         let big_n = options.num_mesh_intervals;
         let n_cm = ocp.options.no_countermovement_nodes;
         if big_n == 0 {
-            return Err(TranscriptionError::Invalid("num_mesh_intervals must be at least 1".into()));
+            return Err(TranscriptionError::Invalid(
+                "num_mesh_intervals must be at least 1".into(),
+            ));
         }
         if n_cm > big_n {
             return Err(TranscriptionError::Invalid(format!(
@@ -622,10 +724,15 @@ impl Transcription {
             )));
         }
         if pattern.nx != nx || pattern.nu != nu || pattern.rows.len() != nx + 2 {
-            return Err(TranscriptionError::Pattern(format!("the pattern is for {} states and {} controls, the problem has {nx} and {nu}", pattern.nx, pattern.nu)));
+            return Err(TranscriptionError::Pattern(format!(
+                "the pattern is for {} states and {} controls, the problem has {nx} and {nu}",
+                pattern.nx, pattern.nu
+            )));
         }
         if options.threads == 0 {
-            return Err(TranscriptionError::Invalid("threads must be at least 1".into()));
+            return Err(TranscriptionError::Invalid(
+                "threads must be at least 1".into(),
+            ));
         }
         let nin = nx + nu;
         let compiled = Compiled::new(&pattern.rows, nin, options.compress_columns, LANES);
@@ -663,7 +770,11 @@ impl Transcription {
                 }
             }
         }
-        let first_stage = if options.scheme == Scheme::HermiteSimpson { big_n } else { points.len() };
+        let first_stage = if options.scheme == Scheme::HermiteSimpson {
+            big_n
+        } else {
+            points.len()
+        };
         let nv = nin;
         let var = |k: usize, c: usize| (k - 1) * nv + c;
         let tf = big_n * nv;
@@ -675,7 +786,9 @@ impl Transcription {
                     cols.push(r);
                     cols.sort_unstable();
                 }
-                cols.iter().map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 })).collect()
+                cols.iter()
+                    .map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 }))
+                    .collect()
             })
             .collect();
         // Hermite–Simpson: F_c^x·F adds, to row r, the columns of every row
@@ -683,14 +796,26 @@ impl Transcription {
         let (mut hs_rows, mut hs_prods) = (Vec::new(), Vec::new());
         if options.scheme == Scheme::HermiteSimpson {
             for r in 0..nx {
-                let mut cols: Vec<usize> = pattern.rows[r].iter().copied().chain(std::iter::once(r)).collect();
-                let prods: Vec<(usize, usize)> = pattern.rows[r].iter().filter(|&&c| c < nx).map(|&c| (c, compiled.entry(r, c).unwrap_or(usize::MAX))).collect();
+                let mut cols: Vec<usize> = pattern.rows[r]
+                    .iter()
+                    .copied()
+                    .chain(std::iter::once(r))
+                    .collect();
+                let prods: Vec<(usize, usize)> = pattern.rows[r]
+                    .iter()
+                    .filter(|&&c| c < nx)
+                    .map(|&c| (c, compiled.entry(r, c).unwrap_or(usize::MAX)))
+                    .collect();
                 for &(sr, _) in &prods {
                     cols.extend(pattern.rows[sr].iter().copied());
                 }
                 cols.sort_unstable();
                 cols.dedup();
-                hs_rows.push(cols.iter().map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 })).collect::<Vec<_>>());
+                hs_rows.push(
+                    cols.iter()
+                        .map(|&c| (c, compiled.entry(r, c), if c == r { 1.0 } else { 0.0 }))
+                        .collect::<Vec<_>>(),
+                );
                 hs_prods.push(prods);
             }
         }
@@ -701,24 +826,57 @@ impl Transcription {
             let row0 = (k - 1) * nx;
             let (pa, pb) = match options.scheme {
                 Scheme::MidpointEuler => (interval_point[k - 1], interval_point[k - 1]),
-                Scheme::Trapezoidal | Scheme::HermiteSimpson => (node_point[k - 1].unwrap_or(usize::MAX), node_point[k].unwrap_or(usize::MAX)),
+                Scheme::Trapezoidal | Scheme::HermiteSimpson => (
+                    node_point[k - 1].unwrap_or(usize::MAX),
+                    node_point[k].unwrap_or(usize::MAX),
+                ),
             };
             for r in 0..nx {
-                let cols = if options.scheme == Scheme::HermiteSimpson { &hs_rows[r] } else { &blk[r] };
+                let cols = if options.scheme == Scheme::HermiteSimpson {
+                    &hs_rows[r]
+                } else {
+                    &blk[r]
+                };
                 if k >= 2 {
                     for &(c, e, d) in cols {
                         structure.push((row0 + r, var(k - 1, c)));
-                        sources.push(if options.scheme == Scheme::HermiteSimpson { Src::Hs } else { Src::Dyn { point: pa, entry: e, diag: -d } });
+                        sources.push(if options.scheme == Scheme::HermiteSimpson {
+                            Src::Hs
+                        } else {
+                            Src::Dyn {
+                                point: pa,
+                                entry: e,
+                                diag: -d,
+                            }
+                        });
                     }
                 }
                 for &(c, e, d) in cols {
                     structure.push((row0 + r, var(k, c)));
-                    sources.push(if options.scheme == Scheme::HermiteSimpson { Src::Hs } else { Src::Dyn { point: pb, entry: e, diag: d } });
+                    sources.push(if options.scheme == Scheme::HermiteSimpson {
+                        Src::Hs
+                    } else {
+                        Src::Dyn {
+                            point: pb,
+                            entry: e,
+                            diag: d,
+                        }
+                    });
                 }
                 structure.push((row0 + r, tf));
                 sources.push(match options.scheme {
-                    Scheme::MidpointEuler => Src::Tf { a: Term::None, b: pb, row: r, scale: inv_n },
-                    Scheme::Trapezoidal => Src::Tf { a: node_point[k - 1].map_or(Term::Start, Term::Point), b: pb, row: r, scale: 0.5 * inv_n },
+                    Scheme::MidpointEuler => Src::Tf {
+                        a: Term::None,
+                        b: pb,
+                        row: r,
+                        scale: inv_n,
+                    },
+                    Scheme::Trapezoidal => Src::Tf {
+                        a: node_point[k - 1].map_or(Term::Start, Term::Point),
+                        b: pb,
+                        row: r,
+                        scale: 0.5 * inv_n,
+                    },
                     Scheme::HermiteSimpson => Src::Hs,
                 });
             }
@@ -735,7 +893,11 @@ impl Transcription {
                 let p = node_point[node].unwrap_or(usize::MAX);
                 for &c in &ydd_cols {
                     structure.push((row, var(node, c)));
-                    sources.push(Src::Out { point: p, entry: compiled.entry(nx, c).unwrap_or(usize::MAX), scale });
+                    sources.push(Src::Out {
+                        point: p,
+                        entry: compiled.entry(nx, c).unwrap_or(usize::MAX),
+                        scale,
+                    });
                 }
             }
         }
@@ -745,7 +907,11 @@ impl Transcription {
             let p = node_point[big_n].unwrap_or(usize::MAX);
             for &c in &fy_cols {
                 structure.push((row, var(big_n, c)));
-                sources.push(Src::Out { point: p, entry: compiled.entry(nx + 1, c).unwrap_or(usize::MAX), scale: 1.0 });
+                sources.push(Src::Out {
+                    point: p,
+                    entry: compiled.entry(nx + 1, c).unwrap_or(usize::MAX),
+                    scale: 1.0,
+                });
             }
         }
         let off_end = structure.len();
@@ -754,7 +920,9 @@ impl Transcription {
         w0.x.copy_from_slice(ocp.x0());
         w0.u.copy_from_slice(ocp.u0());
         let mut node0 = vec![0.0; nx + 2];
-        eval_value(&ocp, &mut w0, &mut node0).map_err(|e| TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}")))?;
+        eval_value(&ocp, &mut w0, &mut node0).map_err(|e| {
+            TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}"))
+        })?;
         let workers = (0..options.threads).map(|_| Worker::new(&ocp)).collect();
         let npts = points.len();
         let nnz_g = compiled.entries.len();
@@ -818,7 +986,8 @@ impl Transcription {
 
     /// Index of control `i` of node `k` (None for node 0).
     pub fn control_index(&self, k: usize, i: usize) -> Option<usize> {
-        (k >= 1 && k <= self.num_intervals() && i < self.nu).then(|| (k - 1) * self.node_size() + self.nx + i)
+        (k >= 1 && k <= self.num_intervals() && i < self.nu)
+            .then(|| (k - 1) * self.node_size() + self.nx + i)
     }
 
     /// Index of t_f (the last variable).
@@ -862,22 +1031,42 @@ impl Transcription {
         let big_n = self.num_intervals();
         MeshTrajectory {
             time: self.mesh_times(self.final_time(v)),
-            states: (0..=big_n).map(|k| self.node_state(v, k).to_vec()).collect(),
-            controls: (0..=big_n).map(|k| self.node_control(v, k).to_vec()).collect(),
+            states: (0..=big_n)
+                .map(|k| self.node_state(v, k).to_vec())
+                .collect(),
+            controls: (0..=big_n)
+                .map(|k| self.node_control(v, k).to_vec())
+                .collect(),
         }
     }
 
     /// The variable vector of node states and excitations (N + 1 each,
     /// node 0's ignored: it is fixed) and final time `tf`.
-    pub fn pack(&self, states: &[Vec<f64>], controls: &[Vec<f64>], tf: f64) -> Result<Vec<f64>, TranscriptionError> {
+    pub fn pack(
+        &self,
+        states: &[Vec<f64>],
+        controls: &[Vec<f64>],
+        tf: f64,
+    ) -> Result<Vec<f64>, TranscriptionError> {
         let big_n = self.num_intervals();
         if states.len() != big_n + 1 || controls.len() != big_n + 1 {
-            return Err(TranscriptionError::Guess(format!("need {} node states and controls (node 0 included), got {} and {}", big_n + 1, states.len(), controls.len())));
+            return Err(TranscriptionError::Guess(format!(
+                "need {} node states and controls (node 0 included), got {} and {}",
+                big_n + 1,
+                states.len(),
+                controls.len()
+            )));
         }
         let mut v = vec![0.0; self.num_variables()];
         for k in 1..=big_n {
             if states[k].len() != self.nx || controls[k].len() != self.nu {
-                return Err(TranscriptionError::Guess(format!("node {k}: {} states and {} controls, expected {} and {}", states[k].len(), controls[k].len(), self.nx, self.nu)));
+                return Err(TranscriptionError::Guess(format!(
+                    "node {k}: {} states and {} controls, expected {} and {}",
+                    states[k].len(),
+                    controls[k].len(),
+                    self.nx,
+                    self.nu
+                )));
             }
             let o = (k - 1) * self.node_size();
             v[o..o + self.nx].copy_from_slice(&states[k]);
@@ -902,25 +1091,56 @@ impl Transcription {
     /// An initial guess from a trajectory (times increasing, from 0, states
     /// and excitations per time) resampled linearly onto the mesh for final
     /// time `tf`, then clipped into the variable bounds (t_f too).
-    pub fn guess_from_trajectory(&self, time: &[f64], states: &[Vec<f64>], controls: &[Vec<f64>], tf: f64) -> Result<Vec<f64>, TranscriptionError> {
+    pub fn guess_from_trajectory(
+        &self,
+        time: &[f64],
+        states: &[Vec<f64>],
+        controls: &[Vec<f64>],
+        tf: f64,
+    ) -> Result<Vec<f64>, TranscriptionError> {
         if time.is_empty() || time.len() != states.len() || time.len() != controls.len() {
-            return Err(TranscriptionError::Guess(format!("{} times, {} states and {} controls; need equally many, at least one", time.len(), states.len(), controls.len())));
+            return Err(TranscriptionError::Guess(format!(
+                "{} times, {} states and {} controls; need equally many, at least one",
+                time.len(),
+                states.len(),
+                controls.len()
+            )));
         }
-        if let Some(i) = time.windows(2).position(|w| w[0].is_nan() || w[1].is_nan() || w[1] < w[0]) {
-            return Err(TranscriptionError::Guess(format!("times not increasing at index {}: {} then {}", i + 1, time[i], time[i + 1])));
+        if let Some(i) = time
+            .windows(2)
+            .position(|w| w[0].is_nan() || w[1].is_nan() || w[1] < w[0])
+        {
+            return Err(TranscriptionError::Guess(format!(
+                "times not increasing at index {}: {} then {}",
+                i + 1,
+                time[i],
+                time[i + 1]
+            )));
         }
         if let Some(i) = states.iter().position(|s| s.len() != self.nx) {
-            return Err(TranscriptionError::Guess(format!("state {i} has {} values, expected {}", states[i].len(), self.nx)));
+            return Err(TranscriptionError::Guess(format!(
+                "state {i} has {} values, expected {}",
+                states[i].len(),
+                self.nx
+            )));
         }
         if let Some(i) = controls.iter().position(|c| c.len() != self.nu) {
-            return Err(TranscriptionError::Guess(format!("control {i} has {} values, expected {}", controls[i].len(), self.nu)));
+            return Err(TranscriptionError::Guess(format!(
+                "control {i} has {} values, expected {}",
+                controls[i].len(),
+                self.nu
+            )));
         }
         if !(tf.is_finite() && tf > 0.0) {
-            return Err(TranscriptionError::Guess(format!("final time must be positive, got {tf}")));
+            return Err(TranscriptionError::Guess(format!(
+                "final time must be positive, got {tf}"
+            )));
         }
         let t_end = *time.last().unwrap_or(&0.0);
         if tf > t_end + 1e-12 * t_end.abs().max(1.0) {
-            return Err(TranscriptionError::Guess(format!("the trajectory ends at {t_end} s, before the final time {tf} s")));
+            return Err(TranscriptionError::Guess(format!(
+                "the trajectory ends at {t_end} s, before the final time {tf} s"
+            )));
         }
         let big_n = self.num_intervals();
         let times = self.mesh_times(tf);
@@ -932,8 +1152,16 @@ impl Transcription {
             while j + 1 < time.len() && time[j + 1] < t {
                 j += 1;
             }
-            let (a, b) = if j + 1 < time.len() { (j, j + 1) } else { (j, j) };
-            let s = if b > a && time[b] > time[a] { ((t - time[a]) / (time[b] - time[a])).clamp(0.0, 1.0) } else { 0.0 };
+            let (a, b) = if j + 1 < time.len() {
+                (j, j + 1)
+            } else {
+                (j, j)
+            };
+            let s = if b > a && time[b] > time[a] {
+                ((t - time[a]) / (time[b] - time[a])).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
             for i in 0..self.nx {
                 xs[k][i] = states[a][i] + s * (states[b][i] - states[a][i]);
             }
@@ -955,8 +1183,16 @@ impl Transcription {
     /// (Rust-native Dormand–Prince, accuracy 1e-6) and resampled onto the
     /// mesh with t_f the lift-off time; returns the guess and the jump.
     pub fn bang_bang_guess(&self) -> Result<(Vec<f64>, JumpSummary), TranscriptionError> {
-        let (summary, traj) = self.ocp.simulate_bang_bang(1e-6).map_err(TranscriptionError::Simulation)?;
-        let tf = summary.liftoff_time_s.ok_or_else(|| TranscriptionError::Guess(format!("the bang-bang jump does not lift off within {} s", summary.final_time_s)))?;
+        let (summary, traj) = self
+            .ocp
+            .simulate_bang_bang(1e-6)
+            .map_err(TranscriptionError::Simulation)?;
+        let tf = summary.liftoff_time_s.ok_or_else(|| {
+            TranscriptionError::Guess(format!(
+                "the bang-bang jump does not lift off within {} s",
+                summary.final_time_s
+            ))
+        })?;
         let v = self.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, tf)?;
         Ok((v, summary))
     }
@@ -965,7 +1201,11 @@ impl Transcription {
     /// held at every node, t_f = 0.3 s; see [`Self::bang_bang_guess`]).
     pub fn set_initial_point(&mut self, v: &[f64]) -> Result<(), TranscriptionError> {
         if v.len() != self.num_variables() {
-            return Err(TranscriptionError::Guess(format!("{} values, the problem has {} variables", v.len(), self.num_variables())));
+            return Err(TranscriptionError::Guess(format!(
+                "{} values, the problem has {} variables",
+                v.len(),
+                self.num_variables()
+            )));
         }
         self.initial = v.to_vec();
         Ok(())
@@ -981,7 +1221,11 @@ impl Transcription {
         let [_, cm, lo, end] = self.block_offsets;
         let nx = self.nx;
         let first = self.structure.iter().take_while(|&&(r, _)| r < nx).count();
-        let second = self.structure.iter().filter(|&&(r, _)| (nx..2 * nx).contains(&r)).count();
+        let second = self
+            .structure
+            .iter()
+            .filter(|&&(r, _)| (nx..2 * nx).contains(&r))
+            .count();
         JacobianStats {
             nnz: end,
             nnz_defects: cm,
@@ -1012,7 +1256,8 @@ impl Transcription {
     /// Y_C, Ẏ_C and J = Y_C + Ẏ_C²/(2g) at the final node.
     pub fn jump_objective(&self, v: &[f64]) -> (f64, f64, f64) {
         let mut ws = self.ocp.eq.multibody.workspace::<f64>();
-        self.ocp.jump_objective(&mut ws, self.node_state(v, self.num_intervals()))
+        self.ocp
+            .jump_objective(&mut ws, self.node_state(v, self.num_intervals()))
     }
 
     /// Evaluate g (and with `jac` its Jacobian) at every point, in parallel:
@@ -1021,16 +1266,28 @@ impl Transcription {
     fn eval_points(&mut self, v: &[f64], jac: bool) -> Result<(), EvalError> {
         let what = if jac { "jacobian" } else { "constraints" };
         if v.len() != self.num_variables() {
-            return Err(EvalError::new(what, format!("{} values, the problem has {} variables", v.len(), self.num_variables())));
+            return Err(EvalError::new(
+                what,
+                format!(
+                    "{} values, the problem has {} variables",
+                    v.len(),
+                    self.num_variables()
+                ),
+            ));
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(EvalError::new(what, format!("{} is {}", self.variable_name(i), v[i])));
+            return Err(EvalError::new(
+                what,
+                format!("{} is {}", self.variable_name(i), v[i]),
+            ));
         }
         let first_stage = self.first_stage;
-        self.eval_stage(v, jac, 0, first_stage).map_err(|e| EvalError::new(what, e))?;
+        self.eval_stage(v, jac, 0, first_stage)
+            .map_err(|e| EvalError::new(what, e))?;
         if first_stage < self.points.len() {
             let all = self.points.len();
-            self.eval_stage(v, jac, first_stage, all).map_err(|e| EvalError::new(what, e))?;
+            self.eval_stage(v, jac, first_stage, all)
+                .map_err(|e| EvalError::new(what, e))?;
         }
         Ok(())
     }
@@ -1066,7 +1323,12 @@ impl Transcription {
                 _ => &node0[..nx],
             }
         };
-        let run = |w: &mut Worker<LANES>, first: usize, pts: &[Point], vals: &mut [f64], jacs: &mut [f64]| -> Result<(), (usize, String)> {
+        let run = |w: &mut Worker<LANES>,
+                   first: usize,
+                   pts: &[Point],
+                   vals: &mut [f64],
+                   jacs: &mut [f64]|
+         -> Result<(), (usize, String)> {
             for (i, p) in pts.iter().enumerate() {
                 match *p {
                     Point::Node(k) => {
@@ -1095,7 +1357,11 @@ impl Transcription {
                     }
                 }
                 let out = &mut vals[i * nout..(i + 1) * nout];
-                let r = if jac { eval_jac(ocp, cp, w, out, &mut jacs[i * nnz..(i + 1) * nnz], None) } else { eval_value(ocp, w, out) };
+                let r = if jac {
+                    eval_jac(ocp, cp, w, out, &mut jacs[i * nnz..(i + 1) * nnz], None)
+                } else {
+                    eval_value(ocp, w, out)
+                };
                 r.map_err(|e| (first + i, e))?;
             }
             Ok(())
@@ -1114,16 +1380,26 @@ impl Transcription {
                 let mut jobs = self
                     .workers
                     .iter_mut()
-                    .zip(todo_vals.chunks_mut(per * nout).zip(todo_jac.chunks_mut(per * nnz.max(1))))
+                    .zip(
+                        todo_vals
+                            .chunks_mut(per * nout)
+                            .zip(todo_jac.chunks_mut(per * nnz.max(1))),
+                    )
                     .zip(points.chunks(per).enumerate());
                 let first = jobs.next();
-                let handles: Vec<_> = jobs.map(|((w, (vals, jacs)), (ci, pts))| s.spawn(move || run(w, lo + ci * per, pts, vals, jacs))).collect();
+                let handles: Vec<_> = jobs
+                    .map(|((w, (vals, jacs)), (ci, pts))| {
+                        s.spawn(move || run(w, lo + ci * per, pts, vals, jacs))
+                    })
+                    .collect();
                 let mut res = match first {
                     Some(((w, (vals, jacs)), (_, pts))) => run(w, lo, pts, vals, jacs),
                     None => Ok(()),
                 };
                 for h in handles {
-                    let r = h.join().unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
+                    let r = h
+                        .join()
+                        .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
                     if res.is_ok() {
                         res = r;
                     }
@@ -1172,7 +1448,17 @@ impl Transcription {
             for r in 0..nx {
                 let cols = &self.hs_rows[r];
                 let prods = &self.hs_prods[r];
-                for (node_jac, sign) in [(if k >= 2 { self.node_point[k - 1].map(|p| &self.point_jac[p * nnz..(p + 1) * nnz]) } else { None }, -1.0), (Some(jb), 1.0)] {
+                for (node_jac, sign) in [
+                    (
+                        if k >= 2 {
+                            self.node_point[k - 1].map(|p| &self.point_jac[p * nnz..(p + 1) * nnz])
+                        } else {
+                            None
+                        },
+                        -1.0,
+                    ),
+                    (Some(jb), 1.0),
+                ] {
                     let Some(jn) = node_jac else { continue };
                     // scratch = row r of F_c^x·F_node.
                     for &(sr, e_rs) in prods {
@@ -1183,7 +1469,8 @@ impl Transcription {
                     }
                     for &(c, e, d) in cols {
                         let (fnode, fcen) = e.map_or((0.0, 0.0), |e| (jn[e], jc[e]));
-                        let v = sign * d - h / 6.0 * fnode - h / 3.0 * fcen + sign * h * h / 12.0 * scratch[c];
+                        let v = sign * d - h / 6.0 * fnode - h / 3.0 * fcen
+                            + sign * h * h / 12.0 * scratch[c];
                         scratch[c] = 0.0;
                         if let Some(o) = out.next() {
                             *o = v;
@@ -1214,7 +1501,10 @@ fn check_len(what: &str, name: &str, got: usize, want: usize) -> Result<(), Eval
     if got == want {
         Ok(())
     } else {
-        Err(EvalError::new(what, format!("{name} has length {got}, expected {want}")))
+        Err(EvalError::new(
+            what,
+            format!("{name} has length {got}, expected {want}"),
+        ))
     }
 }
 
@@ -1270,7 +1560,10 @@ impl Nlp for Transcription {
         check_len("objective", "x", x.len(), self.num_variables())?;
         let (_, _, j) = self.jump_objective(x);
         if !j.is_finite() {
-            return Err(EvalError::new("objective", format!("J = {j} at the final node")));
+            return Err(EvalError::new(
+                "objective",
+                format!("J = {j} at the final node"),
+            ));
         }
         Ok(-j)
     }
@@ -1313,19 +1606,31 @@ impl Nlp for Transcription {
                 Scheme::Trapezoidal => {
                     let (pa, pb) = (self.node_point[k - 1], self.node_point[k]);
                     for r in 0..nx {
-                        c[row0 + r] = xb[r] - xa[r] - 0.5 * h * (self.point_val(pa, r) + self.point_val(pb, r));
+                        c[row0 + r] = xb[r]
+                            - xa[r]
+                            - 0.5 * h * (self.point_val(pa, r) + self.point_val(pb, r));
                     }
                 }
                 Scheme::HermiteSimpson => {
-                    let (pa, pb, pc) = (self.node_point[k - 1], self.node_point[k], Some(self.interval_point[k - 1]));
+                    let (pa, pb, pc) = (
+                        self.node_point[k - 1],
+                        self.node_point[k],
+                        Some(self.interval_point[k - 1]),
+                    );
                     for r in 0..nx {
-                        c[row0 + r] = xb[r] - xa[r] - h / 6.0 * (self.point_val(pa, r) + 4.0 * self.point_val(pc, r) + self.point_val(pb, r));
+                        c[row0 + r] = xb[r]
+                            - xa[r]
+                            - h / 6.0
+                                * (self.point_val(pa, r)
+                                    + 4.0 * self.point_val(pc, r)
+                                    + self.point_val(pb, r));
                     }
                 }
             }
         }
         for j in 0..self.n_cm {
-            c[big_n * nx + j] = self.point_val(self.node_point[j], nx) - self.point_val(self.node_point[j + 1], nx);
+            c[big_n * nx + j] =
+                self.point_val(self.node_point[j], nx) - self.point_val(self.node_point[j + 1], nx);
         }
         c[self.liftoff_row()] = self.point_val(self.node_point[big_n], nx + 1);
         self.counters.constraints += 1;
@@ -1363,7 +1668,11 @@ impl Nlp for Transcription {
                     };
                     -(fa + self.point_vals[b * nout + row]) * scale
                 }
-                Src::Out { point, entry, scale } => scale * self.point_jac[point * nnz + entry],
+                Src::Out {
+                    point,
+                    entry,
+                    scale,
+                } => scale * self.point_jac[point * nnz + entry],
             };
         }
         self.counters.jacobians += 1;
@@ -1384,7 +1693,11 @@ impl Nlp for Transcription {
             let start = if k >= 2 { (k - 2) * nv } else { 0 };
             let mut variables: Vec<usize> = (start..k * nv).collect();
             variables.push(tf);
-            out.push(Element { variables, constraints: ((k - 1) * nx..k * nx).collect(), objective: false });
+            out.push(Element {
+                variables,
+                constraints: ((k - 1) * nx..k * nx).collect(),
+                objective: false,
+            });
         }
         for j in 0..self.n_cm {
             let mut variables = Vec::new();
@@ -1393,13 +1706,21 @@ impl Nlp for Transcription {
                     variables.extend(self.ydd_cols.iter().map(|&c| (node - 1) * nv + c));
                 }
             }
-            out.push(Element { variables, constraints: vec![big_n * nx + j], objective: false });
+            out.push(Element {
+                variables,
+                constraints: vec![big_n * nx + j],
+                objective: false,
+            });
         }
         let n = self.ocp.nq();
         let mut cols: Vec<usize> = (0..2 * n).chain(self.fy_cols.iter().copied()).collect();
         cols.sort_unstable();
         cols.dedup();
-        out.push(Element { variables: cols.iter().map(|&c| (big_n - 1) * nv + c).collect(), constraints: vec![self.liftoff_row()], objective: true });
+        out.push(Element {
+            variables: cols.iter().map(|&c| (big_n - 1) * nv + c).collect(),
+            constraints: vec![self.liftoff_row()],
+            objective: true,
+        });
         out
     }
 
@@ -1419,7 +1740,11 @@ impl Nlp for Transcription {
     fn constraint_name(&self, i: usize) -> String {
         let nx = self.nx;
         if i < self.num_intervals() * nx {
-            format!("defect of interval {} in {}", i / nx + 1, self.ocp.eq.state_names()[i % nx])
+            format!(
+                "defect of interval {} in {}",
+                i / nx + 1,
+                self.ocp.eq.state_names()[i % nx]
+            )
         } else if self.no_countermovement_rows().contains(&i) {
             let j = i - self.num_intervals() * nx;
             format!("no countermovement: Ÿ_C(node {j}) ≤ Ÿ_C(node {})", j + 1)
@@ -1432,7 +1757,14 @@ impl Nlp for Transcription {
 /// Median time (s) of one Jacobian of g = (f, Ÿ_C, F_y/(m g)) at (x, u)
 /// in `pattern` with `W` dual lanes per pass, over `reps` evaluations
 /// (for choosing [`LANES`]; `W = 1` is one direction per pass).
-pub fn time_point_jacobian<const W: usize>(ocp: &JumpOcp, pattern: &StatePattern, compress: bool, x: &[f64], u: &[f64], reps: usize) -> Result<f64, String> {
+pub fn time_point_jacobian<const W: usize>(
+    ocp: &JumpOcp,
+    pattern: &StatePattern,
+    compress: bool,
+    x: &[f64],
+    u: &[f64],
+    reps: usize,
+) -> Result<f64, String> {
     let nin = pattern.nx + pattern.nu;
     let cp = Compiled::new(&pattern.rows, nin, compress, W);
     let mut w = Worker::<W>::new(ocp);

@@ -16,25 +16,73 @@ fn tmp(name: &str) -> std::path::PathBuf {
 #[test]
 fn bang_bang_jump_leaves_the_ground_and_writes_opensim_files() {
     let out = tmp("sim");
-    let o = leap().args(["simulate", "--integrator", "DormandPrince", "--json", "--out"]).arg(&out).output().unwrap();
+    let o = leap()
+        .args([
+            "simulate",
+            "--integrator",
+            "DormandPrince",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    for key in ["jump_height_m", "liftoff_time_s", "liftoff_com_velocity_mps", "peak_vertical_grf_bw", "steps", "rejected_steps", "wall_time_s"] {
-        assert!(v.get(key).is_some_and(|x| x.is_number()), "missing {key}: {v}");
+    for key in [
+        "jump_height_m",
+        "liftoff_time_s",
+        "liftoff_com_velocity_mps",
+        "peak_vertical_grf_bw",
+        "steps",
+        "rejected_steps",
+        "wall_time_s",
+    ] {
+        assert!(
+            v.get(key).is_some_and(|x| x.is_number()),
+            "missing {key}: {v}"
+        );
     }
     assert!(v["jump_height_m"].as_f64().unwrap() > 0.05);
     assert!(v["liftoff_com_velocity_mps"].as_f64().unwrap() > 0.5);
-    let names: Vec<String> = std::fs::read_dir(&out).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
-    for f in ["jump_states.sto", "jump_controls.sto", "jump_grf.mot", "jump_summary.json"] {
+    let names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    for f in [
+        "jump_states.sto",
+        "jump_controls.sto",
+        "jump_grf.mot",
+        "jump_summary.json",
+    ] {
         assert!(names.contains(&f.to_string()), "{f} not in {names:?}");
     }
     assert_eq!(names.len(), 4, "nothing else is written: {names:?}");
     // The controls it wrote drive the same jump when read back.
     let out2 = tmp("sim2");
-    let o2 = leap().args(["simulate", "--integrator", "DormandPrince", "--json", "--controls"]).arg(out.join("jump_controls.sto")).arg("--out").arg(&out2).output().unwrap();
-    assert!(o2.status.success(), "{}", String::from_utf8_lossy(&o2.stderr));
+    let o2 = leap()
+        .args([
+            "simulate",
+            "--integrator",
+            "DormandPrince",
+            "--json",
+            "--controls",
+        ])
+        .arg(out.join("jump_controls.sto"))
+        .arg("--out")
+        .arg(&out2)
+        .output()
+        .unwrap();
+    assert!(
+        o2.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o2.stderr)
+    );
     let v2: serde_json::Value = serde_json::from_slice(&o2.stdout).unwrap();
-    let (h1, h2) = (v["jump_height_m"].as_f64().unwrap(), v2["jump_height_m"].as_f64().unwrap());
+    let (h1, h2) = (
+        v["jump_height_m"].as_f64().unwrap(),
+        v2["jump_height_m"].as_f64().unwrap(),
+    );
     assert!((h1 - h2).abs() < 5e-3, "{h1} vs {h2}");
     std::fs::remove_dir_all(&out).ok();
     std::fs::remove_dir_all(&out2).ok();
@@ -45,23 +93,52 @@ fn bad_simulate_input_gets_clear_errors() {
     let out = tmp("bad");
     let cases: [(&[&str], &str); 5] = [
         (&["--integrator", "Verlet"], "unknown integrator 'Verlet'"),
-        (&["--controls", "tests/data/controls/jumper_missing_soleus.sto"], "missing: no excitation column for muscle 'soleus_r'"),
-        (&["--controls", "tests/data/controls/jumper_nan.sto"], "row 2 (t = 0.1): excitation NaN"),
-        (&["--controls", "tests/data/controls/jumper_time_order.sto"], "not strictly increasing"),
+        (
+            &[
+                "--controls",
+                "tests/data/controls/jumper_missing_soleus.sto",
+            ],
+            "missing: no excitation column for muscle 'soleus_r'",
+        ),
+        (
+            &["--controls", "tests/data/controls/jumper_nan.sto"],
+            "row 2 (t = 0.1): excitation NaN",
+        ),
+        (
+            &["--controls", "tests/data/controls/jumper_time_order.sto"],
+            "not strictly increasing",
+        ),
         (&["--accuracy=-1"], "accuracy: must be positive"),
     ];
     for (args, want) in cases {
-        let o = leap().arg("simulate").args(args).arg("--out").arg(&out).output().unwrap();
+        let o = leap()
+            .arg("simulate")
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{args:?} succeeded");
         assert!(err.contains(want), "{args:?}: {err}");
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
     let study = out.join("study.json");
-    std::fs::write(&study, r#"{"integrator": "RungeKuttaMerson", "acuracy": 1e-5}"#).unwrap();
-    let o = leap().args(["simulate", "--study"]).arg(&study).output().unwrap();
+    std::fs::write(
+        &study,
+        r#"{"integrator": "RungeKuttaMerson", "acuracy": 1e-5}"#,
+    )
+    .unwrap();
+    let o = leap()
+        .args(["simulate", "--study"])
+        .arg(&study)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("study.json") && err.contains("acuracy"), "{err}");
+    assert!(
+        !o.status.success() && err.contains("study.json") && err.contains("acuracy"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -72,7 +149,11 @@ fn eval_reports_the_static_squat_at_rest() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let squat = out.join("squat.json");
     std::fs::write(&squat, &o.stdout).unwrap();
-    let o = leap().args(["eval", "--json", "--input"]).arg(&squat).output().unwrap();
+    let o = leap()
+        .args(["eval", "--json", "--input"])
+        .arg(&squat)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     for (c, a) in v["accelerations"].as_object().unwrap() {
@@ -80,13 +161,28 @@ fn eval_reports_the_static_squat_at_rest() {
     }
     let soleus = &v["muscles"]["soleus_r"];
     assert!(soleus["tendon_force"].as_f64().unwrap() > 0.0);
-    assert!(soleus["moment_arms"]["ankle_angle_r"].as_f64().unwrap() < 0.0, "soleus plantarflexes");
+    assert!(
+        soleus["moment_arms"]["ankle_angle_r"].as_f64().unwrap() < 0.0,
+        "soleus plantarflexes"
+    );
     // A missing state is named.
     let mut s: serde_json::Value = serde_json::from_slice(&std::fs::read(&squat).unwrap()).unwrap();
-    s["state"].as_object_mut().unwrap().remove("/forceset/soleus_r/activation");
+    s["state"]
+        .as_object_mut()
+        .unwrap()
+        .remove("/forceset/soleus_r/activation");
     std::fs::write(&squat, serde_json::to_vec(&s).unwrap()).unwrap();
-    let o = leap().args(["eval", "--input"]).arg(&squat).output().unwrap();
+    let o = leap()
+        .args(["eval", "--input"])
+        .arg(&squat)
+        .output()
+        .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && err.contains("squat.json") && err.contains("/forceset/soleus_r/activation"), "{err}");
+    assert!(
+        !o.status.success()
+            && err.contains("squat.json")
+            && err.contains("/forceset/soleus_r/activation"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&out).ok();
 }

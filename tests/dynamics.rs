@@ -53,7 +53,10 @@ fn double_pendulum_matches_closed_form() {
         // q̈ = M⁻¹(τ − b) by Cramer's rule.
         let det = mm[0] * mm[3] - mm[1] * mm[2];
         let r = [tau[0] - b[0], tau[1] - b[1]];
-        let qdd_ref = [(mm[3] * r[0] - mm[1] * r[1]) / det, (mm[0] * r[1] - mm[2] * r[0]) / det];
+        let qdd_ref = [
+            (mm[3] * r[0] - mm[1] * r[1]) / det,
+            (mm[0] * r[1] - mm[2] * r[0]) / det,
+        ];
         let mut qdd = [0.0; 2];
         mb.forward_dynamics(&mut ws, &tau, &mut qdd).unwrap();
         for (x, y) in qdd.iter().zip(&qdd_ref) {
@@ -63,7 +66,14 @@ fn double_pendulum_matches_closed_form() {
 }
 
 /// Classical fixed-step RK4 on the Rust-native dynamics (no applied forces).
-fn rk4_energy_drift(model: &Model, symmetric: bool, q0: Vec<f64>, u0: Vec<f64>, h: f64, steps: usize) -> (f64, f64) {
+fn rk4_energy_drift(
+    model: &Model,
+    symmetric: bool,
+    q0: Vec<f64>,
+    u0: Vec<f64>,
+    h: f64,
+    steps: usize,
+) -> (f64, f64) {
     let sys = model.system(symmetric).unwrap();
     let mb = Multibody::new(model, &sys);
     let n = mb.nq();
@@ -82,7 +92,9 @@ fn rk4_energy_drift(model: &Model, symmetric: bool, q0: Vec<f64>, u0: Vec<f64>, 
         mb.energy(&w)
     };
     let e0 = energy(&q, &u);
-    let axpy = |x: &[f64], a: f64, y: &[f64]| -> Vec<f64> { x.iter().zip(y).map(|(x, y)| x + a * y).collect() };
+    let axpy = |x: &[f64], a: f64, y: &[f64]| -> Vec<f64> {
+        x.iter().zip(y).map(|(x, y)| x + a * y).collect()
+    };
     let mut max_drift: f64 = 0.0;
     for _ in 0..steps {
         let k1q = u.clone();
@@ -107,13 +119,19 @@ fn passive_simulation_conserves_energy_rust_native() {
     let m = Model::from_file("models/double_pendulum.json").unwrap();
     let (e0, drift) = rk4_energy_drift(&m, false, vec![1.2, -0.7], vec![0.0, 2.0], 1e-3, 2000);
     // Scale: the pendulum's energy swing |E| ~ 10 J; RK4 at h = 1 ms keeps drift tiny.
-    assert!(drift < 1e-8 * e0.abs().max(1.0), "double pendulum drift {drift} J (E0 {e0})");
+    assert!(
+        drift < 1e-8 * e0.abs().max(1.0),
+        "double pendulum drift {drift} J (E0 {e0})"
+    );
     let j = Model::from_file("models/jumper.json").unwrap();
     let sys = j.system(true).unwrap();
     let q0 = sys.q_from_model(&j.poses["squat"]);
     let u0: Vec<f64> = (0..7).map(|i| 0.5 * (i as f64 - 3.0)).collect();
     let (e0, drift) = rk4_energy_drift(&j, true, q0, u0, 2e-4, 2500);
-    assert!(drift < 1e-8 * e0.abs(), "jumper (free flight) drift {drift} J (E0 {e0})");
+    assert!(
+        drift < 1e-8 * e0.abs(),
+        "jumper (free flight) drift {drift} J (E0 {e0})"
+    );
 }
 
 #[test]
@@ -126,10 +144,16 @@ fn passive_simulation_conserves_energy_simbody() {
     sb.set_state(0.0, &q0, &u0).unwrap();
     sb.set_applied_forces(&[0.0; 7], &[]).unwrap();
     let e0 = sb.energy().unwrap();
-    let stats = sb.integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-9, 0.5).unwrap();
+    let stats = sb
+        .integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-9, 0.5)
+        .unwrap();
     assert!((stats.final_time - 0.5).abs() < 1e-12);
     let e1 = sb.energy().unwrap();
-    assert!((e1 - e0).abs() < 1e-6 * e0.abs(), "Simbody drift {} J of {e0} J", e1 - e0);
+    assert!(
+        (e1 - e0).abs() < 1e-6 * e0.abs(),
+        "Simbody drift {} J of {e0} J",
+        e1 - e0
+    );
     // The Rust-native energy at Simbody's final state is Simbody's energy.
     let (mut q, mut u) = (vec![0.0; 7], vec![0.0; 7]);
     sb.state(&mut q, &mut u).unwrap();
@@ -150,7 +174,11 @@ fn dual_number_derivatives_match_central_differences() {
     let q0 = sys.q_from_model(&m.poses["squat"]);
     let u0: Vec<f64> = (0..n).map(|i| 0.3 * (i as f64 + 1.0).sin()).collect();
     let tau0: Vec<f64> = (0..n).map(|i| 20.0 * (i as f64).cos()).collect();
-    let heel = m.stations.iter().find(|s| s.name == "sole_heel_lat_r").unwrap();
+    let heel = m
+        .stations
+        .iter()
+        .find(|s| s.name == "sole_heel_lat_r")
+        .unwrap();
     let (hb, hp) = mb.body_point(heel.body, heel.location);
     let qdd_f64 = |q: &[f64], u: &[f64]| -> Vec<f64> {
         let mut ws = mb.workspace::<f64>();
@@ -163,11 +191,41 @@ fn dual_number_derivatives_match_central_differences() {
     };
     let mut ws = mb.workspace::<Dual64>();
     for dir in 0..2 * n {
-        let q: Vec<Dual64> = q0.iter().enumerate().map(|(i, &x)| if dir == i { Dual64::from_re(x).derivative() } else { Dual64::from_re(x) }).collect();
-        let u: Vec<Dual64> = u0.iter().enumerate().map(|(i, &x)| if dir == n + i { Dual64::from_re(x).derivative() } else { Dual64::from_re(x) }).collect();
+        let q: Vec<Dual64> = q0
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| {
+                if dir == i {
+                    Dual64::from_re(x).derivative()
+                } else {
+                    Dual64::from_re(x)
+                }
+            })
+            .collect();
+        let u: Vec<Dual64> = u0
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| {
+                if dir == n + i {
+                    Dual64::from_re(x).derivative()
+                } else {
+                    Dual64::from_re(x)
+                }
+            })
+            .collect();
         mb.set_state(&mut ws, &q, &u);
         let mut tau: Vec<Dual64> = tau0.iter().map(|&t| Dual64::from_re(t)).collect();
-        mb.add_point_force(&ws, hb, hp, [Dual64::from_re(30.0), Dual64::from_re(600.0), Dual64::from_re(0.0)], &mut tau);
+        mb.add_point_force(
+            &ws,
+            hb,
+            hp,
+            [
+                Dual64::from_re(30.0),
+                Dual64::from_re(600.0),
+                Dual64::from_re(0.0),
+            ],
+            &mut tau,
+        );
         let mut qdd = vec![Dual64::from_re(0.0); n];
         mb.forward_dynamics(&mut ws, &tau, &mut qdd).unwrap();
         let h = 1e-6;
@@ -183,7 +241,10 @@ fn dual_number_derivatives_match_central_differences() {
         for k in 0..n {
             let fd = (fp[k] - fm[k]) / (2.0 * h);
             let ad = qdd[k].eps;
-            assert!((fd - ad).abs() <= 1e-6 * (1.0 + ad.abs()), "d qdd[{k}] / d x[{dir}]: dual {ad} vs central difference {fd}");
+            assert!(
+                (fd - ad).abs() <= 1e-6 * (1.0 + ad.abs()),
+                "d qdd[{k}] / d x[{dir}]: dual {ad} vs central difference {fd}"
+            );
         }
         // The COM acceleration's derivative too.
         let acom = mb.com_acceleration(&ws, &qdd);

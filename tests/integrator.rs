@@ -16,13 +16,18 @@ impl OdeSystem for Oscillator {
 
 fn run(accuracy: f64) -> (f64, Dopri5) {
     let mut sys = Oscillator;
-    let opts = Dopri5Options { accuracy, ..Default::default() };
+    let opts = Dopri5Options {
+        accuracy,
+        ..Default::default()
+    };
     let mut ig = Dopri5::new(&mut sys, 0.0, &[1.0, 0.0], opts).unwrap();
     while ig.t() < 10.0 {
         ig.step(&mut sys, 10.0).unwrap();
     }
     // x(t) = cos 2t
-    let err = (ig.x()[0] - (20.0f64).cos()).abs().max((ig.x()[1] + 2.0 * (20.0f64).sin()).abs());
+    let err = (ig.x()[0] - (20.0f64).cos())
+        .abs()
+        .max((ig.x()[1] + 2.0 * (20.0f64).sin()).abs());
     (err, ig)
 }
 
@@ -35,7 +40,10 @@ fn oscillator_error_follows_the_accuracy() {
     assert!(ig9.stats.steps > ig5.stats.steps);
     assert_eq!(ig9.t(), 10.0);
     // FSAL: 6 new evaluations per attempted step, plus the first.
-    assert_eq!(ig9.stats.f_evals, 1 + 6 * (ig9.stats.steps + ig9.stats.rejected_steps));
+    assert_eq!(
+        ig9.stats.f_evals,
+        1 + 6 * (ig9.stats.steps + ig9.stats.rejected_steps)
+    );
 }
 
 #[test]

@@ -10,9 +10,16 @@ fn sto_round_trip_keeps_values_to_the_last_bit() {
     std::fs::create_dir_all(&dir).unwrap();
     let mut t = StoTable::default();
     t.metadata.insert("inDegrees".into(), "no".into());
-    t.labels = vec!["/jointset/hip_r/hip_flexion_r/value".into(), "/forceset/soleus_r/activation".into()];
+    t.labels = vec![
+        "/jointset/hip_r/hip_flexion_r/value".into(),
+        "/forceset/soleus_r/activation".into(),
+    ];
     t.time = vec![0.0, 0.1, 0.2];
-    t.rows = vec![vec![1.0 / 3.0, 0.05], vec![-2.5e-9, 0.999999999999], vec![std::f64::consts::PI, 1.0]];
+    t.rows = vec![
+        vec![1.0 / 3.0, 0.05],
+        vec![-2.5e-9, 0.999999999999],
+        vec![std::f64::consts::PI, 1.0],
+    ];
     let p = dir.join("x.sto");
     t.write_sto(&p).unwrap();
     let r = StoTable::read(&p).unwrap();
@@ -33,7 +40,11 @@ fn sto_round_trip_keeps_values_to_the_last_bit() {
 
 #[test]
 fn opensim3_controls_are_read_and_interpolated() {
-    let c = Controls::from_file(Path::new("tests/data/controls/ok_v1.sto"), &["vas_int_r", "soleus_r"]).unwrap();
+    let c = Controls::from_file(
+        Path::new("tests/data/controls/ok_v1.sto"),
+        &["vas_int_r", "soleus_r"],
+    )
+    .unwrap();
     let mut u = [0.0; 2];
     c.at(0.05, &mut u);
     assert!((u[0] - 0.4).abs() < 1e-15 && (u[1] - 0.3).abs() < 1e-15);
@@ -53,7 +64,10 @@ fn broken_controls_name_file_column_and_reason() {
         let e = Controls::from_file(Path::new(&path), &["soleus_r", "vas_int_r"]).unwrap_err();
         let msg = e.to_string();
         assert!(matches!(e, StoError::Column { .. }), "{msg}");
-        assert!(msg.contains(&path) && msg.contains(column) && msg.contains(reason), "{msg}");
+        assert!(
+            msg.contains(&path) && msg.contains(column) && msg.contains(reason),
+            "{msg}"
+        );
     }
     let e = StoTable::parse("a=b\ntime\tx\n0\t1\n", Path::new("no_end.sto")).unwrap_err();
     assert!(e.to_string().contains("endheader"));

@@ -33,30 +33,75 @@ fn close(a: f64, b: f64, floor: f64) -> bool {
 
 #[test]
 fn thelen_matches_opensim_46_tables() {
-    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap()).unwrap();
+    let data: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap())
+            .unwrap();
     for set in ["defaults", "legacy"] {
         let d = &data[set];
         for row in d["rows"].as_array().unwrap() {
-            let r: Vec<f64> = row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let r: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
             let th = Thelen::new(&muscle(r[0], &d["params"]));
             let info = th.calc(r[4], r[3], r[1], r[2], r[5]);
             let ctx = format!("{set} {r:?}");
-            assert!(close(info.tendon_force, r[6], 1e-6), "F_T {} ({ctx})", info.tendon_force);
-            assert!(close(info.fiber_velocity, r[7], 1e-6), "v_M {} ({ctx})", info.fiber_velocity);
-            assert!(close(info.force_velocity_multiplier, r[8], 1e-6), "f_v {} ({ctx})", info.force_velocity_multiplier);
-            assert!(close(info.pennation_angle, r[9], 1e-6), "phi {} ({ctx})", info.pennation_angle);
-            assert!(close(info.activation_rate, r[10], 1e-6), "da/dt {} ({ctx})", info.activation_rate);
+            assert!(
+                close(info.tendon_force, r[6], 1e-6),
+                "F_T {} ({ctx})",
+                info.tendon_force
+            );
+            assert!(
+                close(info.fiber_velocity, r[7], 1e-6),
+                "v_M {} ({ctx})",
+                info.fiber_velocity
+            );
+            assert!(
+                close(info.force_velocity_multiplier, r[8], 1e-6),
+                "f_v {} ({ctx})",
+                info.force_velocity_multiplier
+            );
+            assert!(
+                close(info.pennation_angle, r[9], 1e-6),
+                "phi {} ({ctx})",
+                info.pennation_angle
+            );
+            assert!(
+                close(info.activation_rate, r[10], 1e-6),
+                "da/dt {} ({ctx})",
+                info.activation_rate
+            );
         }
         for row in d["equilibrium"].as_array().unwrap() {
-            let r: Vec<f64> = row.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+            let r: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
             let th = Thelen::new(&muscle(r[0], &d["params"]));
             let lm = th.equilibrium_fiber_length(r[2], r[1]);
             // OpenSim's equilibrium solver stops at a force residual of
             // 1e-8·F0, so its l_M is good to about 1e-9 m (§2.7).
-            assert!((lm - r[3]).abs() < 2e-9, "{set} equilibrium l_M {lm} vs {} ({r:?})", r[3]);
+            assert!(
+                (lm - r[3]).abs() < 2e-9,
+                "{set} equilibrium l_M {lm} vs {} ({r:?})",
+                r[3]
+            );
             let info = th.calc(r[2], lm, r[1], 0.0, r[2]);
-            assert!((info.tendon_force - r[4]).abs() < 1e-5 * r[4].max(1.0), "{set} equilibrium F_T {} vs {}", info.tendon_force, r[4]);
-            assert!(info.fiber_velocity.abs() < 1e-9, "equilibrium fibre velocity {}", info.fiber_velocity);
+            assert!(
+                (info.tendon_force - r[4]).abs() < 1e-5 * r[4].max(1.0),
+                "{set} equilibrium F_T {} vs {}",
+                info.tendon_force,
+                r[4]
+            );
+            assert!(
+                info.fiber_velocity.abs() < 1e-9,
+                "equilibrium fibre velocity {}",
+                info.fiber_velocity
+            );
         }
     }
 }
@@ -87,28 +132,65 @@ fn hunt_crossley_closed_form() {
         assert!((f[1] - fy).abs() < 1e-10 * fy, "{} vs {fy}", f[1]);
         let fx = -(vx.signum()) * 0.8 * fy * (vx.abs() / 0.01).min(1.0);
         assert!((f[0] - fx).abs() < 1e-10 * fy, "{} vs {fx}", f[0]);
-        assert!((at[1] - (-depth / 2.0)).abs() < 1e-15, "contact point mid-overlap");
+        assert!(
+            (at[1] - (-depth / 2.0)).abs() < 1e-15,
+            "contact point mid-overlap"
+        );
     }
     // Out of contact, or separating fast enough: no force.
-    assert_eq!(sphere_ground_force(&spec, r, [0.0, r + 1e-6, 0.0], [0.0, 0.0, 0.0]).0, [0.0; 3]);
-    assert_eq!(sphere_ground_force(&spec, r, [0.0, r - 1e-3, 0.0], [0.0, 3.0, 0.0]).0[1], 0.0);
+    assert_eq!(
+        sphere_ground_force(&spec, r, [0.0, r + 1e-6, 0.0], [0.0, 0.0, 0.0]).0,
+        [0.0; 3]
+    );
+    assert_eq!(
+        sphere_ground_force(&spec, r, [0.0, r - 1e-3, 0.0], [0.0, 3.0, 0.0]).0[1],
+        0.0
+    );
 }
 
 /// The Anderson & Pandy form, and OpenSim 4.6's ExpressionBasedCoordinateForce
 /// for the hip-flexion entry (model-equations.md §8.6).
 #[test]
 fn passive_torque_is_the_anderson_pandy_exponential() {
-    let hip = LigamentSpec { coordinate: "hip_flexion_r".into(), k1: -2.44, k2: 5.05, k3: 1.51, k4: -21.88, theta1: -0.6981, theta2: 1.81, damping: 0.1 };
-    for (q, qd, want) in [(-0.8, 0.0, 14.03678414), (-0.5, 1.0, -0.08022579784), (0.0, 0.0, -0.0002612991696), (1.0, -2.0, 0.1591766869), (1.9, 0.5, -3.893940604)] {
+    let hip = LigamentSpec {
+        coordinate: "hip_flexion_r".into(),
+        k1: -2.44,
+        k2: 5.05,
+        k3: 1.51,
+        k4: -21.88,
+        theta1: -0.6981,
+        theta2: 1.81,
+        damping: 0.1,
+    };
+    for (q, qd, want) in [
+        (-0.8, 0.0, 14.03678414),
+        (-0.5, 1.0, -0.08022579784),
+        (0.0, 0.0, -0.0002612991696),
+        (1.0, -2.0, 0.1591766869),
+        (1.9, 0.5, -3.893940604),
+    ] {
         let t: f64 = passive_torque(&hip, q, qd);
-        assert!((t - want).abs() <= 1e-9 * want.abs().max(1e-3), "hip q={q}: {t} vs {want}");
+        assert!(
+            (t - want).abs() <= 1e-9 * want.abs().max(1e-3),
+            "hip q={q}: {t} vs {want}"
+        );
     }
-    let l = LigamentSpec { coordinate: "knee_angle_r".into(), k1: -6.09, k2: 33.94, k3: 11.03, k4: -11.33, theta1: -2.4, theta2: 0.13, damping: 0.1 };
+    let l = LigamentSpec {
+        coordinate: "knee_angle_r".into(),
+        k1: -6.09,
+        k2: 33.94,
+        k3: 11.03,
+        k4: -11.33,
+        theta1: -2.4,
+        theta2: 0.13,
+        damping: 0.1,
+    };
     // Sign check of model-data.md §9: at q = 0.13 the first term is −6.09 N·m.
     let t: f64 = passive_torque(&l, 0.13, 0.0);
     assert!((t - (-6.09 + 11.03 * (-11.33f64 * (0.13 + 2.4)).exp())).abs() < 1e-12);
     let t2: f64 = passive_torque(&l, -1.0, 2.0);
-    let want = -6.09 * (33.94f64 * (-1.0 - 0.13)).exp() + 11.03 * (-11.33f64 * (-1.0 + 2.4)).exp() - 0.2;
+    let want =
+        -6.09 * (33.94f64 * (-1.0 - 0.13)).exp() + 11.03 * (-11.33f64 * (-1.0 + 2.4)).exp() - 0.2;
     assert!((t2 - want).abs() < 1e-12);
 }
 
@@ -116,11 +198,18 @@ fn passive_torque_is_the_anderson_pandy_exponential() {
 /// SmoothSphereHalfSpaceForce on a spinning, sliding sphere.
 #[test]
 fn contact_laws_match_opensim_46_tables() {
-    let data: serde_json::Value = serde_json::from_str(&std::fs::read_to_string("tests/data/contact_opensim46.json").unwrap()).unwrap();
+    let data: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string("tests/data/contact_opensim46.json").unwrap(),
+    )
+    .unwrap();
     let r = 0.05;
     let mut checked = 0;
     for case in data["cases"].as_array().unwrap() {
-        let law = if case["law"] == "HuntCrossleyForce" { ContactLaw::HuntCrossleyForce } else { ContactLaw::SmoothSphereHalfSpaceForce };
+        let law = if case["law"] == "HuntCrossleyForce" {
+            ContactLaw::HuntCrossleyForce
+        } else {
+            ContactLaw::SmoothSphereHalfSpaceForce
+        };
         let g = |k: &str| case[k].as_f64().unwrap();
         let spec = ContactSpec {
             law,
@@ -136,7 +225,12 @@ fn contact_laws_match_opensim_46_tables() {
             spheres: vec![],
         };
         for row in case["rows"].as_array().unwrap() {
-            let v: Vec<f64> = row.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+            let v: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
             let (depth, vy, vx, w) = (v[0], v[1], v[2], v[3]);
             let p = [0.0, r - depth, 0.0];
             // Velocity of the sphere's material point at the mid-overlap contact point.
@@ -144,8 +238,20 @@ fn contact_laws_match_opensim_46_tables() {
             let vc = [vx + w * arm, vy, 0.0];
             let (f, _) = sphere_ground_force(&spec, r, p, vc);
             let scale = v[4].abs().max(1e-9);
-            assert!((f[1] - v[4]).abs() <= 1e-8 * scale, "{:?} F_y {} vs {} ({v:?})", case["law"], f[1], v[4]);
-            assert!((f[0] - v[5]).abs() <= 1e-8 * scale, "{:?} F_x {} vs {} ({v:?})", case["law"], f[0], v[5]);
+            assert!(
+                (f[1] - v[4]).abs() <= 1e-8 * scale,
+                "{:?} F_y {} vs {} ({v:?})",
+                case["law"],
+                f[1],
+                v[4]
+            );
+            assert!(
+                (f[0] - v[5]).abs() <= 1e-8 * scale,
+                "{:?} F_x {} vs {} ({v:?})",
+                case["law"],
+                f[0],
+                v[5]
+            );
             checked += 1;
         }
     }

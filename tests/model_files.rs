@@ -11,12 +11,30 @@ fn jumper_loads_with_gait2392_masses_and_credits() {
     assert_eq!(m.bodies.len(), 12);
     // gait2392 total mass, model-data.md §2 item 5: 75.1646 kg.
     assert!((m.total_mass() - 75.1646).abs() < 1e-9);
-    assert!(m.credits.iter().any(|c| c.contains("gait2392") && c.contains("CC BY 3.0")));
+    assert!(m
+        .credits
+        .iter()
+        .any(|c| c.contains("gait2392") && c.contains("CC BY 3.0")));
     assert_eq!(m.system(false).unwrap().nq(), 10);
     let sym = m.system(true).unwrap();
     assert_eq!(sym.nq(), 7);
-    let names: Vec<&str> = sym.coordinates.iter().map(|&c| m.coordinates[c].name.as_str()).collect();
-    assert_eq!(names, ["pelvis_tilt", "pelvis_tx", "pelvis_ty", "hip_flexion_r", "knee_angle_r", "ankle_angle_r", "lumbar_extension"]);
+    let names: Vec<&str> = sym
+        .coordinates
+        .iter()
+        .map(|&c| m.coordinates[c].name.as_str())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "pelvis_tilt",
+            "pelvis_tx",
+            "pelvis_ty",
+            "hip_flexion_r",
+            "knee_angle_r",
+            "ankle_angle_r",
+            "lumbar_extension"
+        ]
+    );
     assert_eq!(m.stations.len(), 16);
 }
 
@@ -27,7 +45,12 @@ fn jumper_loads_with_gait2392_masses_and_credits() {
 fn knee_splines_match_model_data_check_values() {
     let m = Model::from_file("models/jumper.json").unwrap();
     let knee = m.joints.iter().find(|j| j.name == "knee_r").unwrap();
-    let leap::model::JointKind::TranslatingHinge { translation_x, translation_y, .. } = &knee.kind else {
+    let leap::model::JointKind::TranslatingHinge {
+        translation_x,
+        translation_y,
+        ..
+    } = &knee.kind
+    else {
         panic!("knee_r is not a translating hinge")
     };
     let q = -1.3962634;
@@ -39,7 +62,11 @@ fn knee_splines_match_model_data_check_values() {
 
 #[test]
 fn spline_extrapolates_linearly_with_end_slope() {
-    let s = SimmSpline::new(&SplineData { x: vec![0.0, 1.0, 2.0, 3.0, 4.0], y: vec![0.0, 1.0, 0.0, 2.0, 1.0] }).unwrap();
+    let s = SimmSpline::new(&SplineData {
+        x: vec![0.0, 1.0, 2.0, 3.0, 4.0],
+        y: vec![0.0, 1.0, 0.0, 2.0, 1.0],
+    })
+    .unwrap();
     let (_, slope_hi, _) = s.eval(4.0 - 1e-13);
     let (v, d1, d2) = s.eval(5.5f64);
     assert!((v - (1.0 + 1.5 * slope_hi)).abs() < 1e-9);
@@ -52,7 +79,10 @@ fn broken(name: &str) -> ModelError {
         Ok(_) => panic!("{path} was accepted"),
         Err(e) => {
             let msg = e.to_string();
-            assert!(msg.starts_with(&path), "error does not name the file: {msg}");
+            assert!(
+                msg.starts_with(&path),
+                "error does not name the file: {msg}"
+            );
             e
         }
     }
@@ -64,18 +94,54 @@ fn broken_model_files_name_file_field_and_reason() {
         ("negative_mass", "bodies[0].mass", "positive"),
         ("unknown_body", "joints[1].parent", "unknown body 'linkX'"),
         ("broken_json", "", "EOF while parsing"),
-        ("unknown_field", "bodies[1].colour", "unknown field `colour`"),
-        ("inertia_not_pd", "bodies[1].inertia", "not positive definite"),
-        ("default_outside_range", "coordinates[1].default_value", "outside the range"),
-        ("unknown_coordinate", "joints[0].coordinate", "unknown coordinate 'q9'"),
+        (
+            "unknown_field",
+            "bodies[1].colour",
+            "unknown field `colour`",
+        ),
+        (
+            "inertia_not_pd",
+            "bodies[1].inertia",
+            "not positive definite",
+        ),
+        (
+            "default_outside_range",
+            "coordinates[1].default_value",
+            "outside the range",
+        ),
+        (
+            "unknown_coordinate",
+            "joints[0].coordinate",
+            "unknown coordinate 'q9'",
+        ),
         ("duplicate_body", "bodies[2].name", "defined twice"),
         ("kinematic_loop", "bodies[0]", "kinematic loop"),
-        ("unknown_station_body", "stations[0].body", "unknown body 'hand'"),
-        ("unknown_joint_type", "joints[0].type", "unknown variant `ball`"),
+        (
+            "unknown_station_body",
+            "stations[0].body",
+            "unknown body 'hand'",
+        ),
+        (
+            "unknown_joint_type",
+            "joints[0].type",
+            "unknown variant `ball`",
+        ),
         ("range_reversed", "coordinates[0].range", "min < max"),
-        ("spline_not_increasing", "joints[2].translation_y", "not strictly increasing"),
-        ("asymmetric_hip", "joints[6].location_in_parent", "symmetry partner 'hip_r'"),
-        ("pose_outside_range", "poses.squat.knee_angle_r", "outside the range"),
+        (
+            "spline_not_increasing",
+            "joints[2].translation_y",
+            "not strictly increasing",
+        ),
+        (
+            "asymmetric_hip",
+            "joints[6].location_in_parent",
+            "symmetry partner 'hip_r'",
+        ),
+        (
+            "pose_outside_range",
+            "poses.squat.knee_angle_r",
+            "outside the range",
+        ),
     ];
     for (name, field, reason) in cases {
         let e = broken(name);

@@ -63,15 +63,19 @@ fn forward_dynamics_allocates_nothing() {
 #[test]
 fn state_equation_allocates_nothing() {
     let m = Model::from_file("models/jumper.json").unwrap();
-    let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let eq =
+        leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Smooth { delta: 0.02 })
+            .unwrap();
     let laws = leap::laws::OpenSimLaws::new(&m).unwrap();
     let sq = leap::squat::static_squat(&eq, &laws, &m.poses["squat"]).unwrap();
     let mut ws = eq.workspace::<f64>();
     let mut xd = vec![0.0; eq.nx()];
-    eq.rhs(&laws, &mut ws, &sq.x, &sq.excitation, &mut xd).unwrap();
+    eq.rhs(&laws, &mut ws, &sq.x, &sq.excitation, &mut xd)
+        .unwrap();
     let (_, n) = counted(|| {
         for _ in 0..50 {
-            eq.rhs(&laws, &mut ws, &sq.x, &sq.excitation, &mut xd).unwrap();
+            eq.rhs(&laws, &mut ws, &sq.x, &sq.excitation, &mut xd)
+                .unwrap();
         }
     });
     assert_eq!(n, 0);

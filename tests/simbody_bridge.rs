@@ -18,7 +18,9 @@ fn exceptions_become_errors_and_the_model_stays_usable() {
     let (_, mut sb) = pendulum();
     for kind in 0..3 {
         let e = sb.throw_for_test(kind).unwrap_err();
-        let SimbodyError::Simbody(msg) = &e else { panic!("{e:?}") };
+        let SimbodyError::Simbody(msg) = &e else {
+            panic!("{e:?}")
+        };
         match kind {
             0 => assert!(msg.contains("stage"), "{msg}"),
             1 => assert!(msg.contains("thrown on purpose"), "{msg}"),
@@ -35,30 +37,53 @@ fn exceptions_become_errors_and_the_model_stays_usable() {
 #[test]
 fn wrong_lengths_and_bodies_are_refused() {
     let (_, mut sb) = pendulum();
-    assert!(matches!(sb.set_state(0.0, &[0.1], &[0.0, 0.0]), Err(SimbodyError::Input(_))));
+    assert!(matches!(
+        sb.set_state(0.0, &[0.1], &[0.0, 0.0]),
+        Err(SimbodyError::Input(_))
+    ));
     let mut m = vec![0.0; 3];
     assert!(sb.mass_matrix(&mut m).is_err());
     assert!(sb.station_position(7, [0.0; 3]).is_err());
-    assert!(sb.set_applied_forces(&[0.0, 0.0], &[(9, [0.0; 3], [1.0, 0.0, 0.0])]).is_err());
+    assert!(sb
+        .set_applied_forces(&[0.0, 0.0], &[(9, [0.0; 3], [1.0, 0.0, 0.0])])
+        .is_err());
 }
 
 #[test]
 fn rust_native_dynamics_match_simbody_on_the_jumper() {
     let m = Model::from_file("models/jumper.json").unwrap();
     let report = crosscheck::run(&m, 40, 7).unwrap();
-    assert_eq!(report.comparisons.len(), 5, "full, symmetric, symmetric-vs-full and state-equation comparisons");
-    assert!(report.max_rel_error <= crosscheck::TOLERANCE, "{}", report.table());
+    assert_eq!(
+        report.comparisons.len(),
+        5,
+        "full, symmetric, symmetric-vs-full and state-equation comparisons"
+    );
+    assert!(
+        report.max_rel_error <= crosscheck::TOLERANCE,
+        "{}",
+        report.table()
+    );
     // ẋ = f(x, u) with muscles, contact and passive torques: Rust-native
     // against the same laws evaluated from Simbody's kinematics in Simbody.
-    let f_err = report.state_equation_max_rel_error.expect("the jumper has force elements");
-    assert!(f_err <= crosscheck::STATE_EQUATION_TOLERANCE, "{}", report.table());
+    let f_err = report
+        .state_equation_max_rel_error
+        .expect("the jumper has force elements");
+    assert!(
+        f_err <= crosscheck::STATE_EQUATION_TOLERANCE,
+        "{}",
+        report.table()
+    );
 }
 
 #[test]
 fn rust_native_dynamics_match_simbody_on_the_double_pendulum() {
     let m = Model::from_file("models/double_pendulum.json").unwrap();
     let report = crosscheck::run(&m, 40, 3).unwrap();
-    assert!(report.max_rel_error <= crosscheck::TOLERANCE, "{}", report.table());
+    assert!(
+        report.max_rel_error <= crosscheck::TOLERANCE,
+        "{}",
+        report.table()
+    );
 }
 
 #[test]

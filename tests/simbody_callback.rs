@@ -5,7 +5,9 @@
 use leap::model::Model;
 use leap::multibody::{GeneralizedForces, ModelView, Multibody};
 use leap::path::PathSmoothing;
-use leap::simbody::{simbody_q_order, ForceBuffer, SimbodyIntegrator, SimbodyKinematics, SimbodyModel};
+use leap::simbody::{
+    simbody_q_order, ForceBuffer, SimbodyIntegrator, SimbodyKinematics, SimbodyModel,
+};
 
 #[test]
 fn path_forces_through_the_callback_match_rust_native() {
@@ -15,16 +17,29 @@ fn path_forces_through_the_callback_match_rust_native() {
         let perm = simbody_q_order(&sys);
         let q_index: Vec<usize> = sys.q_of_model_coordinate.iter().map(|&k| perm[k]).collect();
         let mobod: Vec<i32> = sys.system_body_of.iter().map(|&s| s as i32 + 1).collect();
-        let tensions: Vec<f64> = (0..model.muscles.len()).map(|i| 100.0 + 37.0 * i as f64).collect();
+        let tensions: Vec<f64> = (0..model.muscles.len())
+            .map(|i| 100.0 + 37.0 * i as f64)
+            .collect();
         let m2 = model.clone();
         let (t2, q2, mb2) = (tensions.clone(), q_index.clone(), mobod.clone());
         let mut buf = ForceBuffer::default();
         let f: Box<leap::simbody::ForceFn> = Box::new(move |ctx, _t, q, u, _z, _zdot| {
             buf.clear();
             {
-                let kin = SimbodyKinematics { ctx, mobod: &mb2, q_index: &q2, q, u, error: Default::default() };
+                let kin = SimbodyKinematics {
+                    ctx,
+                    mobod: &mb2,
+                    q_index: &q2,
+                    q,
+                    u,
+                    error: Default::default(),
+                };
                 for (m, t) in m2.muscles.iter().zip(&t2) {
-                    m.path.calc(&kin, PathSmoothing::Smooth { delta: 0.02 }, Some((*t, &mut buf)));
+                    m.path.calc(
+                        &kin,
+                        PathSmoothing::Smooth { delta: 0.02 },
+                        Some((*t, &mut buf)),
+                    );
                 }
                 if let Some(e) = kin.error.into_inner() {
                     return Err(e);
@@ -50,17 +65,33 @@ fn path_forces_through_the_callback_match_rust_native() {
             mb.set_state(&mut ws, &q, &u);
             let mut tau = vec![0.0; n];
             {
-                let view = ModelView { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate };
-                let mut sink = GeneralizedForces { mb: &mb, ws: &ws, q_of: &sys.q_of_model_coordinate, tau: &mut tau };
+                let view = ModelView {
+                    mb: &mb,
+                    ws: &ws,
+                    q_of: &sys.q_of_model_coordinate,
+                };
+                let mut sink = GeneralizedForces {
+                    mb: &mb,
+                    ws: &ws,
+                    q_of: &sys.q_of_model_coordinate,
+                    tau: &mut tau,
+                };
                 for (m, t) in model.muscles.iter().zip(&tensions) {
-                    m.path.calc(&view, PathSmoothing::Smooth { delta: 0.02 }, Some((*t, &mut sink)));
+                    m.path.calc(
+                        &view,
+                        PathSmoothing::Smooth { delta: 0.02 },
+                        Some((*t, &mut sink)),
+                    );
                 }
             }
             let mut qdd_r = vec![0.0; n];
             mb.forward_dynamics(&mut ws, &tau, &mut qdd_r).unwrap();
             let scale = qdd_s.iter().fold(0.0f64, |a, x| a.max(x.abs()));
             for (a, b) in qdd_r.iter().zip(&qdd_s) {
-                assert!((a - b).abs() <= 1e-10 * scale, "symmetric={symmetric}: {a} vs {b}");
+                assert!(
+                    (a - b).abs() <= 1e-10 * scale,
+                    "symmetric={symmetric}: {a} vs {b}"
+                );
             }
         }
         assert!(sb.force_calls() >= 5);
@@ -85,7 +116,8 @@ fn auxiliary_states_integrate_with_the_multibody_state() {
     let mut zd = [0.0; 3];
     sb.zdot(&mut zd).unwrap();
     assert!((zd[0] + 25.0).abs() < 1e-12);
-    sb.integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-10, 0.1).unwrap();
+    sb.integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-10, 0.1)
+        .unwrap();
     let mut z = [0.0; 3];
     sb.z(&mut z).unwrap();
     let decay = (-0.1f64 / 0.04).exp();
@@ -107,16 +139,23 @@ fn callback_errors_and_panics_become_errors() {
     let mut sb = SimbodyModel::with_force(&model, &sys, Some((f, 0))).unwrap();
     sb.set_state(0.0, &[0.5, 0.0], &[0.0, 0.0]).unwrap();
     sb.set_applied_forces(&[0.0, 0.0], &[]).unwrap();
-    let e = sb.integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-6, 0.2).unwrap_err().to_string();
+    let e = sb
+        .integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-6, 0.2)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("contact model diverged"), "{e}");
     // The model stays usable.
     sb.set_state(0.0, &[0.5, 0.0], &[0.0, 0.0]).unwrap();
     let mut qdd = [0.0; 2];
     sb.accelerations(&mut qdd).unwrap();
 
-    let g: Box<leap::simbody::ForceFn> = Box::new(|_ctx, _t, _q, _u, _z, _zdot| panic!("index out of bounds in a muscle"));
+    let g: Box<leap::simbody::ForceFn> =
+        Box::new(|_ctx, _t, _q, _u, _z, _zdot| panic!("index out of bounds in a muscle"));
     let mut sb = SimbodyModel::with_force(&model, &sys, Some((g, 0))).unwrap();
     sb.set_state(0.0, &[0.5, 0.0], &[0.0, 0.0]).unwrap();
     let e = sb.accelerations(&mut qdd).unwrap_err().to_string();
-    assert!(e.contains("panic in Rust force element") && e.contains("index out of bounds in a muscle"), "{e}");
+    assert!(
+        e.contains("panic in Rust force element") && e.contains("index out of bounds in a muscle"),
+        "{e}"
+    );
 }

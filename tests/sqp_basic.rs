@@ -66,7 +66,11 @@ impl AdProblem for Rosenbrock {
 
 fn run<P: AdProblem>(p: P, mode: HessianMode) -> leap::sqp::SqpResult {
     let mut nlp = AdNlp::new(p);
-    let settings = SqpSettings { hessian: Some(mode), verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(), ..Default::default() };
+    let settings = SqpSettings {
+        hessian: Some(mode),
+        verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
+        ..Default::default()
+    };
     solve(&mut nlp, &settings)
 }
 
@@ -75,7 +79,11 @@ fn hs071_both_hessians() {
     for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
         let r = run(Hs071, mode);
         assert_eq!(r.status, SqpStatus::Solved, "{mode:?}: {}", r.message);
-        assert!((r.objective - 17.0140173).abs() < 1e-6 * 17.0, "{mode:?}: {}", r.objective);
+        assert!(
+            (r.objective - 17.0140173).abs() < 1e-6 * 17.0,
+            "{mode:?}: {}",
+            r.objective
+        );
     }
 }
 
@@ -135,7 +143,11 @@ fn bad_problems_get_a_status_not_a_panic() {
     }
     let r = run(Inverted, HessianMode::PartitionedBfgs);
     assert_eq!(r.status, SqpStatus::InvalidProblem);
-    assert!(r.message.contains("x[0]") && r.message.contains("bounds"), "{}", r.message);
+    assert!(
+        r.message.contains("x[0]") && r.message.contains("bounds"),
+        "{}",
+        r.message
+    );
     // NaN at the start.
     struct NanStart;
     impl AdProblem for NanStart {

@@ -50,7 +50,11 @@ struct Trapezoid<O: Ocp> {
 impl<O: Ocp> Trapezoid<O> {
     fn new(ocp: O, intervals: usize) -> Self {
         let free_time = ocp.duration().is_err();
-        Trapezoid { ocp, n: intervals, free_time }
+        Trapezoid {
+            ocp,
+            n: intervals,
+            free_time,
+        }
     }
     fn nz(&self) -> usize {
         O::NX + O::NU
@@ -77,7 +81,11 @@ impl<O: Ocp> Trapezoid<O> {
     /// variables `w` (as listed by `interval_vars`).
     fn interval<D: Scalar>(&self, w: &[D], defect: &mut [D]) -> D {
         let (nx, nz) = (O::NX, self.nz());
-        let tf = if self.free_time { w[2 * nz] } else { D::from(self.ocp.duration().unwrap_or(0.0)) };
+        let tf = if self.free_time {
+            w[2 * nz]
+        } else {
+            D::from(self.ocp.duration().unwrap_or(0.0))
+        };
         let h = tf / self.n as f64;
         let (a, b) = (&w[..nz], &w[nz..2 * nz]);
         let mut fa = vec![D::from(0.0); nx];
@@ -87,7 +95,9 @@ impl<O: Ocp> Trapezoid<O> {
         for i in 0..nx {
             defect[i] = b[i] - a[i] - h * 0.5 * (fa[i] + fb[i]);
         }
-        h * 0.5 * (self.ocp.running_cost(&a[..nx], &a[nx..]) + self.ocp.running_cost(&b[..nx], &b[nx..]))
+        h * 0.5
+            * (self.ocp.running_cost(&a[..nx], &a[nx..])
+                + self.ocp.running_cost(&b[..nx], &b[nx..]))
     }
     fn gather<D: Scalar>(&self, z: &[f64], vars: &[usize]) -> Vec<D> {
         vars.iter().map(|&j| D::from(z[j])).collect()
@@ -107,7 +117,13 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
         for k in 0..=self.n {
             for i in 0..nx {
                 let (l, u) = self.ocp.state_bounds(i);
-                let fixed = if k == 0 { x0[i] } else if k == self.n { xf[i] } else { None };
+                let fixed = if k == 0 {
+                    x0[i]
+                } else if k == self.n {
+                    xf[i]
+                } else {
+                    None
+                };
                 (lo[k * nz + i], hi[k * nz + i]) = match fixed {
                     Some(v) => (v, v),
                     None => (l, u),
@@ -138,7 +154,11 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
     }
     fn objective(&mut self, z: &[f64]) -> Result<f64, EvalError> {
         let mut d = vec![0.0; O::NX];
-        let mut f = if self.ocp.minimum_time() { self.tf(z) } else { 0.0 };
+        let mut f = if self.ocp.minimum_time() {
+            self.tf(z)
+        } else {
+            0.0
+        };
         for k in 0..self.n {
             let w: Vec<f64> = self.gather(z, &self.interval_vars(k));
             f += self.interval(&w, &mut d);
@@ -201,19 +221,39 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
     }
     fn elements(&self) -> Vec<Element> {
         let mut els: Vec<Element> = (0..self.n)
-            .map(|k| Element { variables: self.interval_vars(k), constraints: (k * O::NX..(k + 1) * O::NX).collect(), objective: false })
+            .map(|k| Element {
+                variables: self.interval_vars(k),
+                constraints: (k * O::NX..(k + 1) * O::NX).collect(),
+                objective: false,
+            })
             .collect();
         // The objective: all node variables (the running cost) and tf.
-        els.push(Element { variables: (0..self.num_variables()).collect(), constraints: vec![], objective: true });
+        els.push(Element {
+            variables: (0..self.num_variables()).collect(),
+            constraints: vec![],
+            objective: true,
+        });
         els
     }
     fn has_hessian(&self) -> bool {
         true
     }
-    fn element_hessian(&mut self, z: &[f64], e: usize, sigma: f64, lambda: &[f64], h: &mut [f64]) -> Result<(), EvalError> {
+    fn element_hessian(
+        &mut self,
+        z: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
         h.fill(0.0);
         let mut d = vec![HyperDual64::from(0.0); O::NX];
-        let second = |this: &Self, vars: &[usize], a: usize, b: usize, d: &mut [HyperDual64]| -> HyperDual64 {
+        let second = |this: &Self,
+                      vars: &[usize],
+                      a: usize,
+                      b: usize,
+                      d: &mut [HyperDual64]|
+         -> HyperDual64 {
             let mut w: Vec<HyperDual64> = this.gather(z, vars);
             w[a].eps1 = 1.0;
             w[b].eps2 = 1.0;
@@ -225,7 +265,9 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
             for a in 0..nv {
                 for b in a..nv {
                     second(self, &vars, a, b, &mut d);
-                    let v: f64 = (0..O::NX).map(|i| lambda[e * O::NX + i] * d[i].eps1eps2).sum();
+                    let v: f64 = (0..O::NX)
+                        .map(|i| lambda[e * O::NX + i] * d[i].eps1eps2)
+                        .sum();
                     h[a * nv + b] = v;
                     h[b * nv + a] = v;
                 }
@@ -386,7 +428,11 @@ fn brachistochrone_time(xf: f64, yf: f64) -> f64 {
 }
 
 fn settings(mode: HessianMode) -> SqpSettings {
-    SqpSettings { hessian: Some(mode), verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(), ..Default::default() }
+    SqpSettings {
+        hessian: Some(mode),
+        verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
+        ..Default::default()
+    }
 }
 
 fn derivatives_ok<N: Nlp>(nlp: &mut N) {
@@ -395,11 +441,16 @@ fn derivatives_ok<N: Nlp>(nlp: &mut N) {
     for (j, v) in z.iter_mut().enumerate() {
         *v += 0.01 * ((j * 7919) % 13) as f64 / 13.0;
     }
-    let lambda: Vec<f64> = (0..nlp.num_constraints()).map(|i| ((i * 31) % 7) as f64 - 3.0).collect();
+    let lambda: Vec<f64> = (0..nlp.num_constraints())
+        .map(|i| ((i * 31) % 7) as f64 - 3.0)
+        .collect();
     let r = check_derivatives(nlp, &z, &lambda, 1e-6).expect("evaluations");
     assert!(r.gradient < 1e-6, "gradient {r:?}");
     assert!(r.jacobian < 1e-6, "jacobian {r:?}");
-    assert!(r.jacobian_outside_pattern < 1e-9, "jacobian outside its pattern {r:?}");
+    assert!(
+        r.jacobian_outside_pattern < 1e-9,
+        "jacobian outside its pattern {r:?}"
+    );
     assert!(r.hessian.unwrap() < 1e-5, "hessian {r:?}");
 }
 
@@ -457,14 +508,25 @@ fn double_integrator_minimum_effort() {
             let r = solve(&mut nlp, &settings(mode));
             assert_eq!(r.status, SqpStatus::Solved, "N={n} {mode:?}: {}", r.message);
             assert!(r.constraint_violation < 1e-8);
-            assert!((r.objective - f_ref).abs() < 1e-9 * f_ref, "N={n} {mode:?}: J {} vs KKT {f_ref}", r.objective);
-            let dx = r.x.iter().zip(&x_ref).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            assert!(
+                (r.objective - f_ref).abs() < 1e-9 * f_ref,
+                "N={n} {mode:?}: J {} vs KKT {f_ref}",
+                r.objective
+            );
+            let dx =
+                r.x.iter()
+                    .zip(&x_ref)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
             assert!(dx < 1e-4, "N={n} {mode:?}: |x − x_KKT| = {dx}");
         }
         errors.push((f_ref - 12.0).abs());
     }
     // The discrete optimum converges to J* = 12 at second order.
-    assert!(errors[0] < 0.5 && errors[1] < errors[0] / 3.5 && errors[2] < errors[1] / 3.5, "{errors:?}");
+    assert!(
+        errors[0] < 0.5 && errors[1] < errors[0] / 3.5 && errors[2] < errors[1] / 3.5,
+        "{errors:?}"
+    );
 }
 
 #[test]
@@ -477,14 +539,25 @@ fn bryson_denham_state_constraint() {
         }
         let r = solve(&mut nlp, &settings(HessianMode::ExactConvexified));
         assert_eq!(r.status, SqpStatus::Solved, "N={n}: {}", r.message);
-        let xmax = (0..=n).map(|k| r.x[k * 3]).fold(f64::NEG_INFINITY, f64::max);
+        let xmax = (0..=n)
+            .map(|k| r.x[k * 3])
+            .fold(f64::NEG_INFINITY, f64::max);
         assert!(xmax <= ELL + 1e-8, "state bound violated: {xmax}");
         // The bound is reached in the middle of the interval.
-        assert!(xmax > ELL - 1e-8, "N={n}: the state bound is never active ({xmax})");
+        assert!(
+            xmax > ELL - 1e-8,
+            "N={n}: the state bound is never active ({xmax})"
+        );
         errors.push((r.objective - 4.0 / (9.0 * ELL)).abs());
     }
-    assert!(errors[0] < 0.05 && errors[1] < errors[0] / 3.0 && errors[2] < errors[1] / 3.0, "{errors:?}");
-    let r = solve(&mut Trapezoid::new(BrysonDenham, 60), &settings(HessianMode::PartitionedBfgs));
+    assert!(
+        errors[0] < 0.05 && errors[1] < errors[0] / 3.0 && errors[2] < errors[1] / 3.0,
+        "{errors:?}"
+    );
+    let r = solve(
+        &mut Trapezoid::new(BrysonDenham, 60),
+        &settings(HessianMode::PartitionedBfgs),
+    );
     // BFGS reaches the acceptable level only (the state-bound arc makes the
     // multipliers converge slowly).
     assert!(r.status.success(), "BFGS: {:?} {}", r.status, r.message);
@@ -507,9 +580,15 @@ fn brachistochrone_free_final_time() {
             if mode == HessianMode::ExactConvexified {
                 errors.push((tf - t_star).abs() / t_star);
             } else {
-                assert!((tf - t_star).abs() / t_star < 5e-3, "N={n} BFGS: T {tf} vs {t_star}");
+                assert!(
+                    (tf - t_star).abs() / t_star < 5e-3,
+                    "N={n} BFGS: T {tf} vs {t_star}"
+                );
             }
         }
     }
-    assert!(errors[0] < 5e-3 && errors[1] < errors[0] / 2.5, "relative errors {errors:?} (T* = {t_star})");
+    assert!(
+        errors[0] < 5e-3 && errors[1] < errors[0] / 2.5,
+        "relative errors {errors:?} (T* = {t_star})"
+    );
 }

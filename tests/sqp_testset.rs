@@ -8,7 +8,11 @@ use leap::sqp::{solve, HessianMode, SqpSettings, SqpStatus};
 use leap::testset::{hock_schittkowski, infeasible_problems, unbounded_problems};
 
 fn settings(mode: HessianMode) -> SqpSettings {
-    SqpSettings { hessian: Some(mode), verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(), ..Default::default() }
+    SqpSettings {
+        hessian: Some(mode),
+        verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
+        ..Default::default()
+    }
 }
 
 /// Problems the SQP does not yet solve to the book's optimum from the
@@ -27,7 +31,9 @@ const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
 ];
 
 fn known_failure(name: &str, mode: HessianMode) -> bool {
-    KNOWN_FAILURES.iter().any(|&(n, m, _)| n == name && m.is_none_or(|m| m == mode))
+    KNOWN_FAILURES
+        .iter()
+        .any(|&(n, m, _)| n == name && m.is_none_or(|m| m == mode))
 }
 
 fn run_all(mode: HessianMode) {
@@ -44,13 +50,26 @@ fn run_all(mode: HessianMode) {
         let r = solve(&mut AdNlp::new(p), &settings(mode));
         iterations += r.iterations;
         let err = (r.objective - f_star).abs() / f_star.abs().max(1.0);
-        if r.status != SqpStatus::Solved || err.is_nan() || err > 1e-6 || r.constraint_violation > 1e-6 {
+        if r.status != SqpStatus::Solved
+            || err.is_nan()
+            || err > 1e-6
+            || r.constraint_violation > 1e-6
+        {
             failures.push(format!("{name}: {:?} f {} (f* {f_star}, rel err {err:.1e}) viol {:.1e} after {} iterations: {}", r.status, r.objective, r.constraint_violation, r.iterations, r.message));
         }
     }
-    eprintln!("{mode:?}: {solved} of {} problems, {iterations} iterations", problems.len());
+    eprintln!(
+        "{mode:?}: {solved} of {} problems, {iterations} iterations",
+        problems.len()
+    );
     assert!(solved >= 25);
-    assert!(failures.is_empty(), "{mode:?}: {} of {} failed:\n{}", failures.len(), problems.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{mode:?}: {} of {} failed:\n{}",
+        failures.len(),
+        problems.len(),
+        failures.join("\n")
+    );
 }
 
 #[test]
@@ -69,7 +88,13 @@ fn infeasible_problems_are_reported() {
         for p in infeasible_problems() {
             let name = p.name;
             let r = solve(&mut AdNlp::new(p), &settings(mode));
-            assert_eq!(r.status, SqpStatus::Infeasible, "{name} {mode:?}: {} ({} iterations)", r.message, r.iterations);
+            assert_eq!(
+                r.status,
+                SqpStatus::Infeasible,
+                "{name} {mode:?}: {} ({} iterations)",
+                r.message,
+                r.iterations
+            );
             assert!(r.constraint_violation > 1e-3, "{name}");
         }
     }
@@ -85,6 +110,12 @@ fn unbounded_problems_are_reported() {
     for p in unbounded_problems() {
         let name = p.name;
         let r = solve(&mut AdNlp::new(p), &settings(mode));
-        assert_eq!(r.status, SqpStatus::Unbounded, "{name} {mode:?}: {} ({} iterations)", r.message, r.iterations);
+        assert_eq!(
+            r.status,
+            SqpStatus::Unbounded,
+            "{name} {mode:?}: {} ({} iterations)",
+            r.message,
+            r.iterations
+        );
     }
 }

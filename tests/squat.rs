@@ -23,7 +23,9 @@ impl OdeSystem for Fixed<'_> {
         self.eq.nx()
     }
     fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
-        self.eq.rhs(self.laws, &mut self.ws, x, &self.u, dx).map_err(|e| e.to_string())
+        self.eq
+            .rhs(self.laws, &mut self.ws, x, &self.u, dx)
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -41,23 +43,49 @@ fn static_squat_holds_in_both_backends() {
     let laws = OpenSimLaws::new(&model).unwrap();
     let sq = static_squat(&eq, &laws, &model.poses["squat"]).unwrap();
     assert!(sq.max_abs_qdd <= 1e-6, "q̈ = {}", sq.max_abs_qdd);
-    assert!((sq.vertical_grf_bw - 1.0).abs() < 1e-6, "GRF {} BW", sq.vertical_grf_bw);
+    assert!(
+        (sq.vertical_grf_bw - 1.0).abs() < 1e-6,
+        "GRF {} BW",
+        sq.vertical_grf_bw
+    );
     assert!(sq.excitation.iter().all(|&a| (0.01..=1.0).contains(&a)));
     // Fibres in equilibrium and activations steady: the muscle states do not move.
     let mut w = eq.workspace::<f64>();
     let mut dx = vec![0.0; eq.nx()];
-    eq.rhs(&laws, &mut w, &sq.x, &sq.excitation, &mut dx).unwrap();
+    eq.rhs(&laws, &mut w, &sq.x, &sq.excitation, &mut dx)
+        .unwrap();
     let n = eq.nq();
-    assert!(dx[2 * n..].iter().all(|v| v.abs() < 1e-8), "muscle state rates {:?}", &dx[2 * n..]);
+    assert!(
+        dx[2 * n..].iter().all(|v| v.abs() < 1e-8),
+        "muscle state rates {:?}",
+        &dx[2 * n..]
+    );
 
     // Rust-native, Dormand-Prince at 1e-6.
-    let mut sys = Fixed { eq: &eq, laws: &laws, ws: eq.workspace(), u: sq.excitation.clone() };
-    let mut ig = Dopri5::new(&mut sys, 0.0, &sq.x, Dopri5Options { accuracy: 1e-6, ..Default::default() }).unwrap();
+    let mut sys = Fixed {
+        eq: &eq,
+        laws: &laws,
+        ws: eq.workspace(),
+        u: sq.excitation.clone(),
+    };
+    let mut ig = Dopri5::new(
+        &mut sys,
+        0.0,
+        &sq.x,
+        Dopri5Options {
+            accuracy: 1e-6,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     while ig.t() < 0.2 {
         ig.step(&mut sys, 0.2).unwrap();
     }
     let shift = pelvis_shift(&eq, &sq.x, ig.x());
-    eprintln!("static squat: max |q̈| {:.2e}, Rust-native pelvis shift after 0.2 s {shift:.3e} m", sq.max_abs_qdd);
+    eprintln!(
+        "static squat: max |q̈| {:.2e}, Rust-native pelvis shift after 0.2 s {shift:.3e} m",
+        sq.max_abs_qdd
+    );
     assert!(shift < 1e-3, "Rust-native: pelvis moved {shift} m in 0.2 s");
 
     // Simbody, RungeKuttaMerson at OpenSim's default accuracy 1e-5.
@@ -66,7 +94,9 @@ fn static_squat_holds_in_both_backends() {
     sb.set_excitation(Excitation::Constant(sq.excitation.clone()));
     sb.set_state(0.0, &sq.x).unwrap();
     sb.simbody.set_applied_forces(&vec![0.0; n], &[]).unwrap();
-    sb.simbody.integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-5, 0.2).unwrap();
+    sb.simbody
+        .integrate(SimbodyIntegrator::RungeKuttaMerson, 1e-5, 0.2)
+        .unwrap();
     let mut x1 = vec![0.0; eq.nx()];
     sb.state(&mut x1).unwrap();
     let shift = pelvis_shift(&eq, &sq.x, &x1);

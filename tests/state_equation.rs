@@ -6,9 +6,9 @@ use leap::model::Model;
 mod common;
 use common::TestLaws;
 use leap::ode::{SimbodyStateEquation, StateEquation};
-use std::sync::Arc;
 use leap::path::PathSmoothing;
 use leap::scalar::Dual64;
+use std::sync::Arc;
 
 fn symmetric_state(eq: &StateEquation, k: usize) -> (Vec<f64>, Vec<f64>) {
     let (n, nm) = (eq.nq(), eq.nm());
@@ -25,7 +25,9 @@ fn symmetric_state(eq: &StateEquation, k: usize) -> (Vec<f64>, Vec<f64>) {
         x[2 * n + m] = 0.1 + 0.01 * m as f64;
         x[2 * n + nm + m] = 0.2 + 0.02 * ((m + k) as f64).sin();
     }
-    let u = (0..nm).map(|m| 0.5 + 0.4 * ((m * 3 + k) as f64).cos()).collect();
+    let u = (0..nm)
+        .map(|m| 0.5 + 0.4 * ((m * 3 + k) as f64).cos())
+        .collect();
     (x, u)
 }
 
@@ -55,23 +57,40 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
         let mut uf = vec![0.0; nmf];
         for (j, &mi) in full.muscles.iter().enumerate() {
             let name = &model.muscles[mi].spec.name;
-            let right = name.strip_suffix("_l").map(|s| format!("{s}_r")).unwrap_or(name.clone());
-            let ks = sym.muscles.iter().position(|&m| model.muscles[m].spec.name == right).unwrap();
+            let right = name
+                .strip_suffix("_l")
+                .map(|s| format!("{s}_r"))
+                .unwrap_or(name.clone());
+            let ks = sym
+                .muscles
+                .iter()
+                .position(|&m| model.muscles[m].spec.name == right)
+                .unwrap();
             xf[2 * nf + j] = xs[2 * ns + ks];
             xf[2 * nf + nmf + j] = xs[2 * ns + nms + ks];
             uf[j] = us[ks];
         }
         let mut ds = vec![0.0; sym.nx()];
         let mut df = vec![0.0; full.nx()];
-        sym.rhs(&laws, &mut sym.workspace(), &xs, &us, &mut ds).unwrap();
+        sym.rhs(&laws, &mut sym.workspace(), &xs, &us, &mut ds)
+            .unwrap();
         let mut wf = full.workspace();
         full.rhs(&laws, &mut wf, &xf, &uf, &mut df).unwrap();
-        assert!(wf.sphere_force.iter().any(|f| f[1] > 0.0), "the feet touch the ground");
+        assert!(
+            wf.sphere_force.iter().any(|f| f[1] > 0.0),
+            "the feet touch the ground"
+        );
         // Accelerations of every symmetric coordinate.
         let scale = df[nf..2 * nf].iter().fold(1.0f64, |a, x| a.max(x.abs()));
         for (i, &c) in sym.system.coordinates.iter().enumerate() {
             let a_full = df[nf + full.system.q_of_model_coordinate[c]];
-            assert!((ds[ns + i] - a_full).abs() <= 1e-10 * scale, "q̈ of {}: {} vs {}", model.coordinates[c].name, ds[ns + i], a_full);
+            assert!(
+                (ds[ns + i] - a_full).abs() <= 1e-10 * scale,
+                "q̈ of {}: {} vs {}",
+                model.coordinates[c].name,
+                ds[ns + i],
+                a_full
+            );
         }
         for (ks, &mi) in sym.muscles.iter().enumerate() {
             let j = full.muscles.iter().position(|&m| m == mi).unwrap();
@@ -92,7 +111,17 @@ fn state_derivative_jacobian_matches_central_differences() {
     let mut w = eq.workspace::<f64>();
     let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
     for dir in (0..nx).step_by(5) {
-        let xd: Vec<Dual64> = x.iter().enumerate().map(|(i, &v)| if i == dir { Dual64::from(v).derivative() } else { Dual64::from(v) }).collect();
+        let xd: Vec<Dual64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                if i == dir {
+                    Dual64::from(v).derivative()
+                } else {
+                    Dual64::from(v)
+                }
+            })
+            .collect();
         let mut fd = vec![Dual64::from(0.0); nx];
         eq.rhs(&laws, &mut wd, &xd, &ud, &mut fd).unwrap();
         let h = 1e-6;
@@ -104,7 +133,12 @@ fn state_derivative_jacobian_matches_central_differences() {
         eq.rhs(&laws, &mut w, &xm, &u, &mut fm).unwrap();
         for i in 0..nx {
             let cd = (fp[i] - fm[i]) / (2.0 * h);
-            assert!((fd[i].eps - cd).abs() <= 1e-5 * (1.0 + cd.abs()), "∂f[{i}]/∂x[{dir}]: dual {} vs central {}", fd[i].eps, cd);
+            assert!(
+                (fd[i].eps - cd).abs() <= 1e-5 * (1.0 + cd.abs()),
+                "∂f[{i}]/∂x[{dir}]: dual {} vs central {}",
+                fd[i].eps,
+                cd
+            );
         }
     }
 }
@@ -116,15 +150,21 @@ fn wrong_lengths_are_errors() {
     let laws = TestLaws(model.clone());
     let mut w = eq.workspace::<f64>();
     let mut xd = vec![0.0; 62];
-    assert!(eq.rhs(&laws, &mut w, &vec![0.0; 61], &vec![0.0; 24], &mut xd).is_err());
-    assert!(eq.rhs(&laws, &mut w, &vec![0.0; 62], &vec![0.0; 23], &mut xd).is_err());
+    assert!(eq
+        .rhs(&laws, &mut w, &vec![0.0; 61], &vec![0.0; 24], &mut xd)
+        .is_err());
+    assert!(eq
+        .rhs(&laws, &mut w, &vec![0.0; 62], &vec![0.0; 23], &mut xd)
+        .is_err());
 }
 
 #[test]
 fn simbody_state_equation_matches_rust_native() {
     let model = Model::from_file("models/jumper.json").unwrap();
     for symmetric in [true, false] {
-        let eq = Arc::new(StateEquation::new(&model, symmetric, PathSmoothing::Smooth { delta: 0.02 }).unwrap());
+        let eq = Arc::new(
+            StateEquation::new(&model, symmetric, PathSmoothing::Smooth { delta: 0.02 }).unwrap(),
+        );
         let laws = Arc::new(TestLaws(model.clone()));
         let mut sb = SimbodyStateEquation::new(eq.clone(), laws.clone()).unwrap();
         let mut w = eq.workspace::<f64>();
@@ -141,7 +181,8 @@ fn simbody_state_equation_matches_rust_native() {
                     x[i] = q0[i] + 0.003 * ((k + 3 * i) as f64).sin();
                     x[n + i] = 0.4 * ((k + i) as f64).cos();
                 }
-                x[eq.system.q_of_model_coordinate[model.coordinate_index("pelvis_ty").unwrap()]] -= 0.01;
+                x[eq.system.q_of_model_coordinate[model.coordinate_index("pelvis_ty").unwrap()]] -=
+                    0.01;
                 for i in 2 * n..nx {
                     x[i] = 0.1 + 0.003 * i as f64;
                 }
@@ -155,6 +196,9 @@ fn simbody_state_equation_matches_rust_native() {
                 worst = worst.max((fr[i] - fs[i]).abs() / scale);
             }
         }
-        assert!(worst <= 1e-9, "symmetric={symmetric}: worst normwise relative difference {worst:e}");
+        assert!(
+            worst <= 1e-9,
+            "symmetric={symmetric}: worst normwise relative difference {worst:e}"
+        );
     }
 }

@@ -56,7 +56,13 @@ struct FdReport {
 
 /// Central differences of every constraint row along variable `j`, step
 /// `s` (and the one-sided ones).
-fn differences(tr: &mut Transcription, x: &[f64], c0: &[f64], j: usize, s: f64) -> Vec<(f64, f64, f64)> {
+fn differences(
+    tr: &mut Transcription,
+    x: &[f64],
+    c0: &[f64],
+    j: usize,
+    s: f64,
+) -> Vec<(f64, f64, f64)> {
     let m = c0.len();
     let (mut cp, mut cm) = (vec![0.0; m], vec![0.0; m]);
     let mut xp = x.to_vec();
@@ -64,7 +70,15 @@ fn differences(tr: &mut Transcription, x: &[f64], c0: &[f64], j: usize, s: f64) 
     tr.constraints(&xp, &mut cp).unwrap();
     xp[j] = x[j] - s;
     tr.constraints(&xp, &mut cm).unwrap();
-    (0..m).map(|i| ((cp[i] - cm[i]) / (2.0 * s), (cp[i] - c0[i]) / s, (c0[i] - cm[i]) / s)).collect()
+    (0..m)
+        .map(|i| {
+            (
+                (cp[i] - cm[i]) / (2.0 * s),
+                (cp[i] - c0[i]) / s,
+                (c0[i] - cm[i]) / s,
+            )
+        })
+        .collect()
 }
 
 /// Compare the Jacobian at `x` with central differences of step 1e-6
@@ -142,7 +156,11 @@ fn fd_check(tr: &mut Transcription, x: &[f64]) -> FdReport {
                     let r = central.abs() / row_max[i].max(1.0);
                     if r > rep.outside {
                         rep.outside = r;
-                        rep.outside_at = format!("∂{}/∂{} = {central}", tr.constraint_name(i), tr.variable_name(j));
+                        rep.outside_at = format!(
+                            "∂{}/∂{} = {central}",
+                            tr.constraint_name(i),
+                            tr.variable_name(j)
+                        );
                     }
                 }
             }
@@ -207,12 +225,22 @@ fn sizes_bounds_and_elements() {
         assert_eq!((lo[a], hi[a]), (0.01, 1.0));
     }
     // The start and the guess lie inside the bounds.
-    assert!(ocp.x0().iter().enumerate().all(|(i, v)| (ocp.state_lower[i]..=ocp.state_upper[i]).contains(v)));
-    assert!(guess.iter().enumerate().all(|(i, v)| (lo[i]..=hi[i]).contains(v)));
+    assert!(ocp
+        .x0()
+        .iter()
+        .enumerate()
+        .all(|(i, v)| (ocp.state_lower[i]..=ocp.state_upper[i]).contains(v)));
+    assert!(guess
+        .iter()
+        .enumerate()
+        .all(|(i, v)| (lo[i]..=hi[i]).contains(v)));
     let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
     tr.constraint_bounds(&mut cl, &mut cu);
     assert!(cl[..1736].iter().chain(&cu[..1736]).all(|&v| v == 0.0));
-    assert!(cl[1736..1743].iter().all(|&v| v == f64::NEG_INFINITY) && cu[1736..1743].iter().all(|&v| v == 0.0));
+    assert!(
+        cl[1736..1743].iter().all(|&v| v == f64::NEG_INFINITY)
+            && cu[1736..1743].iter().all(|&v| v == 0.0)
+    );
     assert_eq!((cl[1743], cu[1743]), (f64::NEG_INFINITY, 0.01));
     // Jacobian pattern: no duplicates, in range, sizes as reported.
     let s = tr.jacobian_structure();
@@ -227,8 +255,15 @@ fn sizes_bounds_and_elements() {
     assert_eq!(st.nnz, s.len());
     assert_eq!(st.state_equation_entries, 5332);
     // Each defect block: both nodes' columns of ∂f/∂(x, u) ∪ I, and t_f.
-    let f_x_and_identity: usize = (0..62).map(|r| tr.pattern().rows[r].iter().filter(|&&c| c < 62).count() + usize::from(!tr.pattern().contains(r, r))).sum();
-    let f_u: usize = (0..62).map(|r| tr.pattern().rows[r].iter().filter(|&&c| c >= 62).count()).sum();
+    let f_x_and_identity: usize = (0..62)
+        .map(|r| {
+            tr.pattern().rows[r].iter().filter(|&&c| c < 62).count()
+                + usize::from(!tr.pattern().contains(r, r))
+        })
+        .sum();
+    let f_u: usize = (0..62)
+        .map(|r| tr.pattern().rows[r].iter().filter(|&&c| c >= 62).count())
+        .sum();
     assert_eq!(st.nnz_interval, 2 * (f_x_and_identity + f_u) + 62);
     assert_eq!(st.nnz_first_interval, f_x_and_identity + f_u + 62);
     assert_eq!(st.nnz_defects, st.nnz_first_interval + 27 * st.nnz_interval);
@@ -242,11 +277,22 @@ fn sizes_bounds_and_elements() {
     for k in 0..24 {
         assert_eq!(tr.pattern().rows[38 + k], vec![38 + k, 62 + k]);
         let r = &tr.pattern().rows[14 + k];
-        assert!(r.contains(&(14 + k)) && r.contains(&(38 + k)) && r.iter().all(|&c| c < 7 || c == 14 + k || c == 38 + k), "{r:?}");
+        assert!(
+            r.contains(&(14 + k))
+                && r.contains(&(38 + k))
+                && r.iter().all(|&c| c < 7 || c == 14 + k || c == 38 + k),
+            "{r:?}"
+        );
     }
     // Vasti span the knee only; gastrocnemii the knee and the ankle.
     let names = ocp.eq.state_names();
-    let row = |muscle: &str| tr.pattern().rows[names.iter().position(|s| *s == format!("/forceset/{muscle}/fiber_length")).unwrap()].clone();
+    let row = |muscle: &str| {
+        tr.pattern().rows[names
+            .iter()
+            .position(|s| *s == format!("/forceset/{muscle}/fiber_length"))
+            .unwrap()]
+        .clone()
+    };
     assert_eq!(row("vas_int_r"), vec![4, 30, 54]);
     assert_eq!(row("med_gas_r"), vec![4, 5, 32, 56]);
     // The partially separable structure.
@@ -263,53 +309,135 @@ fn sizes_bounds_and_elements() {
         }
     }
     for &(i, j) in &s {
-        assert!(el[owner[i]].variables.binary_search(&j).is_ok(), "entry ({i}, {j}) outside its element");
+        assert!(
+            el[owner[i]].variables.binary_search(&j).is_ok(),
+            "entry ({i}, {j}) outside its element"
+        );
     }
     // Names.
     assert_eq!(tr.variable_name(n - 1), "t_f");
-    assert_eq!(tr.variable_name(86 + 3), "node 2 /jointset/hip_r/hip_flexion_r/value");
-    assert!(tr.constraint_name(62 + 7).starts_with("defect of interval 2 in /jointset/ground_pelvis/pelvis_tilt/speed"));
+    assert_eq!(
+        tr.variable_name(86 + 3),
+        "node 2 /jointset/hip_r/hip_flexion_r/value"
+    );
+    assert!(tr
+        .constraint_name(62 + 7)
+        .starts_with("defect of interval 2 in /jointset/ground_pelvis/pelvis_tilt/speed"));
 }
 
 #[test]
 fn settings_errors_name_what_is_wrong() {
     let (ocp, pattern, _) = setup();
-    let with = |o: OcpOptions| JumpOcp::from_parts(ocp.eq.clone(), ocp.laws.clone(), ocp.squat.clone(), o);
-    let e = with(OcpOptions { final_time_bounds: [0.5, 0.2], ..Default::default() }).unwrap_err().to_string();
+    let with =
+        |o: OcpOptions| JumpOcp::from_parts(ocp.eq.clone(), ocp.laws.clone(), ocp.squat.clone(), o);
+    let e = with(OcpOptions {
+        final_time_bounds: [0.5, 0.2],
+        ..Default::default()
+    })
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("final_time_bounds"), "{e}");
-    let e = with(OcpOptions { speed_bound: 0.0, ..Default::default() }).unwrap_err().to_string();
+    let e = with(OcpOptions {
+        speed_bound: 0.0,
+        ..Default::default()
+    })
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("speed_bound"), "{e}");
-    let e = with(OcpOptions { fiber_length_bounds: [0.2, 0.5], ..Default::default() }).unwrap_err().to_string();
-    assert!(e.contains("the start violates the bounds of /forceset/"), "{e}");
-    let e = with(OcpOptions { fiber_length_bounds: [1.5, 1.2], ..Default::default() }).unwrap_err().to_string();
+    let e = with(OcpOptions {
+        fiber_length_bounds: [0.2, 0.5],
+        ..Default::default()
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("the start violates the bounds of /forceset/"),
+        "{e}"
+    );
+    let e = with(OcpOptions {
+        fiber_length_bounds: [1.5, 1.2],
+        ..Default::default()
+    })
+    .unwrap_err()
+    .to_string();
     assert!(e.contains("fiber_length_bounds"), "{e}");
     // Lift-off as an equality.
-    let eq_ocp = Arc::new(with(OcpOptions { liftoff: LiftOff::ForceEquals { fraction: 0.05 }, ..Default::default() }).unwrap());
-    let tr = Transcription::with_pattern(eq_ocp, TranscriptionOptions::default(), pattern.clone()).unwrap();
-    let (mut cl, mut cu) = (vec![0.0; tr.num_constraints()], vec![0.0; tr.num_constraints()]);
+    let eq_ocp = Arc::new(
+        with(OcpOptions {
+            liftoff: LiftOff::ForceEquals { fraction: 0.05 },
+            ..Default::default()
+        })
+        .unwrap(),
+    );
+    let tr = Transcription::with_pattern(eq_ocp, TranscriptionOptions::default(), pattern.clone())
+        .unwrap();
+    let (mut cl, mut cu) = (
+        vec![0.0; tr.num_constraints()],
+        vec![0.0; tr.num_constraints()],
+    );
     tr.constraint_bounds(&mut cl, &mut cu);
     assert_eq!((cl[tr.liftoff_row()], cu[tr.liftoff_row()]), (0.05, 0.05));
     // Too few intervals for the no-countermovement rows; a wrong pattern.
-    let e = Transcription::with_pattern(ocp.clone(), TranscriptionOptions { num_mesh_intervals: 5, ..Default::default() }, pattern.clone()).err().unwrap().to_string();
+    let e = Transcription::with_pattern(
+        ocp.clone(),
+        TranscriptionOptions {
+            num_mesh_intervals: 5,
+            ..Default::default()
+        },
+        pattern.clone(),
+    )
+    .err()
+    .unwrap()
+    .to_string();
     assert!(e.contains("num_mesh_intervals = 5"), "{e}");
     let mut bad = pattern.clone();
     bad.nu = 3;
-    assert!(Transcription::with_pattern(ocp.clone(), TranscriptionOptions::default(), bad).is_err());
+    assert!(
+        Transcription::with_pattern(ocp.clone(), TranscriptionOptions::default(), bad).is_err()
+    );
     // Guesses.
     let tr = transcription(TranscriptionOptions::default());
     let x0 = ocp.x0().to_vec();
     let u0 = ocp.u0().to_vec();
-    let e = tr.guess_from_trajectory(&[0.0, 0.2, 0.1], &[x0.clone(), x0.clone(), x0.clone()], &[u0.clone(), u0.clone(), u0.clone()], 0.1).unwrap_err().to_string();
+    let e = tr
+        .guess_from_trajectory(
+            &[0.0, 0.2, 0.1],
+            &[x0.clone(), x0.clone(), x0.clone()],
+            &[u0.clone(), u0.clone(), u0.clone()],
+            0.1,
+        )
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("not increasing at index 2"), "{e}");
-    let e = tr.guess_from_trajectory(&[0.0, 0.2], &[x0.clone(), x0.clone()], &[u0.clone(), u0.clone()], 0.3).unwrap_err().to_string();
+    let e = tr
+        .guess_from_trajectory(
+            &[0.0, 0.2],
+            &[x0.clone(), x0.clone()],
+            &[u0.clone(), u0.clone()],
+            0.3,
+        )
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("ends at 0.2 s"), "{e}");
-    let e = tr.guess_from_trajectory(&[0.0, 0.2], &[x0.clone(), x0[..10].to_vec()], &[u0.clone(), u0.clone()], 0.1).unwrap_err().to_string();
+    let e = tr
+        .guess_from_trajectory(
+            &[0.0, 0.2],
+            &[x0.clone(), x0[..10].to_vec()],
+            &[u0.clone(), u0.clone()],
+            0.1,
+        )
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("state 1 has 10 values"), "{e}");
     // Evaluation errors instead of panics.
     let mut tr = tr;
     let mut c = vec![0.0; 3];
     let v = tr.constant_guess(0.3);
-    assert!(tr.constraints(&v, &mut c).unwrap_err().to_string().contains("length 3"));
+    assert!(tr
+        .constraints(&v, &mut c)
+        .unwrap_err()
+        .to_string()
+        .contains("length 3"));
     let mut c = vec![0.0; tr.num_constraints()];
     let mut w = v.clone();
     w[100] = f64::NAN;
@@ -321,14 +449,21 @@ fn settings_errors_name_what_is_wrong() {
 fn jacobian_matches_finite_differences_midpoint() {
     let (_, _, guess) = setup();
     let mut tr = transcription(TranscriptionOptions::default());
-    for (name, x) in [("bang-bang guess", guess.clone()), ("perturbed guess", perturbed(&tr, guess, 7))] {
+    for (name, x) in [
+        ("bang-bang guess", guess.clone()),
+        ("perturbed guess", perturbed(&tr, guess, 7)),
+    ] {
         let r = fd_check(&mut tr, &x);
         eprintln!("midpoint, {name}: {} entries, worst {:.2e} ({}), kinks {}, refined {}, row-scaled {} (worst {:.1e}), outside the pattern {:.2e} ({})", r.entries, r.worst, r.worst_at, r.kinks, r.refined, r.row_scaled, r.row_scaled_worst, r.outside, r.outside_at);
         assert!(r.worst <= 1e-6, "{name}: {}", r.worst_at);
         assert!(r.outside <= 1e-7, "{name}: {}", r.outside_at);
         // At the guess, muscles that are off sit at a = u = a_min: on the
         // activation switch and the clamp (6 entries per muscle and interval).
-        let allowed = if name == "bang-bang guess" { 6 * 8 * 28 + r.entries / 1000 } else { r.entries / 1000 };
+        let allowed = if name == "bang-bang guess" {
+            6 * 8 * 28 + r.entries / 1000
+        } else {
+            r.entries / 1000
+        };
         assert!(r.kinks <= allowed, "{name}: {} kinks", r.kinks);
     }
 }
@@ -340,12 +475,32 @@ fn jacobian_matches_finite_differences_trapezoidal_and_hermite_simpson() {
     let full = transcription(TranscriptionOptions::default());
     let traj = full.unpack(guess);
     for scheme in [Scheme::Trapezoidal, Scheme::HermiteSimpson] {
-        let mut tr = transcription(TranscriptionOptions { num_mesh_intervals: 10, scheme, ..Default::default() });
-        let x = tr.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, full.final_time(guess)).unwrap();
+        let mut tr = transcription(TranscriptionOptions {
+            num_mesh_intervals: 10,
+            scheme,
+            ..Default::default()
+        });
+        let x = tr
+            .guess_from_trajectory(
+                &traj.time,
+                &traj.states,
+                &traj.controls,
+                full.final_time(guess),
+            )
+            .unwrap();
         // Hermite–Simpson's centre state x_c = x̄ + h(f_{k−1} − f_k)/8 leaves
         // the physiological range at 10 intervals if perturbed fibres move
         // at metres per second: a smaller perturbation there.
-        let x = perturbed_by(&tr, &x, 11, if scheme == Scheme::HermiteSimpson { 1e-4 } else { 0.02 });
+        let x = perturbed_by(
+            &tr,
+            &x,
+            11,
+            if scheme == Scheme::HermiteSimpson {
+                1e-4
+            } else {
+                0.02
+            },
+        );
         let r = fd_check(&mut tr, &x);
         eprintln!("{scheme:?}: {} entries, worst {:.2e} ({}), kinks {}, refined {}, row-scaled {} (worst {:.1e}), outside the pattern {:.2e} ({})", r.entries, r.worst, r.worst_at, r.kinks, r.refined, r.row_scaled, r.row_scaled_worst, r.outside, r.outside_at);
         assert!(r.worst <= 1e-6, "{scheme:?}: {}", r.worst_at);
@@ -358,16 +513,35 @@ fn jacobian_matches_finite_differences_trapezoidal_and_hermite_simpson() {
 fn compressed_uncompressed_and_parallel_jacobians_agree() {
     let (_, _, guess) = setup();
     for scheme in [Scheme::MidpointEuler, Scheme::HermiteSimpson] {
-        let mut a = transcription(TranscriptionOptions { threads: 1, scheme, ..Default::default() });
-        let mut b = transcription(TranscriptionOptions { threads: 2, scheme, compress_columns: false, ..Default::default() });
+        let mut a = transcription(TranscriptionOptions {
+            threads: 1,
+            scheme,
+            ..Default::default()
+        });
+        let mut b = transcription(TranscriptionOptions {
+            threads: 2,
+            scheme,
+            compress_columns: false,
+            ..Default::default()
+        });
         let x = perturbed_by(&a, guess, 3, 1e-3);
         let (mut ja, mut jb) = (vec![0.0; a.jacobian_nnz()], vec![0.0; b.jacobian_nnz()]);
         a.jacobian_values(&x, &mut ja).unwrap();
         b.jacobian_values(&x, &mut jb).unwrap();
         assert_eq!(a.jacobian_structure(), b.jacobian_structure());
-        let worst = ja.iter().zip(&jb).map(|(p, q)| (p - q).abs() / p.abs().max(1.0)).fold(0.0, f64::max);
-        assert!(worst <= 1e-12, "{scheme:?}: compressed vs uncompressed: {worst:e}");
-        let (mut ca, mut cb) = (vec![0.0; a.num_constraints()], vec![0.0; b.num_constraints()]);
+        let worst = ja
+            .iter()
+            .zip(&jb)
+            .map(|(p, q)| (p - q).abs() / p.abs().max(1.0))
+            .fold(0.0, f64::max);
+        assert!(
+            worst <= 1e-12,
+            "{scheme:?}: compressed vs uncompressed: {worst:e}"
+        );
+        let (mut ca, mut cb) = (
+            vec![0.0; a.num_constraints()],
+            vec![0.0; b.num_constraints()],
+        );
         a.constraints(&x, &mut ca).unwrap();
         b.constraints(&x, &mut cb).unwrap();
         assert_eq!(ca, cb, "{scheme:?}");
@@ -395,7 +569,11 @@ struct Ramp<'a> {
 
 impl Ramp<'_> {
     fn control(&self, t: f64) -> Vec<f64> {
-        self.ua.iter().zip(&self.ub).map(|(a, b)| a + (b - a) * t / self.t_end).collect()
+        self.ua
+            .iter()
+            .zip(&self.ub)
+            .map(|(a, b)| a + (b - a) * t / self.t_end)
+            .collect()
     }
 }
 
@@ -405,7 +583,10 @@ impl OdeSystem for Ramp<'_> {
     }
     fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
         self.u = self.control(t);
-        self.ocp.state_rates(&mut self.ws, x, &self.u, dx).map(|_| ()).map_err(|e| e.to_string())
+        self.ocp
+            .state_rates(&mut self.ws, x, &self.u, dx)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
     }
 }
 
@@ -419,9 +600,26 @@ fn defects_vanish_at_the_schemes_order_on_a_forward_trajectory() {
     let t_end = 0.1;
     let mut ub = vec![0.0; ocp.nu()];
     ocp.bang_bang().at(0.0, &mut ub);
-    let mut sys = Ramp { ocp, ws: ocp.eq.workspace(), ua: ocp.u0().to_vec(), ub, t_end, u: vec![] };
+    let mut sys = Ramp {
+        ocp,
+        ws: ocp.eq.workspace(),
+        ua: ocp.u0().to_vec(),
+        ub,
+        t_end,
+        u: vec![],
+    };
     let finest = 128;
-    let mut ig = Dopri5::new(&mut sys, 0.0, ocp.x0(), Dopri5Options { accuracy: 1e-11, max_steps: 1_000_000, ..Default::default() }).unwrap();
+    let mut ig = Dopri5::new(
+        &mut sys,
+        0.0,
+        ocp.x0(),
+        Dopri5Options {
+            accuracy: 1e-11,
+            max_steps: 1_000_000,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let mut states = vec![ocp.x0().to_vec()];
     for k in 1..=finest {
         let t = t_end * k as f64 / finest as f64;
@@ -431,32 +629,63 @@ fn defects_vanish_at_the_schemes_order_on_a_forward_trajectory() {
         states.push(ig.x().to_vec());
     }
     let mut worst_at_finest = Vec::new();
-    for scheme in [Scheme::Trapezoidal, Scheme::MidpointEuler, Scheme::HermiteSimpson] {
+    for scheme in [
+        Scheme::Trapezoidal,
+        Scheme::MidpointEuler,
+        Scheme::HermiteSimpson,
+    ] {
         let mut last: Option<f64> = None;
         for big_n in [32, 64, 128] {
-            let mut tr = transcription(TranscriptionOptions { num_mesh_intervals: big_n, scheme, ..Default::default() });
+            let mut tr = transcription(TranscriptionOptions {
+                num_mesh_intervals: big_n,
+                scheme,
+                ..Default::default()
+            });
             let stride = finest / big_n;
             let xs: Vec<Vec<f64>> = (0..=big_n).map(|k| states[k * stride].clone()).collect();
-            let us: Vec<Vec<f64>> = tr.mesh_times(t_end).iter().map(|&t| sys.control(t)).collect();
+            let us: Vec<Vec<f64>> = tr
+                .mesh_times(t_end)
+                .iter()
+                .map(|&t| sys.control(t))
+                .collect();
             let v = tr.pack(&xs, &us, t_end).unwrap();
             let mut c = vec![0.0; tr.num_constraints()];
             tr.constraints(&v, &mut c).unwrap();
-            let worst = c[tr.defect_rows()].iter().fold(0.0f64, |m, d| m.max(d.abs()));
-            eprintln!("{scheme:?}, N = {big_n}: max |defect| {worst:.3e}{}", last.map(|l| format!(", ratio {:.2}", l / worst)).unwrap_or_default());
+            let worst = c[tr.defect_rows()]
+                .iter()
+                .fold(0.0f64, |m, d| m.max(d.abs()));
+            eprintln!(
+                "{scheme:?}, N = {big_n}: max |defect| {worst:.3e}{}",
+                last.map(|l| format!(", ratio {:.2}", l / worst))
+                    .unwrap_or_default()
+            );
             worst_at_finest.push((scheme, worst));
             if let Some(l) = last {
                 // Local truncation error O(h³) (Hermite–Simpson O(h⁵)):
                 // halving h divides it by ~8 (~32), less where f has kinks
                 // (passive fibre force at l̃ = 1, the tendon's toe region).
-                assert!(l / worst > 5.5, "{scheme:?}: N = {big_n}: ratio {}", l / worst);
+                assert!(
+                    l / worst > 5.5,
+                    "{scheme:?}: N = {big_n}: ratio {}",
+                    l / worst
+                );
             }
             last = Some(worst);
         }
         assert!(last.unwrap() < 2e-4, "{scheme:?}: {last:?}");
     }
     // Hermite–Simpson is far more accurate on the finest mesh.
-    let at = |s: Scheme| worst_at_finest.iter().rev().find(|(t, _)| *t == s).unwrap().1;
-    assert!(at(Scheme::HermiteSimpson) < 0.2 * at(Scheme::Trapezoidal).min(at(Scheme::MidpointEuler)));
+    let at = |s: Scheme| {
+        worst_at_finest
+            .iter()
+            .rev()
+            .find(|(t, _)| *t == s)
+            .unwrap()
+            .1
+    };
+    assert!(
+        at(Scheme::HermiteSimpson) < 0.2 * at(Scheme::Trapezoidal).min(at(Scheme::MidpointEuler))
+    );
 }
 
 #[test]
@@ -472,9 +701,16 @@ fn objective_and_path_rows_match_independent_computations() {
     let xn = tr.node_state(&x, big_n).to_vec();
     let mut w = eq.multibody.workspace::<f64>();
     eq.multibody.set_state(&mut w, &xn[..n], &xn[n..2 * n]);
-    let (yc, vc) = (eq.multibody.com_position(&w)[1], eq.multibody.com_velocity(&w)[1]);
+    let (yc, vc) = (
+        eq.multibody.com_position(&w)[1],
+        eq.multibody.com_velocity(&w)[1],
+    );
     let f = tr.objective(&x).unwrap();
-    assert!((f + yc + vc * vc / (2.0 * g)).abs() < 1e-14, "{f} vs {}", -(yc + vc * vc / (2.0 * g)));
+    assert!(
+        (f + yc + vc * vc / (2.0 * g)).abs() < 1e-14,
+        "{f} vs {}",
+        -(yc + vc * vc / (2.0 * g))
+    );
     // The gradient against central differences.
     let mut grad = vec![0.0; x.len()];
     tr.gradient(&x, &mut grad).unwrap();
@@ -487,7 +723,12 @@ fn objective_and_path_rows_match_independent_computations() {
         let fm = tr.objective(&xp).unwrap();
         xp[j] = x[j];
         let fd = (fp - fm) / (2.0 * s);
-        assert!((grad[j] - fd).abs() <= 1e-7 * fd.abs().max(1.0), "∂f/∂{}: {} vs {fd}", tr.variable_name(j), grad[j]);
+        assert!(
+            (grad[j] - fd).abs() <= 1e-7 * fd.abs().max(1.0),
+            "∂f/∂{}: {} vs {fd}",
+            tr.variable_name(j),
+            grad[j]
+        );
     }
     // Ÿ_C at nodes 0..7 from q̈ = f(x, u) and com_acceleration; the
     // vertical ground force at the final node.
@@ -497,23 +738,49 @@ fn objective_and_path_rows_match_independent_computations() {
     let mut dx = vec![0.0; eq.nx()];
     let ydd: Vec<f64> = (0..=7)
         .map(|k| {
-            eq.rhs(&ocp.laws, &mut ws, tr.node_state(&x, k), tr.node_control(&x, k), &mut dx).unwrap();
+            eq.rhs(
+                &ocp.laws,
+                &mut ws,
+                tr.node_state(&x, k),
+                tr.node_control(&x, k),
+                &mut dx,
+            )
+            .unwrap();
             eq.multibody.com_acceleration(&ws.mb, &dx[n..2 * n])[1]
         })
         .collect();
-    assert!(ydd[0].abs() < 1e-6, "the static squat accelerates: {}", ydd[0]);
+    assert!(
+        ydd[0].abs() < 1e-6,
+        "the static squat accelerates: {}",
+        ydd[0]
+    );
     for j in 0..7 {
         let want = ydd[j] - ydd[j + 1];
-        assert!((c[1736 + j] - want).abs() <= 1e-12 * want.abs().max(1.0), "row {j}: {} vs {want}", c[1736 + j]);
+        assert!(
+            (c[1736 + j] - want).abs() <= 1e-12 * want.abs().max(1.0),
+            "row {j}: {} vs {want}",
+            c[1736 + j]
+        );
     }
-    eq.rhs(&ocp.laws, &mut ws, &xn, tr.node_control(&x, big_n), &mut dx).unwrap();
+    eq.rhs(&ocp.laws, &mut ws, &xn, tr.node_control(&x, big_n), &mut dx)
+        .unwrap();
     let fy: f64 = ws.sphere_force.iter().map(|f| f[1]).sum();
     let weight = eq.model.total_mass() * g;
     assert!((c[1743] - fy / weight).abs() <= 1e-12 * (fy / weight).abs().max(1.0));
     // The defects of interval 3 (midpoint Euler) by hand.
     let h = tr.final_time(&x) / 28.0;
-    let xm: Vec<f64> = tr.node_state(&x, 2).iter().zip(tr.node_state(&x, 3)).map(|(a, b)| 0.5 * (a + b)).collect();
-    let um: Vec<f64> = tr.node_control(&x, 2).iter().zip(tr.node_control(&x, 3)).map(|(a, b)| 0.5 * (a + b)).collect();
+    let xm: Vec<f64> = tr
+        .node_state(&x, 2)
+        .iter()
+        .zip(tr.node_state(&x, 3))
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
+    let um: Vec<f64> = tr
+        .node_control(&x, 2)
+        .iter()
+        .zip(tr.node_control(&x, 3))
+        .map(|(a, b)| 0.5 * (a + b))
+        .collect();
     eq.rhs(&ocp.laws, &mut ws, &xm, &um, &mut dx).unwrap();
     for r in 0..62 {
         let want = tr.node_state(&x, 3)[r] - tr.node_state(&x, 2)[r] - h * dx[r];
@@ -539,7 +806,12 @@ fn bang_bang_guess_follows_the_forward_jump() {
     for c in 0..2 * n {
         let (a, b) = (traj.states[i - 1][c], traj.states[i][c]);
         let (lo, hi) = (a.min(b) - 1e-9, a.max(b) + 1e-9);
-        assert!((lo..=hi).contains(&mesh.states[28][c]), "{}: {} not between {a} and {b}", ocp.eq.state_names()[c], mesh.states[28][c]);
+        assert!(
+            (lo..=hi).contains(&mesh.states[28][c]),
+            "{}: {} not between {a} and {b}",
+            ocp.eq.state_names()[c],
+            mesh.states[28][c]
+        );
     }
     // Extensors on, the others at the minimum excitation.
     let bb = ocp.bang_bang();
@@ -563,17 +835,24 @@ fn timing() {
     };
     let t = std::time::Instant::now();
     let _ = StatePattern::detect(ocp, 60, 1).unwrap();
-    eprintln!("pattern detection (60 samples): {:.1} ms", 1e3 * t.elapsed().as_secs_f64());
+    eprintln!(
+        "pattern detection (60 samples): {:.1} ms",
+        1e3 * t.elapsed().as_secs_f64()
+    );
     let x = guess.to_vec();
     let mut ws = ocp.eq.workspace::<f64>();
     let mut dx = vec![0.0; ocp.nx()];
     let xs = &x[86 * 9..86 * 9 + 62];
     let us = &x[86 * 9 + 62..86 * 10];
-    let f64_time = median((0..500).map(|_| {
-        let t = std::time::Instant::now();
-        ocp.state_rates(&mut ws, xs, us, &mut dx).unwrap();
-        t.elapsed().as_secs_f64()
-    }).collect());
+    let f64_time = median(
+        (0..500)
+            .map(|_| {
+                let t = std::time::Instant::now();
+                ocp.state_rates(&mut ws, xs, us, &mut dx).unwrap();
+                t.elapsed().as_secs_f64()
+            })
+            .collect(),
+    );
     eprintln!("f(x, u) in f64: {:.1} µs", 1e6 * f64_time);
     {
         use leap::scalar::Dual64;
@@ -581,17 +860,27 @@ fn timing() {
         let mut xd: Vec<Dual64> = xs.iter().map(|&v| Dual64::from(v)).collect();
         let ud: Vec<Dual64> = us.iter().map(|&v| Dual64::from(v)).collect();
         let mut dxd = vec![Dual64::from(0.0); ocp.nx()];
-        let t = median((0..200).map(|i| {
-            let j = i % 38;
-            xd[j] = Dual64::from(xs[j]).derivative();
-            let t = std::time::Instant::now();
-            ocp.state_rates(&mut wd, &xd, &ud, &mut dxd).unwrap();
-            let e = t.elapsed().as_secs_f64();
-            xd[j] = Dual64::from(xs[j]);
-            e
-        }).collect());
-        let colors = transcription(TranscriptionOptions::default()).jacobian_stats().colors;
-        eprintln!("one direction with Dual64: {:.1} µs; × {colors} colours = {:.0} µs per point", 1e6 * t, 1e6 * t * colors as f64);
+        let t = median(
+            (0..200)
+                .map(|i| {
+                    let j = i % 38;
+                    xd[j] = Dual64::from(xs[j]).derivative();
+                    let t = std::time::Instant::now();
+                    ocp.state_rates(&mut wd, &xd, &ud, &mut dxd).unwrap();
+                    let e = t.elapsed().as_secs_f64();
+                    xd[j] = Dual64::from(xs[j]);
+                    e
+                })
+                .collect(),
+        );
+        let colors = transcription(TranscriptionOptions::default())
+            .jacobian_stats()
+            .colors;
+        eprintln!(
+            "one direction with Dual64: {:.1} µs; × {colors} colours = {:.0} µs per point",
+            1e6 * t,
+            1e6 * t * colors as f64
+        );
     }
     for compress in [true, false] {
         let mut best = [f64::INFINITY; 7];
@@ -629,12 +918,31 @@ fn timing() {
         for &r in &rows[..6] {
             eprintln!("  {}: {:.3e}", tr.constraint_name(r), c[r]);
         }
-        let by_kind = |lo: usize, hi: usize| tr.defect_rows().filter(|r| (lo..hi).contains(&(r % 62))).map(|r| c[r].abs()).fold(0.0f64, f64::max);
-        eprintln!("  max |defect| of q {:.2e}, q̇ {:.2e}, l^M {:.2e}, a {:.2e}", by_kind(0, 7), by_kind(7, 14), by_kind(14, 38), by_kind(38, 62));
+        let by_kind = |lo: usize, hi: usize| {
+            tr.defect_rows()
+                .filter(|r| (lo..hi).contains(&(r % 62)))
+                .map(|r| c[r].abs())
+                .fold(0.0f64, f64::max)
+        };
+        eprintln!(
+            "  max |defect| of q {:.2e}, q̇ {:.2e}, l^M {:.2e}, a {:.2e}",
+            by_kind(0, 7),
+            by_kind(7, 14),
+            by_kind(14, 38),
+            by_kind(38, 62)
+        );
     }
-    for scheme in [Scheme::MidpointEuler, Scheme::Trapezoidal, Scheme::HermiteSimpson] {
+    for scheme in [
+        Scheme::MidpointEuler,
+        Scheme::Trapezoidal,
+        Scheme::HermiteSimpson,
+    ] {
         for threads in [1, 2] {
-            let mut tr = transcription(TranscriptionOptions { threads, scheme, ..Default::default() });
+            let mut tr = transcription(TranscriptionOptions {
+                threads,
+                scheme,
+                ..Default::default()
+            });
             let mut c = vec![0.0; tr.num_constraints()];
             let mut jv = vec![0.0; tr.jacobian_nnz()];
             let (mut tc, mut tj) = (vec![], vec![]);

@@ -55,7 +55,9 @@ impl std::str::FromStr for HessianMode {
         match s {
             "exact" | "exact_convexified" => Ok(HessianMode::ExactConvexified),
             "bfgs" | "partitioned_bfgs" => Ok(HessianMode::PartitionedBfgs),
-            _ => Err(format!("unknown Hessian mode '{s}' (expected 'exact' or 'bfgs')")),
+            _ => Err(format!(
+                "unknown Hessian mode '{s}' (expected 'exact' or 'bfgs')"
+            )),
         }
     }
 }
@@ -228,7 +230,10 @@ impl SqpResult {
 }
 
 /// Write iteration records as CSV (one header line, one row each).
-pub fn write_history_csv(history: &[IterationRecord], path: &std::path::Path) -> std::io::Result<()> {
+pub fn write_history_csv(
+    history: &[IterationRecord],
+    path: &std::path::Path,
+) -> std::io::Result<()> {
     use std::io::Write;
     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s")?;
@@ -236,7 +241,24 @@ pub fn write_history_csv(history: &[IterationRecord], path: &std::path::Path) ->
         writeln!(
             f,
             "{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e}",
-            r.iter, r.objective, r.inf_pr, r.inf_du, r.complementarity, r.step_norm, r.alpha, r.ls_trials, r.qp_iterations, r.qp_mode, r.penalty, r.merit, r.hessian_skips, r.derivatives_s, r.qp_s, r.line_search_s, r.hessian_s, r.time_s
+            r.iter,
+            r.objective,
+            r.inf_pr,
+            r.inf_du,
+            r.complementarity,
+            r.step_norm,
+            r.alpha,
+            r.ls_trials,
+            r.qp_iterations,
+            r.qp_mode,
+            r.penalty,
+            r.merit,
+            r.hessian_skips,
+            r.derivatives_s,
+            r.qp_s,
+            r.line_search_s,
+            r.hessian_s,
+            r.time_s
         )?;
     }
     f.flush()
@@ -265,13 +287,33 @@ impl Problem {
         let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
         nlp.constraint_bounds(&mut cl, &mut cu);
         for j in 0..n {
-            if xl[j].is_nan() || xu[j].is_nan() || xl[j] > xu[j] || xl[j] >= INFINITE_BOUND || xu[j] <= -INFINITE_BOUND {
-                return Err(format!("variable {}: bounds [{}, {}] are not a non-empty interval", nlp.variable_name(j), xl[j], xu[j]));
+            if xl[j].is_nan()
+                || xu[j].is_nan()
+                || xl[j] > xu[j]
+                || xl[j] >= INFINITE_BOUND
+                || xu[j] <= -INFINITE_BOUND
+            {
+                return Err(format!(
+                    "variable {}: bounds [{}, {}] are not a non-empty interval",
+                    nlp.variable_name(j),
+                    xl[j],
+                    xu[j]
+                ));
             }
         }
         for i in 0..m {
-            if cl[i].is_nan() || cu[i].is_nan() || cl[i] > cu[i] || cl[i] >= INFINITE_BOUND || cu[i] <= -INFINITE_BOUND {
-                return Err(format!("constraint {}: bounds [{}, {}] are not a non-empty interval", nlp.constraint_name(i), cl[i], cu[i]));
+            if cl[i].is_nan()
+                || cu[i].is_nan()
+                || cl[i] > cu[i]
+                || cl[i] >= INFINITE_BOUND
+                || cu[i] <= -INFINITE_BOUND
+            {
+                return Err(format!(
+                    "constraint {}: bounds [{}, {}] are not a non-empty interval",
+                    nlp.constraint_name(i),
+                    cl[i],
+                    cu[i]
+                ));
             }
         }
         let jac = nlp.jacobian_structure();
@@ -294,11 +336,27 @@ impl Problem {
         }
         for &(i, j) in &jac {
             if elements[owner[i]].variables.binary_search(&j).is_err() {
-                return Err(format!("Jacobian entry ({}, {}) lies outside the variables of element {}", nlp.constraint_name(i), nlp.variable_name(j), owner[i]));
+                return Err(format!(
+                    "Jacobian entry ({}, {}) lies outside the variables of element {}",
+                    nlp.constraint_name(i),
+                    nlp.variable_name(j),
+                    owner[i]
+                ));
             }
         }
         let objective_element = elements.iter().position(|e| e.objective);
-        Ok(Problem { n, m, xl, xu, cl, cu, jac, elements, owner, objective_element })
+        Ok(Problem {
+            n,
+            m,
+            xl,
+            xu,
+            cl,
+            cu,
+            jac,
+            elements,
+            owner,
+            objective_element,
+        })
     }
 
     fn violation(&self, c: &[f64]) -> (f64, f64) {
@@ -328,7 +386,10 @@ fn eval_fc<N: Nlp + ?Sized>(nlp: &mut N, x: &[f64], c: &mut [f64]) -> Result<f64
         return Err(EvalError::new("objective", format!("not finite ({f})")));
     }
     if let Some(i) = c.iter().position(|v| !v.is_finite()) {
-        return Err(EvalError::new("constraints", format!("{}: not finite ({})", nlp.constraint_name(i), c[i])));
+        return Err(EvalError::new(
+            "constraints",
+            format!("{}: not finite ({})", nlp.constraint_name(i), c[i]),
+        ));
     }
     Ok(f)
 }
@@ -337,7 +398,10 @@ fn eval_derivatives<N: Nlp + ?Sized>(nlp: &mut N, p: &mut Point) -> Result<(), E
     nlp.gradient(&p.x, &mut p.g)?;
     nlp.jacobian_values(&p.x, &mut p.jv)?;
     if let Some(j) = p.g.iter().position(|v| !v.is_finite()) {
-        return Err(EvalError::new("gradient", format!("{}: not finite", nlp.variable_name(j))));
+        return Err(EvalError::new(
+            "gradient",
+            format!("{}: not finite", nlp.variable_name(j)),
+        ));
     }
     if p.jv.iter().any(|v| !v.is_finite()) {
         return Err(EvalError::new("jacobian", "an entry is not finite"));
@@ -347,7 +411,13 @@ fn eval_derivatives<N: Nlp + ?Sized>(nlp: &mut N, p: &mut Point) -> Result<(), E
 
 /// Gradients of every element's part of the Lagrangian, σ∇f (objective
 /// element) + Σ_{i∈e} λ_i ∇c_i, over the element's variables: O(nnz + Σk).
-fn all_element_gradients(pb: &Problem, g: &[f64], jv: &[f64], lambda: &[f64], out: &mut [Vec<f64>]) {
+fn all_element_gradients(
+    pb: &Problem,
+    g: &[f64],
+    jv: &[f64],
+    lambda: &[f64],
+    out: &mut [Vec<f64>],
+) {
     for (e, el) in pb.elements.iter().enumerate() {
         out[e].iter_mut().for_each(|v| *v = 0.0);
         if pb.objective_element == Some(e) {
@@ -373,7 +443,11 @@ fn convexify(h: &mut [f64], k: usize, delta: f64) {
     let m = DMatrix::from_row_slice(k, k, h);
     let m = (&m + m.transpose()) * 0.5;
     let eig = SymmetricEigen::new(m);
-    let scale = eig.eigenvalues.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1.0);
+    let scale = eig
+        .eigenvalues
+        .iter()
+        .fold(0.0f64, |a, v| a.max(v.abs()))
+        .max(1.0);
     let vals = eig.eigenvalues.map(|v| v.abs().max(delta * scale));
     let r = &eig.eigenvectors * DMatrix::from_diagonal(&vals) * eig.eigenvectors.transpose();
     for a in 0..k {
@@ -413,8 +487,14 @@ fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
     if sbs <= 1e-300 {
         return false;
     }
-    let theta = if sy >= 0.2 * sbs { 1.0 } else { 0.8 * sbs / (sbs - sy) };
-    let r: Vec<f64> = (0..k).map(|a| theta * y[a] + (1.0 - theta) * bs[a]).collect();
+    let theta = if sy >= 0.2 * sbs {
+        1.0
+    } else {
+        0.8 * sbs / (sbs - sy)
+    };
+    let r: Vec<f64> = (0..k)
+        .map(|a| theta * y[a] + (1.0 - theta) * bs[a])
+        .collect();
     let sr: f64 = s.iter().zip(&r).map(|(a, b)| a * b).sum();
     if sr <= 1e-300 {
         return false;
@@ -463,7 +543,11 @@ fn measures(pb: &Problem, p: &Point, lambda: &[f64], zeta: &[f64]) -> Measures {
             continue;
         }
         let l = lambda[i];
-        let slack = if l > 0.0 { pb.cu[i] - p.c[i] } else { p.c[i] - pb.cl[i] };
+        let slack = if l > 0.0 {
+            pb.cu[i] - p.c[i]
+        } else {
+            p.c[i] - pb.cl[i]
+        };
         if slack.is_finite() {
             compl = compl.max((l * slack).abs());
         }
@@ -473,12 +557,19 @@ fn measures(pb: &Problem, p: &Point, lambda: &[f64], zeta: &[f64]) -> Measures {
             continue;
         }
         let z = zeta[j];
-        let slack = if z > 0.0 { pb.xu[j] - p.x[j] } else { p.x[j] - pb.xl[j] };
+        let slack = if z > 0.0 {
+            pb.xu[j] - p.x[j]
+        } else {
+            p.x[j] - pb.xl[j]
+        };
         if slack.is_finite() && slack.abs() < INFINITE_BOUND {
             compl = compl.max((z * slack).abs());
         }
     }
-    Measures { inf_du: norm_inf(&r) / s_d, compl: compl / s_d }
+    Measures {
+        inf_du: norm_inf(&r) / s_d,
+        compl: compl / s_d,
+    }
 }
 
 /// Solve `nlp` from its initial point.
@@ -517,7 +608,11 @@ pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         }
     };
     if x0.len() != pb.n {
-        result.message = format!("initial point has {} entries, the problem {} variables", x0.len(), pb.n);
+        result.message = format!(
+            "initial point has {} entries, the problem {} variables",
+            x0.len(),
+            pb.n
+        );
         return result;
     }
     if hessian == HessianMode::ExactConvexified && !nlp.has_hessian() {
@@ -529,7 +624,11 @@ pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         solver.run(nlp, x0, &mut result, start);
         return result;
     }
-    let x0p: Vec<f64> = x0.iter().enumerate().map(|(j, &v)| v.clamp(pb.xl[j], pb.xu[j])).collect();
+    let x0p: Vec<f64> = x0
+        .iter()
+        .enumerate()
+        .map(|(j, &v)| v.clamp(pb.xl[j], pb.xu[j]))
+        .collect();
     let mut scaled = GradientScaled::new(nlp, &x0p, pb.jac.clone());
     let pb = match Problem::read(&scaled) {
         Ok(pb) => pb,
@@ -554,7 +653,9 @@ pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
     if nlp.constraints(&result.x, &mut c).is_ok() {
         let (mut cl, mut cu) = (vec![0.0; c.len()], vec![0.0; c.len()]);
         nlp.constraint_bounds(&mut cl, &mut cu);
-        result.constraint_violation = (0..c.len()).map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0)).fold(0.0, f64::max);
+        result.constraint_violation = (0..c.len())
+            .map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0))
+            .fold(0.0, f64::max);
     }
     result
 }
@@ -574,9 +675,19 @@ struct GradientScaled<'a, N: Nlp + ?Sized> {
 impl<'a, N: Nlp + ?Sized> GradientScaled<'a, N> {
     fn new(inner: &'a mut N, x0: &[f64], jac: Vec<(usize, usize)>) -> Self {
         let (n, m) = (inner.num_variables(), inner.num_constraints());
-        let factor = |max: f64| if max.is_finite() && max > 100.0 { (100.0 / max).max(1e-8) } else { 1.0 };
+        let factor = |max: f64| {
+            if max.is_finite() && max > 100.0 {
+                (100.0 / max).max(1e-8)
+            } else {
+                1.0
+            }
+        };
         let mut g = vec![0.0; n];
-        let sf = if inner.gradient(x0, &mut g).is_ok() { factor(norm_inf(&g)) } else { 1.0 };
+        let sf = if inner.gradient(x0, &mut g).is_ok() {
+            factor(norm_inf(&g))
+        } else {
+            1.0
+        };
         let mut jv = vec![0.0; jac.len()];
         let mut row_max = vec![0.0f64; m];
         if inner.jacobian_values(x0, &mut jv).is_ok() {
@@ -585,7 +696,13 @@ impl<'a, N: Nlp + ?Sized> GradientScaled<'a, N> {
             }
         }
         let sc = row_max.into_iter().map(factor).collect();
-        GradientScaled { inner, sf, sc, jac_rows: jac.into_iter().map(|(i, _)| i).collect(), lambda: vec![0.0; m] }
+        GradientScaled {
+            inner,
+            sf,
+            sc,
+            jac_rows: jac.into_iter().map(|(i, _)| i).collect(),
+            lambda: vec![0.0; m],
+        }
     }
 }
 
@@ -638,11 +755,19 @@ impl<N: Nlp + ?Sized> Nlp for GradientScaled<'_, N> {
     fn has_hessian(&self) -> bool {
         self.inner.has_hessian()
     }
-    fn element_hessian(&mut self, x: &[f64], e: usize, sigma: f64, lambda: &[f64], h: &mut [f64]) -> Result<(), EvalError> {
+    fn element_hessian(
+        &mut self,
+        x: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
         for i in 0..lambda.len() {
             self.lambda[i] = lambda[i] * self.sc[i];
         }
-        self.inner.element_hessian(x, e, sigma * self.sf, &self.lambda, h)
+        self.inner
+            .element_hessian(x, e, sigma * self.sf, &self.lambda, h)
     }
     fn variable_name(&self, i: usize) -> String {
         self.inner.variable_name(i)
@@ -678,11 +803,21 @@ impl<'s> Solver<'s> {
             })
             .collect();
         let bfgs_first = vec![true; pb.elements.len()];
-        Solver { pb, mode, settings, blocks, bfgs_first, qp: None, qp_elastic: None }
+        Solver {
+            pb,
+            mode,
+            settings,
+            blocks,
+            bfgs_first,
+            qp: None,
+            qp_elastic: None,
+        }
     }
 
     fn dump(&self, elastic: bool, iter: usize, what: &str) -> String {
-        let Some(dir) = &self.settings.qp_dump_dir else { return String::new() };
+        let Some(dir) = &self.settings.qp_dump_dir else {
+            return String::new();
+        };
         let qp = if elastic { &self.qp_elastic } else { &self.qp };
         let Some(qp) = qp else { return String::new() };
         if let Err(e) = std::fs::create_dir_all(dir) {
@@ -698,14 +833,43 @@ impl<'s> Solver<'s> {
     /// Set the QP's vectors and matrices and solve; `c` stands for the
     /// constraint values (the second-order correction passes others).
     #[allow(clippy::too_many_arguments)]
-    fn solve_qp(&mut self, elastic: bool, p: &Point, c: &[f64], g_override: Option<&[f64]>, delta: f64, rho: f64, refresh_matrices: bool) -> Result<QpOutcome, String> {
-        let Solver { pb, blocks, qp, qp_elastic, settings, .. } = self;
+    fn solve_qp(
+        &mut self,
+        elastic: bool,
+        p: &Point,
+        c: &[f64],
+        g_override: Option<&[f64]>,
+        delta: f64,
+        rho: f64,
+        refresh_matrices: bool,
+    ) -> Result<QpOutcome, String> {
+        let Solver {
+            pb,
+            blocks,
+            qp,
+            qp_elastic,
+            settings,
+            ..
+        } = self;
         let slot = if elastic { qp_elastic } else { qp };
         let qp = slot.get_or_insert_with(|| {
-            let qp = Qp::new(&pb.xl, &pb.xu, &pb.cl, &pb.cu, &pb.jac, &pb.elements, elastic, settings.qp_tolerance, settings.qp_equilibrate);
+            let qp = Qp::new(
+                &pb.xl,
+                &pb.xu,
+                &pb.cl,
+                &pb.cu,
+                &pb.jac,
+                &pb.elements,
+                elastic,
+                settings.qp_tolerance,
+                settings.qp_equilibrate,
+            );
             if settings.verbose {
                 let (nv, rows, nnz_p, nnz_a) = qp.size();
-                eprintln!("{} QP: {nv} variables, {rows} rows, nnz(P) {nnz_p}, nnz(A) {nnz_a}", if elastic { "elastic" } else { "plain" });
+                eprintln!(
+                    "{} QP: {nv} variables, {rows} rows, nnz(P) {nnz_p}, nnz(A) {nnz_a}",
+                    if elastic { "elastic" } else { "plain" }
+                );
             }
             qp
         });
@@ -713,11 +877,28 @@ impl<'s> Solver<'s> {
             qp.set_hessian(blocks, &pb.elements, 0.0);
             qp.set_jacobian(&p.jv);
         }
-        qp.set_vectors(g_override.unwrap_or(&p.g), c, &p.x, &pb.xl, &pb.xu, &pb.cl, &pb.cu, delta, rho);
+        qp.set_vectors(
+            g_override.unwrap_or(&p.g),
+            c,
+            &p.x,
+            &pb.xl,
+            &pb.xu,
+            &pb.cl,
+            &pb.cu,
+            delta,
+            rho,
+        );
         qp.solve()
     }
 
-    fn update_hessian<N: Nlp + ?Sized>(&mut self, nlp: &mut N, p: &Point, lambda: &[f64], prev: Option<(&Point, &[Vec<f64>])>, skips: &mut usize) -> Result<(), EvalError> {
+    fn update_hessian<N: Nlp + ?Sized>(
+        &mut self,
+        nlp: &mut N,
+        p: &Point,
+        lambda: &[f64],
+        prev: Option<(&Point, &[Vec<f64>])>,
+        skips: &mut usize,
+    ) -> Result<(), EvalError> {
         match self.mode {
             HessianMode::ExactConvexified => {
                 for (e, el) in self.pb.elements.iter().enumerate() {
@@ -725,18 +906,32 @@ impl<'s> Solver<'s> {
                     let b = &mut self.blocks[e];
                     nlp.element_hessian(&p.x, e, 1.0, lambda, b)?;
                     if b.iter().any(|v| !v.is_finite()) {
-                        return Err(EvalError::new("hessian", format!("element {e}: an entry is not finite")));
+                        return Err(EvalError::new(
+                            "hessian",
+                            format!("element {e}: an entry is not finite"),
+                        ));
                     }
                     convexify(b, k, 1e-8);
                 }
             }
             HessianMode::PartitionedBfgs => {
-                let Some((old, old_grads)) = prev else { return Ok(()) };
-                let mut new_grads: Vec<Vec<f64>> = self.pb.elements.iter().map(|el| vec![0.0; el.variables.len()]).collect();
+                let Some((old, old_grads)) = prev else {
+                    return Ok(());
+                };
+                let mut new_grads: Vec<Vec<f64>> = self
+                    .pb
+                    .elements
+                    .iter()
+                    .map(|el| vec![0.0; el.variables.len()])
+                    .collect();
                 all_element_gradients(&self.pb, &p.g, &p.jv, lambda, &mut new_grads);
                 for (e, el) in self.pb.elements.iter().enumerate() {
                     let s: Vec<f64> = el.variables.iter().map(|&j| p.x[j] - old.x[j]).collect();
-                    let y: Vec<f64> = new_grads[e].iter().zip(&old_grads[e]).map(|(a, b)| a - b).collect();
+                    let y: Vec<f64> = new_grads[e]
+                        .iter()
+                        .zip(&old_grads[e])
+                        .map(|(a, b)| a - b)
+                        .collect();
                     if !bfgs_update(&mut self.blocks[e], &s, &y, &mut self.bfgs_first[e]) {
                         *skips += 1;
                     }
@@ -746,16 +941,32 @@ impl<'s> Solver<'s> {
         Ok(())
     }
 
-    fn run<N: Nlp + ?Sized>(&mut self, nlp: &mut N, x0: &[f64], result: &mut SqpResult, start: Instant) {
+    fn run<N: Nlp + ?Sized>(
+        &mut self,
+        nlp: &mut N,
+        x0: &[f64],
+        result: &mut SqpResult,
+        start: Instant,
+    ) {
         let (n, m) = (self.pb.n, self.pb.m);
         let st = self.settings;
-        let mut x: Vec<f64> = x0.iter().enumerate().map(|(j, &v)| v.clamp(self.pb.xl[j], self.pb.xu[j])).collect();
+        let mut x: Vec<f64> = x0
+            .iter()
+            .enumerate()
+            .map(|(j, &v)| v.clamp(self.pb.xl[j], self.pb.xu[j]))
+            .collect();
         if x.iter().any(|v| !v.is_finite()) {
             result.status = SqpStatus::InvalidProblem;
             result.message = "the initial point is not finite".into();
             return;
         }
-        let mut p = Point { x: std::mem::take(&mut x), f: 0.0, c: vec![0.0; m], g: vec![0.0; n], jv: vec![0.0; self.pb.jac.len()] };
+        let mut p = Point {
+            x: std::mem::take(&mut x),
+            f: 0.0,
+            c: vec![0.0; m],
+            g: vec![0.0; n],
+            jv: vec![0.0; self.pb.jac.len()],
+        };
         let mut time = TimeSplit::default();
         let t = Instant::now();
         match eval_fc(nlp, &p.x, &mut p.c) {
@@ -779,7 +990,14 @@ impl<'s> Solver<'s> {
         let mut acceptable_count = 0usize;
         let mut last_f = f64::NAN;
         let mut skips = 0usize;
-        let finish = |result: &mut SqpResult, status: SqpStatus, msg: String, p: &Point, lambda: &[f64], zeta: &[f64], time: &mut TimeSplit, pb: &Problem| {
+        let finish = |result: &mut SqpResult,
+                      status: SqpStatus,
+                      msg: String,
+                      p: &Point,
+                      lambda: &[f64],
+                      zeta: &[f64],
+                      time: &mut TimeSplit,
+                      pb: &Problem| {
             result.status = status;
             result.message = msg;
             result.x = p.x.clone();
@@ -788,17 +1006,34 @@ impl<'s> Solver<'s> {
             result.objective = p.f;
             result.constraint_violation = pb.violation(&p.c).1;
             time.total_s = start.elapsed().as_secs_f64();
-            time.other_s = (time.total_s - time.derivatives_s - time.hessian_s - time.qp_s - time.line_search_s).max(0.0);
+            time.other_s = (time.total_s
+                - time.derivatives_s
+                - time.hessian_s
+                - time.qp_s
+                - time.line_search_s)
+                .max(0.0);
             result.time = *time;
         };
         for iter in 0..=st.max_iterations {
-            let mut rec = IterationRecord { iter, ..Default::default() };
+            let mut rec = IterationRecord {
+                iter,
+                ..Default::default()
+            };
             // Derivatives at the iterate.
             let t = Instant::now();
             if let Err(e) = eval_derivatives(nlp, &mut p) {
                 let dt = t.elapsed().as_secs_f64();
                 time.derivatives_s += dt;
-                finish(result, SqpStatus::EvaluationError, e.to_string(), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::EvaluationError,
+                    e.to_string(),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             rec.derivatives_s = t.elapsed().as_secs_f64();
@@ -812,30 +1047,84 @@ impl<'s> Solver<'s> {
             rec.complementarity = ms.compl;
             result.dual_infeasibility = ms.inf_du;
             result.iterations = iter;
-            let solved = iter > 0 && inf_pr <= st.optim_constraint_tolerance && ms.inf_du <= st.optim_convergence_tolerance && ms.compl <= st.optim_convergence_tolerance;
-            let paper = st.paper_criterion && iter > 0 && inf_pr <= 1e-3 && (p.f - last_f).abs() < 1e-6 * (1.0 + p.f.abs());
-            let acceptable = iter > 0 && inf_pr <= st.acceptable_constraint_tolerance && ms.inf_du <= st.acceptable_convergence_tolerance && ms.compl <= st.acceptable_convergence_tolerance;
+            let solved = iter > 0
+                && inf_pr <= st.optim_constraint_tolerance
+                && ms.inf_du <= st.optim_convergence_tolerance
+                && ms.compl <= st.optim_convergence_tolerance;
+            let paper = st.paper_criterion
+                && iter > 0
+                && inf_pr <= 1e-3
+                && (p.f - last_f).abs() < 1e-6 * (1.0 + p.f.abs());
+            let acceptable = iter > 0
+                && inf_pr <= st.acceptable_constraint_tolerance
+                && ms.inf_du <= st.acceptable_convergence_tolerance
+                && ms.compl <= st.acceptable_convergence_tolerance;
             acceptable_count = if acceptable { acceptable_count + 1 } else { 0 };
             last_f = p.f;
             if solved || paper {
                 self.log(&rec, start, result);
-                let msg = if solved { "optimal solution found" } else { "objective change below 1e-6 with constraints within 1e-3 (Porsa et al. 2016)" };
-                finish(result, SqpStatus::Solved, msg.into(), &p, &lambda, &zeta, &mut time, &self.pb);
+                let msg = if solved {
+                    "optimal solution found"
+                } else {
+                    "objective change below 1e-6 with constraints within 1e-3 (Porsa et al. 2016)"
+                };
+                finish(
+                    result,
+                    SqpStatus::Solved,
+                    msg.into(),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             if acceptable_count >= st.acceptable_iterations.max(1) {
                 self.log(&rec, start, result);
-                finish(result, SqpStatus::Acceptable, format!("acceptable level met for {acceptable_count} consecutive iterations"), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::Acceptable,
+                    format!("acceptable level met for {acceptable_count} consecutive iterations"),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
-            if inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0) && p.f < st.unbounded_objective {
+            if inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0)
+                && p.f < st.unbounded_objective
+            {
                 self.log(&rec, start, result);
-                finish(result, SqpStatus::Unbounded, format!("objective {:e} below {:e} at a feasible point", p.f, st.unbounded_objective), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::Unbounded,
+                    format!(
+                        "objective {:e} below {:e} at a feasible point",
+                        p.f, st.unbounded_objective
+                    ),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             if iter == st.max_iterations {
                 self.log(&rec, start, result);
-                finish(result, SqpStatus::IterationLimit, format!("{} iterations", st.max_iterations), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::IterationLimit,
+                    format!("{} iterations", st.max_iterations),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             // Hessian model.
@@ -843,7 +1132,16 @@ impl<'s> Solver<'s> {
             let old_grads = prev.as_ref().map(|(o, g)| (o, g.as_slice()));
             if let Err(e) = self.update_hessian(nlp, &p, &lambda, old_grads, &mut skips) {
                 time.hessian_s += t.elapsed().as_secs_f64();
-                finish(result, SqpStatus::EvaluationError, e.to_string(), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::EvaluationError,
+                    e.to_string(),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             rec.hessian_s = t.elapsed().as_secs_f64();
@@ -858,21 +1156,30 @@ impl<'s> Solver<'s> {
             let mut elastic = false;
             let mut outcome = self.solve_qp(false, &p, &p.c, None, delta, rho, true);
             let mut qp_its = self.qp.as_ref().map_or(0, |q| q.iterations);
-            if matches!(outcome, Ok(QpOutcome::Infeasible) | Ok(QpOutcome::Failed(_))) {
+            if matches!(
+                outcome,
+                Ok(QpOutcome::Infeasible) | Ok(QpOutcome::Failed(_))
+            ) {
                 elastic = true;
                 outcome = self.solve_qp(true, &p, &p.c, None, delta, rho, true);
                 qp_its += self.qp_elastic.as_ref().map_or(0, |q| q.iterations);
             }
             rec.qp_s = t.elapsed().as_secs_f64();
             time.qp_s += rec.qp_s;
-            rec.qp_mode = if elastic { "elastic".into() } else { "ok".into() };
+            rec.qp_mode = if elastic {
+                "elastic".into()
+            } else {
+                "ok".into()
+            };
             if st.qp_dump_every {
                 self.dump(elastic, iter, "qp");
             }
             if let Some(msg) = qp_failure(&outcome) {
                 // A QP that fails at a huge step bound after the objective
                 // kept falling at feasible points: diverging iterates.
-                let diverging = delta >= 1e6 * scale_x && inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0) && p.f < f_first - 1e6 * (1.0 + f_first.abs()) * f64::EPSILON.sqrt();
+                let diverging = delta >= 1e6 * scale_x
+                    && inf_pr <= st.optim_constraint_tolerance * norm_inf(&p.x).max(1.0)
+                    && p.f < f_first - 1e6 * (1.0 + f_first.abs()) * f64::EPSILON.sqrt();
                 if diverging {
                     rec.qp_mode = "failed".into();
                     rec.qp_iterations = qp_its;
@@ -884,7 +1191,16 @@ impl<'s> Solver<'s> {
                 rec.qp_mode = "failed".into();
                 rec.qp_iterations = qp_its;
                 self.log(&rec, start, result);
-                finish(result, SqpStatus::NumericalError, format!("QP subproblem at iteration {iter}: {msg}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                finish(
+                    result,
+                    SqpStatus::NumericalError,
+                    format!("QP subproblem at iteration {iter}: {msg}{dump}"),
+                    &p,
+                    &lambda,
+                    &zeta,
+                    &mut time,
+                    &self.pb,
+                );
                 return;
             }
             // Elastic mode: the slacks must take up only what the
@@ -899,7 +1215,9 @@ impl<'s> Solver<'s> {
                 let zero = vec![0.0; n];
                 let feas = self.solve_qp(true, &p, &p.c, Some(&zero), delta, 1.0, false);
                 let least = match feas {
-                    Ok(QpOutcome::Solved) => self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum),
+                    Ok(QpOutcome::Solved) => {
+                        self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum)
+                    }
                     // No verdict without a solved feasibility QP.
                     _ => f64::NAN,
                 };
@@ -919,7 +1237,16 @@ impl<'s> Solver<'s> {
                             time.qp_s += t.elapsed().as_secs_f64();
                             let dump = self.dump(true, iter, "failed");
                             self.log(&rec, start, result);
-                            finish(result, SqpStatus::NumericalError, format!("elastic QP subproblem at iteration {iter}: {msg}{dump}"), &p, &lambda, &zeta, &mut time, &self.pb);
+                            finish(
+                                result,
+                                SqpStatus::NumericalError,
+                                format!("elastic QP subproblem at iteration {iter}: {msg}{dump}"),
+                                &p,
+                                &lambda,
+                                &zeta,
+                                &mut time,
+                                &self.pb,
+                            );
                             return;
                         }
                         let got = viol1 - self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum);
@@ -936,7 +1263,12 @@ impl<'s> Solver<'s> {
             }
             rec.qp_iterations = qp_its;
             result.qp_iterations += qp_its as u64;
-            let qp = if elastic { self.qp_elastic.as_ref() } else { self.qp.as_ref() }.expect("solved above");
+            let qp = if elastic {
+                self.qp_elastic.as_ref()
+            } else {
+                self.qp.as_ref()
+            }
+            .expect("solved above");
             let d = qp.d.clone();
             let (lam_qp, zeta_qp) = (qp.lambda.clone(), qp.zeta.clone());
             let slack_sum = if elastic { qp.slack_sum } else { 0.0 };
@@ -987,7 +1319,12 @@ impl<'s> Solver<'s> {
                     }
                     // Second-order correction (Nocedal & Wright §18.3)
                     // when the full step made the constraints worse.
-                    if alpha == 1.0 && st.second_order_correction && !soc_tried && v1 > viol1 && !elastic {
+                    if alpha == 1.0
+                        && st.second_order_correction
+                        && !soc_tried
+                        && v1 > viol1
+                        && !elastic
+                    {
                         soc_tried = true;
                         // c_soc = c(x + d) − J d, so the QP's rows read
                         // J d̂ + c(x+d) − J d within bounds.
@@ -1005,7 +1342,9 @@ impl<'s> Solver<'s> {
                         if let Ok(QpOutcome::Solved) = soc {
                             let q = self.qp.as_ref().expect("solved");
                             let d2 = q.d.clone();
-                            let soc_x: Vec<f64> = (0..n).map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j])).collect();
+                            let soc_x: Vec<f64> = (0..n)
+                                .map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j]))
+                                .collect();
                             let mut soc_c = vec![0.0; m];
                             if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
                                 let (v2, _) = self.pb.violation(&soc_c);
@@ -1032,14 +1371,28 @@ impl<'s> Solver<'s> {
             let Some((xn, fn_, cn)) = accepted else {
                 self.log(&rec, start, result);
                 // No decrease possible along d.
-                let (status, msg) = if dnorm <= 1e-12 * scale_x && inf_pr <= st.acceptable_constraint_tolerance {
-                    (SqpStatus::Acceptable, "step below 1e-12 at a feasible point".to_string())
+                let (status, msg) = if dnorm <= 1e-12 * scale_x
+                    && inf_pr <= st.acceptable_constraint_tolerance
+                {
+                    (
+                        SqpStatus::Acceptable,
+                        "step below 1e-12 at a feasible point".to_string(),
+                    )
                 } else if acceptable {
-                    (SqpStatus::Acceptable, "no further progress; acceptable level met".to_string())
+                    (
+                        SqpStatus::Acceptable,
+                        "no further progress; acceptable level met".to_string(),
+                    )
                 } else if inf_pr > st.optim_constraint_tolerance {
-                    (SqpStatus::RestorationFailed, format!("line search failed at an infeasible point (violation {inf_pr:e})"))
+                    (
+                        SqpStatus::RestorationFailed,
+                        format!("line search failed at an infeasible point (violation {inf_pr:e})"),
+                    )
                 } else {
-                    (SqpStatus::LineSearchFailed, "line search failed at a feasible point".to_string())
+                    (
+                        SqpStatus::LineSearchFailed,
+                        "line search failed at a feasible point".to_string(),
+                    )
                 };
                 finish(result, status, msg, &p, &lambda, &zeta, &mut time, &self.pb);
                 return;
@@ -1061,13 +1414,27 @@ impl<'s> Solver<'s> {
             zeta.copy_from_slice(&zeta_qp);
             // Element gradients at the old point with the new λ, for BFGS.
             let grads = if self.mode == HessianMode::PartitionedBfgs {
-                let mut g: Vec<Vec<f64>> = self.pb.elements.iter().map(|el| vec![0.0; el.variables.len()]).collect();
+                let mut g: Vec<Vec<f64>> = self
+                    .pb
+                    .elements
+                    .iter()
+                    .map(|el| vec![0.0; el.variables.len()])
+                    .collect();
                 all_element_gradients(&self.pb, &p.g, &p.jv, &lambda, &mut g);
                 g
             } else {
                 Vec::new()
             };
-            let old = std::mem::replace(&mut p, Point { x: xn, f: fn_, c: cn, g: vec![0.0; n], jv: vec![0.0; self.pb.jac.len()] });
+            let old = std::mem::replace(
+                &mut p,
+                Point {
+                    x: xn,
+                    f: fn_,
+                    c: cn,
+                    g: vec![0.0; n],
+                    jv: vec![0.0; self.pb.jac.len()],
+                },
+            );
             prev = Some((old, grads));
         }
     }

@@ -15,7 +15,10 @@
 
 use crate::nlp::{Element, INFINITE_BOUND};
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus, SupportedConeT, ZeroConeT};
+use clarabel::solver::{
+    DefaultSettings, DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT,
+    SolverStatus, SupportedConeT, ZeroConeT,
+};
 use std::path::Path;
 
 /// What a row of A stands for.
@@ -198,7 +201,15 @@ impl Qp {
         }
         let a_jac = a_jac_entry
             .iter()
-            .map(|slots| slots.map(|(e, s)| if e == usize::MAX { (usize::MAX, 0.0) } else { (index[e], s) }))
+            .map(|slots| {
+                slots.map(|(e, s)| {
+                    if e == usize::MAX {
+                        (usize::MAX, 0.0)
+                    } else {
+                        (index[e], s)
+                    }
+                })
+            })
             .collect();
         // P: the diagonal, then each element's upper triangle (merged).
         let mut p_entries: Vec<(usize, usize)> = (0..n).map(|j| (j, j)).collect();
@@ -225,7 +236,10 @@ impl Qp {
         }
         let (p, pindex) = csc(nz, nz, &p_entries);
         let p_diag = (0..n).map(|j| pindex[j]).collect();
-        let p_elem = p_elem.into_iter().map(|map| map.into_iter().map(|e| pindex[e]).collect()).collect();
+        let p_elem = p_elem
+            .into_iter()
+            .map(|map| map.into_iter().map(|e| pindex[e]).collect())
+            .collect();
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
             .max_threads(1)
@@ -270,7 +284,12 @@ impl Qp {
 
     /// Variables, rows, non-zeros of P (upper triangle) and of A.
     pub fn size(&self) -> (usize, usize, usize, usize) {
-        (self.nz, self.rows.len(), self.p.nzval.len(), self.a.nzval.len())
+        (
+            self.nz,
+            self.rows.len(),
+            self.p.nzval.len(),
+            self.a.nzval.len(),
+        )
     }
 
     /// Fill P from the element matrices (row-major k×k, both triangles),
@@ -307,7 +326,18 @@ impl Qp {
     /// second-order-correction substitute), bounds, step bound `delta`,
     /// elastic penalty `rho`.
     #[allow(clippy::too_many_arguments)]
-    pub fn set_vectors(&mut self, g: &[f64], c: &[f64], x: &[f64], x_lower: &[f64], x_upper: &[f64], c_lower: &[f64], c_upper: &[f64], delta: f64, rho: f64) {
+    pub fn set_vectors(
+        &mut self,
+        g: &[f64],
+        c: &[f64],
+        x: &[f64],
+        x_lower: &[f64],
+        x_upper: &[f64],
+        c_lower: &[f64],
+        c_upper: &[f64],
+        delta: f64,
+        rho: f64,
+    ) {
         self.q[..self.n].copy_from_slice(g);
         for v in &mut self.q[self.n..] {
             *v = rho;
@@ -339,8 +369,19 @@ impl Qp {
                 s.update_b(&self.b).map_err(|e| e.to_string())?;
             }
             None => {
-                let cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(self.num_eq), NonnegativeConeT(self.rows.len() - self.num_eq)];
-                let s = DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &cones, self.settings.clone()).map_err(|e| e.to_string())?;
+                let cones: Vec<SupportedConeT<f64>> = vec![
+                    ZeroConeT(self.num_eq),
+                    NonnegativeConeT(self.rows.len() - self.num_eq),
+                ];
+                let s = DefaultSolver::new(
+                    &self.p,
+                    &self.q,
+                    &self.a,
+                    &self.b,
+                    &cones,
+                    self.settings.clone(),
+                )
+                .map_err(|e| e.to_string())?;
                 self.solver = Some(s);
             }
         }
@@ -350,7 +391,9 @@ impl Qp {
         let status = s.solution.status;
         match status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Ok(QpOutcome::Infeasible),
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+                return Ok(QpOutcome::Infeasible)
+            }
             other => return Ok(QpOutcome::Failed(other)),
         }
         let (x, z, sl) = (&s.solution.x, &s.solution.z, &s.solution.s);
@@ -388,9 +431,21 @@ impl Qp {
     /// Write the QP with its current values as clarabel JSON.
     pub fn dump(&self, path: &Path) -> Result<(), String> {
         use clarabel::solver::SolverJSONReadWrite;
-        let cones: Vec<SupportedConeT<f64>> = vec![ZeroConeT(self.num_eq), NonnegativeConeT(self.rows.len() - self.num_eq)];
-        let s = DefaultSolver::new(&self.p, &self.q, &self.a, &self.b, &cones, self.settings.clone()).map_err(|e| e.to_string())?;
+        let cones: Vec<SupportedConeT<f64>> = vec![
+            ZeroConeT(self.num_eq),
+            NonnegativeConeT(self.rows.len() - self.num_eq),
+        ];
+        let s = DefaultSolver::new(
+            &self.p,
+            &self.q,
+            &self.a,
+            &self.b,
+            &cones,
+            self.settings.clone(),
+        )
+        .map_err(|e| e.to_string())?;
         let mut f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        s.save_to_file(&mut f).map_err(|e| format!("{}: {e}", path.display()))
+        s.save_to_file(&mut f)
+            .map_err(|e| format!("{}: {e}", path.display()))
     }
 }

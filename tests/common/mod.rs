@@ -12,9 +12,21 @@ use leap::scalar::Scalar;
 pub struct TestLaws(pub Model);
 
 impl<S: Scalar> ForceLaws<S> for TestLaws {
-    fn muscle(&self, m: usize, a: S, lm: S, lmt: S, vmt: S, u: S) -> Result<MuscleRates<S>, String> {
+    fn muscle(
+        &self,
+        m: usize,
+        a: S,
+        lm: S,
+        lmt: S,
+        vmt: S,
+        u: S,
+    ) -> Result<MuscleRates<S>, String> {
         let f0 = self.0.muscles[m].spec.max_isometric_force;
-        Ok(MuscleRates { tendon_force: a * lmt * (f0 / 0.3), fiber_velocity: vmt * 0.5 - lm * 0.1, activation_rate: (u - a) * 25.0 })
+        Ok(MuscleRates {
+            tendon_force: a * lmt * (f0 / 0.3),
+            fiber_velocity: vmt * 0.5 - lm * 0.1,
+            activation_rate: (u - a) * 25.0,
+        })
     }
     fn sphere(&self, _k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
         let r = 0.032;
@@ -29,4 +41,3 @@ impl<S: Scalar> ForceLaws<S> for TestLaws {
         q * -3.0 - qd * 0.1
     }
 }
-
