@@ -4,7 +4,11 @@ use leap::sqp::{solve, SqpSettings};
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let p = leap::testset::by_name(&args[1]).expect("unknown problem");
-    let mode = args.get(2).map(|s| s.parse().expect("mode"));
+    let mode = args
+        .get(2)
+        .map_or(leap::sqp::HessianMode::PartitionedBfgs, |s| {
+            s.parse().expect("mode: exact or bfgs")
+        });
     let tol = args.get(3).map(|s| s.parse().expect("tol")).unwrap_or(1e-6);
     let r = solve(
         &mut AdNlp::new(p),

@@ -451,7 +451,7 @@ pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
     let mut rows = Vec::new();
     for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
         let settings = SqpSettings {
-            hessian: Some(mode),
+            hessian: mode,
             ..Default::default()
         };
         let mut runs = Vec::new();
@@ -575,7 +575,7 @@ pub fn sqp_jump(
         .map_err(|e| e.to_string())?;
     let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
     let settings = crate::sqp::SqpSettings {
-        hessian: Some(hessian),
+        hessian,
         max_iterations: iterations,
         qp_equilibrate,
         ..Default::default()

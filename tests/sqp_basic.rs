@@ -5,36 +5,10 @@ use leap::nlp::{AdNlp, AdProblem};
 use leap::scalar::Scalar;
 use leap::sqp::{solve, HessianMode, SqpSettings, SqpStatus};
 
-/// HS071 (Hock & Schittkowski 1981, problem 71): f* = 17.0140173.
-struct Hs071;
-impl AdProblem for Hs071 {
-    fn name(&self) -> String {
-        "hs071".into()
-    }
-    fn num_variables(&self) -> usize {
-        4
-    }
-    fn num_constraints(&self) -> usize {
-        2
-    }
-    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        l.fill(1.0);
-        u.fill(5.0);
-    }
-    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
-        l[0] = 25.0;
-        u[0] = f64::INFINITY;
-        l[1] = 40.0;
-        u[1] = 40.0;
-    }
-    fn initial_point(&self, x: &mut [f64]) {
-        x.copy_from_slice(&[1.0, 5.0, 5.0, 1.0]);
-    }
-    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
-        c[0] = x[0] * x[1] * x[2] * x[3];
-        c[1] = x[0] * x[0] + x[1] * x[1] + x[2] * x[2] + x[3] * x[3];
-        x[0] * x[3] * (x[0] + x[1] + x[2]) + x[2]
-    }
+/// HS071 from the test set (Hock & Schittkowski 1981, problem 71):
+/// f* = 17.0140173.
+fn hs071() -> leap::testset::HsProblem {
+    leap::testset::by_name("hs071").expect("hs071 is in the test set")
 }
 
 /// Rosenbrock, unconstrained: f* = 0 at (1, 1).
@@ -67,7 +41,7 @@ impl AdProblem for Rosenbrock {
 fn run<P: AdProblem>(p: P, mode: HessianMode) -> leap::sqp::SqpResult {
     let mut nlp = AdNlp::new(p);
     let settings = SqpSettings {
-        hessian: Some(mode),
+        hessian: mode,
         verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
         ..Default::default()
     };
@@ -77,7 +51,7 @@ fn run<P: AdProblem>(p: P, mode: HessianMode) -> leap::sqp::SqpResult {
 #[test]
 fn hs071_both_hessians() {
     for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
-        let r = run(Hs071, mode);
+        let r = run(hs071(), mode);
         assert_eq!(r.status, SqpStatus::Solved, "{mode:?}: {}", r.message);
         assert!(
             (r.objective - 17.0140173).abs() < 1e-6 * 17.0,
@@ -99,7 +73,7 @@ fn rosenbrock_both_hessians() {
 
 #[test]
 fn iteration_history_as_csv() {
-    let r = run(Hs071, HessianMode::PartitionedBfgs);
+    let r = run(hs071(), HessianMode::PartitionedBfgs);
     let dir = std::env::temp_dir().join(format!("leap_sqp_history_{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("history.csv");

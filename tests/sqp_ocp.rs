@@ -429,7 +429,7 @@ fn brachistochrone_time(xf: f64, yf: f64) -> f64 {
 
 fn settings(mode: HessianMode) -> SqpSettings {
     SqpSettings {
-        hessian: Some(mode),
+        hessian: mode,
         verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
         ..Default::default()
     }

@@ -9,7 +9,7 @@ use leap::testset::{hock_schittkowski, infeasible_problems, unbounded_problems};
 
 fn settings(mode: HessianMode) -> SqpSettings {
     SqpSettings {
-        hessian: Some(mode),
+        hessian: mode,
         verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
         ..Default::default()
     }

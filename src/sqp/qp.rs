@@ -59,7 +59,6 @@ pub(crate) struct Qp {
     /// For element e, the P entry of each local (a, b), a ≤ b, row-major
     /// over the upper triangle.
     p_elem: Vec<Vec<usize>>,
-    p_diag: Vec<usize>,
     a: CscMatrix<f64>,
     /// For Jacobian entry k, the A entries it fills and their signs.
     a_jac: Vec<[(usize, f64); 2]>,
@@ -211,7 +210,8 @@ impl Qp {
                 })
             })
             .collect();
-        // P: the diagonal, then each element's upper triangle (merged).
+        // P: every diagonal entry (a variable outside all elements keeps one,
+        // zero), then each element's upper triangle (merged).
         let mut p_entries: Vec<(usize, usize)> = (0..n).map(|j| (j, j)).collect();
         let mut lookup = std::collections::HashMap::new();
         for j in 0..n {
@@ -235,7 +235,6 @@ impl Qp {
             p_elem.push(map);
         }
         let (p, pindex) = csc(nz, nz, &p_entries);
-        let p_diag = (0..n).map(|j| pindex[j]).collect();
         let p_elem = p_elem
             .into_iter()
             .map(|map| map.into_iter().map(|e| pindex[e]).collect())
@@ -266,7 +265,6 @@ impl Qp {
             num_eq,
             p,
             p_elem,
-            p_diag,
             a,
             a_jac,
             q: vec![0.0; nz],
@@ -292,9 +290,8 @@ impl Qp {
         )
     }
 
-    /// Fill P from the element matrices (row-major k×k, both triangles),
-    /// plus `diagonal` on every variable's diagonal.
-    pub fn set_hessian(&mut self, blocks: &[Vec<f64>], elements: &[Element], diagonal: f64) {
+    /// Fill P from the element matrices (row-major k×k, both triangles).
+    pub fn set_hessian(&mut self, blocks: &[Vec<f64>], elements: &[Element]) {
         self.p.nzval.iter_mut().for_each(|v| *v = 0.0);
         for (e, el) in elements.iter().enumerate() {
             let k = el.variables.len();
@@ -305,9 +302,6 @@ impl Qp {
                     t += 1;
                 }
             }
-        }
-        for &i in &self.p_diag {
-            self.p.nzval[i] += diagonal;
         }
     }
 
