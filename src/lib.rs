@@ -3,7 +3,9 @@
 //! Data flows one way: [`model`] (files and validation) → [`multibody`]
 //! (Rust-native dynamics) and [`simbody`] (the Simbody bridge) → [`path`]
 //! and the force laws ([`laws`]) → the state equation ([`ode`]) → forward
-//! simulation ([`simulate`], [`squat`]) → output ([`io`]).
+//! simulation ([`simulate`], [`squat`]) → the jump problem ([`ocp`]), its
+//! transcription ([`transcription`]) and solver ([`sqp`]), run from a study
+//! ([`study`], [`solve`]) → output ([`io`]).
 
 // Index loops mirror the equations they implement.
 #![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
@@ -23,8 +25,10 @@ pub mod path;
 pub mod scalar;
 pub mod simbody;
 pub mod simulate;
+pub mod solve;
 pub mod spline;
 pub mod sqp;
 pub mod squat;
+pub mod study;
 pub mod testset;
 pub mod transcription;

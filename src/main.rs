@@ -61,6 +61,47 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Solve the maximum-height jump (Porsa, Lin & Pandy 2016) by direct
+    /// collocation and SQP from a study file (or the built-in study, the
+    /// paper's problem); write the solution, ground forces and iteration
+    /// history, print the paper's Table 2 row and check the optimal
+    /// excitations by forward simulation.
+    #[command(after_help = "Examples:
+  leap solve
+  leap solve models/jump_collocation.json --out results/jump28
+  leap solve --num-mesh-intervals 8 --max-iterations 50 --json
+  leap solve --guess results/jump_solution.sto --scheme trapezoidal")]
+    Solve {
+        /// Study file (JSON); command-line options override it.
+        study: Option<PathBuf>,
+        /// Results directory (default: the study's output_directory, results/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Uniform mesh intervals (≥ 2; default 28).
+        #[arg(long, allow_negative_numbers = true)]
+        num_mesh_intervals: Option<i64>,
+        /// SQP iteration limit.
+        #[arg(long, allow_negative_numbers = true)]
+        max_iterations: Option<i64>,
+        /// "bang-bang" or a .sto file with every state and control column.
+        #[arg(long)]
+        guess: Option<String>,
+        /// midpoint-euler (default), trapezoidal or hermite-simpson.
+        #[arg(long)]
+        scheme: Option<String>,
+        /// bfgs (default) or exact.
+        #[arg(long)]
+        hessian: Option<String>,
+        /// Skip the forward simulation of the optimal excitations.
+        #[arg(long)]
+        no_forward_check: bool,
+        /// Print one JSON object (no progress output).
+        #[arg(long)]
+        json: bool,
+        /// No progress output or iteration log.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// ẋ = f(x, u) and its parts (muscle, contact and joint quantities) at
     /// given states, like OpenSim's Analyze tool. Input: JSON
     /// ({"state": {name: value}, "excitation": {"/forceset/<m>": value}} or
@@ -206,6 +247,29 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => simulate(
             study, model, controls, integrator, accuracy, t_max, out, json,
         ),
+        Command::Solve {
+            study,
+            out,
+            num_mesh_intervals,
+            max_iterations,
+            guess,
+            scheme,
+            hessian,
+            no_forward_check,
+            json,
+            quiet,
+        } => {
+            let overrides = leap::study::Overrides {
+                output_directory: out,
+                num_mesh_intervals,
+                max_iterations,
+                guess,
+                scheme,
+                hessian,
+                no_forward_check,
+            };
+            solve(study, overrides, json, quiet)
+        }
         Command::Eval {
             model,
             input,
@@ -640,4 +704,34 @@ fn simulate(
             Ok(ExitCode::from(1))
         }
     }
+}
+
+fn solve(
+    study: Option<PathBuf>,
+    overrides: leap::study::Overrides,
+    json: bool,
+    quiet: bool,
+) -> Result<ExitCode> {
+    use std::io::IsTerminal;
+    let mut config = leap::study::SolveConfig::load(study.as_deref())?;
+    config.apply(&overrides)?;
+    let chatty = !json && !quiet;
+    let verbose = chatty && std::io::stderr().is_terminal();
+    let mut progress = |line: &str| {
+        if chatty {
+            eprintln!("leap solve: {line}");
+        }
+    };
+    let report = leap::solve::run(&config, verbose, &mut progress)?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else if !quiet {
+        print!("{}", report.table());
+        println!("  results in {}", config.output_directory.display());
+    }
+    Ok(if report.success {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }

@@ -157,8 +157,10 @@ impl<L: ForceLaws<f64>, E: ExcitationSource> OdeSystem for Rhs<'_, L, E> {
     }
 }
 
-/// Ground forces per foot from the workspace of the last evaluation.
-fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 12] {
+/// Ground forces per foot from the workspace of the last evaluation of
+/// `eq.rhs` at state `x`: [Fx, Fy, Fz, px, py, pz] for the right then the
+/// left foot (ground on foot, N; centre of pressure on the ground, m).
+pub fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 12] {
     let mut out = [0.0; 12];
     let Some(contact) = &eq.model.contact else {
         return out;
@@ -390,17 +392,7 @@ pub fn write_trajectory(
     controls.labels = eq.control_names();
     controls.time = traj.time.clone();
     controls.rows = traj.controls.clone();
-    let mut grf = StoTable {
-        name: Some(format!("{name}_grf")),
-        ..Default::default()
-    };
-    for side in ["r", "l"] {
-        for l in ["vx", "vy", "vz", "px", "py", "pz"] {
-            grf.labels.push(format!("ground_force_{side}_{l}"));
-        }
-    }
-    grf.time = traj.time.clone();
-    grf.rows = traj.grf.iter().map(|g| g.to_vec()).collect();
+    let grf = grf_table(&format!("{name}_grf"), &traj.time, &traj.grf);
     let paths = [
         dir.join(format!("{name}_states.sto")),
         dir.join(format!("{name}_controls.sto")),
@@ -410,6 +402,23 @@ pub fn write_trajectory(
     controls.write_sto(&paths[1])?;
     grf.write_mot(&paths[2])?;
     Ok(paths.to_vec())
+}
+
+/// Ground reaction forces per foot as an OpenSim ExternalLoads table
+/// (`ground_force_{r,l}_{vx,vy,vz,px,py,pz}`), rows as [`grf_of`] returns.
+pub fn grf_table(name: &str, time: &[f64], grf: &[[f64; 12]]) -> StoTable {
+    let mut t = StoTable {
+        name: Some(name.to_string()),
+        ..Default::default()
+    };
+    for side in ["r", "l"] {
+        for l in ["vx", "vy", "vz", "px", "py", "pz"] {
+            t.labels.push(format!("ground_force_{side}_{l}"));
+        }
+    }
+    t.time = time.to_vec();
+    t.rows = grf.iter().map(|g| g.to_vec()).collect();
+    t
 }
 
 /// Integrate a jump with one of Simbody's integrators (the Simbody backend

@@ -1,0 +1,550 @@
+//! `leap solve`: the jump problem of Porsa, Lin & Pandy (2016) from a study
+//! ([`crate::study`]) through direct collocation ([`crate::transcription`])
+//! and the SQP ([`crate::sqp`]) to files OpenSim and Moco users can open,
+//! the paper's Table 2 row, and a forward check of the optimal excitations.
+//!
+//! Outputs (into the study's `output_directory` and nowhere else), with
+//! `<name>` the study's name (default `jump`):
+//! - `<name>_solution.sto`: states and excitations at the mesh nodes (node
+//!   0, the fixed squat, included) under Moco's names and with a
+//!   `MocoSolution` header (`num_iterations`, `objective`,
+//!   `solver_duration`, `status`, `success`, ...);
+//! - `<name>_grf.mot`: ground reaction forces per foot at the nodes
+//!   (OpenSim's ExternalLoads columns);
+//! - `<name>_history.csv`: one row per SQP iteration;
+//! - `<name>_forward_states.sto`, `_controls.sto`, `_grf.mot`: the forward
+//!   check integrated by Simbody;
+//! - `<name>_summary.json`: the [`SolveReport`].
+//!
+//! Jump height = J − Y_C,standing with J = Y_C(t_f) + Ẏ_C(t_f)²/(2g) the
+//! apex of the centre of mass leaving the ground at t_f (eq. 3); the ground
+//! contact time is t_f.
+
+use crate::io::{Controls, StoError, StoTable};
+use crate::model::{Model, ModelError};
+use crate::nlp::Nlp;
+use crate::ocp::{JumpOcp, OcpError, OcpOptions};
+use crate::simulate::{
+    grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
+    SimulateOptions,
+};
+use crate::sqp::{SqpResult, SqpStatus};
+use crate::study::{scheme_name, ForwardCheck, GuessChoice, SolveConfig};
+use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Stop time of the forward check after the predicted lift-off (s): the
+/// flight to the apex of a 0.4 m jump takes under 0.3 s.
+const FORWARD_FLIGHT_TIME: f64 = 1.0;
+
+/// A solve could not be set up or its results not written. How the
+/// optimizer ended is not an error: it is [`SolveReport::status`].
+#[derive(Debug, thiserror::Error)]
+pub enum SolveError {
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    #[error(transparent)]
+    Ocp(#[from] OcpError),
+    #[error(transparent)]
+    Transcription(#[from] TranscriptionError),
+    #[error(transparent)]
+    Sto(#[from] StoError),
+    #[error("{file}: {reason}")]
+    Guess { file: PathBuf, reason: String },
+    #[error("{file}: {source}")]
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// The forward check: the optimal excitations (linear between the nodes,
+/// held after t_f) integrated from the squat.
+#[derive(Debug, Clone, Serialize)]
+pub struct ForwardCheckReport {
+    pub integrator: String,
+    pub accuracy: f64,
+    /// Simbody's jump (None if the integration failed).
+    pub summary: Option<JumpSummary>,
+    /// The Rust-native Dormand–Prince 5(4) jump at accuracy 1e-6.
+    pub rust_summary: Option<JumpSummary>,
+    /// Why an integration failed.
+    pub errors: Vec<String>,
+}
+
+/// What `leap solve` reports (the `--json` object and `<name>_summary.json`).
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveReport {
+    /// How the SQP ended (snake_case [`SqpStatus`]).
+    pub status: SqpStatus,
+    /// The same as IPOPT's return status, as Moco writes it.
+    pub moco_status: &'static str,
+    pub success: bool,
+    pub message: String,
+    pub iterations: usize,
+    /// Wall time of the SQP (s) and per iteration.
+    pub wall_time_s: f64,
+    pub wall_time_per_iteration_s: f64,
+    /// −J at the solution (m).
+    pub objective: f64,
+    pub jump_height_m: f64,
+    pub apex_com_height_m: f64,
+    pub standing_com_height_m: f64,
+    /// t_f (s).
+    pub ground_contact_time_s: f64,
+    /// Ẏ_C(t_f) (m/s) and Y_C(t_f) (m).
+    pub liftoff_com_velocity_mps: f64,
+    pub liftoff_com_height_m: f64,
+    /// Peak total vertical ground force over the nodes / body weight.
+    pub peak_vertical_grf_bw: f64,
+    /// Largest violation of the constraints (defects, no countermovement,
+    /// lift-off) in their units.
+    pub max_constraint_violation: f64,
+    /// The forward check's jump height (Simbody), its difference from the
+    /// predicted one (forward − predicted), and the Rust-native one.
+    pub forward_jump_height_m: Option<f64>,
+    pub forward_check_difference_m: Option<f64>,
+    pub forward_jump_height_rust_m: Option<f64>,
+    pub forward_check: Option<ForwardCheckReport>,
+    /// The initial guess and, for bang-bang, its jump height (m).
+    pub guess: String,
+    pub guess_jump_height_m: Option<f64>,
+    pub num_mesh_intervals: usize,
+    pub scheme: &'static str,
+    pub hessian: crate::sqp::HessianMode,
+    pub variables: usize,
+    pub constraints: usize,
+    pub time_split: crate::sqp::TimeSplit,
+    pub study: Option<String>,
+    pub model: String,
+    pub output_files: Vec<String>,
+}
+
+/// IPOPT's return status for an SQP status (what Moco writes as `status`).
+pub fn moco_status(s: SqpStatus) -> &'static str {
+    match s {
+        SqpStatus::Solved => "Solve_Succeeded",
+        SqpStatus::Acceptable => "Solved_To_Acceptable_Level",
+        SqpStatus::IterationLimit => "Maximum_Iterations_Exceeded",
+        SqpStatus::Infeasible => "Infeasible_Problem_Detected",
+        SqpStatus::Unbounded => "Diverging_Iterates",
+        SqpStatus::RestorationFailed => "Restoration_Failed",
+        SqpStatus::LineSearchFailed => "Error_In_Step_Computation",
+        SqpStatus::NumericalError => "Error_In_Step_Computation",
+        SqpStatus::EvaluationError => "Invalid_Number_Detected",
+        SqpStatus::InvalidProblem => "Invalid_Problem_Definition",
+    }
+}
+
+/// Run a study: build the problem, solve it, write the outputs, check the
+/// solution forward. `verbose` prints the SQP's iteration log to standard
+/// error; `progress` receives one line per stage.
+pub fn run(
+    config: &SolveConfig,
+    verbose: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<SolveReport, SolveError> {
+    let dir = &config.output_directory;
+    std::fs::create_dir_all(dir).map_err(|source| SolveError::Io {
+        file: dir.clone(),
+        source,
+    })?;
+    progress(&format!("model {}", config.model.display()));
+    let model = Model::from_file(&config.model)?;
+    let big_n = config.transcription.num_mesh_intervals;
+    let defaults = OcpOptions::default();
+    // The paper constrains 7 intervals against countermovement (eq. 4); a
+    // coarser mesh constrains all it has.
+    let options = OcpOptions {
+        no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
+        ..defaults
+    };
+    progress("static squat and jump problem");
+    let ocp = Arc::new(JumpOcp::new(&model, options)?);
+    progress(&format!(
+        "collocation: {} mesh intervals, {}",
+        big_n,
+        scheme_name(config.transcription.scheme)
+    ));
+    let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
+    let (guess, guess_name, guess_jump) = match &config.guess {
+        GuessChoice::BangBang => {
+            progress("initial guess: the bang-bang jump");
+            let (v, s) = tr.bang_bang_guess()?;
+            (v, "bang-bang".to_string(), Some(s.jump_height_m))
+        }
+        GuessChoice::File(p) => {
+            progress(&format!("initial guess: {}", p.display()));
+            (guess_from_file(&tr, p)?, p.display().to_string(), None)
+        }
+    };
+    let mut settings = config.settings.clone();
+    settings.verbose = verbose;
+    progress(&format!(
+        "SQP: {} variables, {} constraints, at most {} iterations",
+        tr.num_variables(),
+        tr.num_constraints(),
+        settings.max_iterations
+    ));
+    let result = crate::sqp::solve_from(&mut tr, &guess, &settings);
+    let mut report = evaluate(&mut tr, &result);
+    report.guess = guess_name;
+    report.guess_jump_height_m = guess_jump;
+    report.study = config.study_file.as_ref().map(|p| p.display().to_string());
+    report.model = config.model.display().to_string();
+
+    // Outputs.
+    let mesh = tr.unpack(&result.x);
+    let name = &config.name;
+    let mut files = Vec::new();
+    let sol = solution_table(&ocp, &mesh, &result, &report);
+    let p = dir.join(format!("{name}_solution.sto"));
+    sol.write_sto(&p)?;
+    files.push(p);
+    let grf: Vec<[f64; 12]> = node_grf(&ocp, &mesh);
+    let p = dir.join(format!("{name}_grf.mot"));
+    grf_table(&format!("{name}_grf"), &mesh.time, &grf).write_mot(&p)?;
+    files.push(p);
+    let p = dir.join(format!("{name}_history.csv"));
+    result
+        .write_history_csv(&p)
+        .map_err(|source| SolveError::Io {
+            file: p.clone(),
+            source,
+        })?;
+    files.push(p);
+
+    if let Some(fc) = config.forward_check {
+        progress("forward check: the optimal excitations integrated from the squat");
+        let (check, fw_files) = forward_check(&ocp, &mesh, fc, dir, name)?;
+        files.extend(fw_files);
+        report.forward_jump_height_m = check.summary.as_ref().map(|s| s.jump_height_m);
+        report.forward_jump_height_rust_m = check.rust_summary.as_ref().map(|s| s.jump_height_m);
+        report.forward_check_difference_m = report
+            .forward_jump_height_m
+            .map(|h| h - report.jump_height_m);
+        report.forward_check = Some(check);
+    }
+    let p = dir.join(format!("{name}_summary.json"));
+    files.push(p.clone());
+    report.output_files = files.iter().map(|f| f.display().to_string()).collect();
+    let text = serde_json::to_string_pretty(&report).unwrap_or_default();
+    std::fs::write(&p, text).map_err(|source| SolveError::Io { file: p, source })?;
+    Ok(report)
+}
+
+/// The report's solution quantities at the SQP's last iterate.
+fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
+    let ocp = tr.ocp.clone();
+    let x = &r.x;
+    let (y, ydot, j) = tr.jump_objective(x);
+    let tf = tr.final_time(x);
+    let mesh = tr.unpack(x);
+    let peak = node_grf(&ocp, &mesh)
+        .iter()
+        .map(|g| (g[1] + g[7]) / ocp.body_weight)
+        .fold(f64::NAN, f64::max);
+    let mut c = vec![0.0; tr.num_constraints()];
+    let violation = match tr.constraints(x, &mut c) {
+        Ok(()) => {
+            let (mut cl, mut cu) = (vec![0.0; c.len()], vec![0.0; c.len()]);
+            tr.constraint_bounds(&mut cl, &mut cu);
+            (0..c.len())
+                .map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0))
+                .fold(0.0, f64::max)
+        }
+        Err(_) => f64::NAN,
+    };
+    SolveReport {
+        status: r.status,
+        moco_status: moco_status(r.status),
+        success: r.status.success(),
+        message: r.message.clone(),
+        iterations: r.iterations,
+        wall_time_s: r.time.total_s,
+        wall_time_per_iteration_s: r.time.total_s / r.iterations.max(1) as f64,
+        objective: -j,
+        jump_height_m: j - ocp.standing_com_height,
+        apex_com_height_m: j,
+        standing_com_height_m: ocp.standing_com_height,
+        ground_contact_time_s: tf,
+        liftoff_com_velocity_mps: ydot,
+        liftoff_com_height_m: y,
+        peak_vertical_grf_bw: peak,
+        max_constraint_violation: violation,
+        forward_jump_height_m: None,
+        forward_check_difference_m: None,
+        forward_jump_height_rust_m: None,
+        forward_check: None,
+        guess: String::new(),
+        guess_jump_height_m: None,
+        num_mesh_intervals: tr.num_intervals(),
+        scheme: scheme_name(tr.options().scheme),
+        hessian: r.hessian,
+        variables: tr.num_variables(),
+        constraints: tr.num_constraints(),
+        time_split: r.time,
+        study: None,
+        model: String::new(),
+        output_files: Vec::new(),
+    }
+}
+
+/// Ground reaction forces per foot at each node (NaN where f(x, u) fails).
+pub fn node_grf(ocp: &JumpOcp, mesh: &MeshTrajectory) -> Vec<[f64; 12]> {
+    let mut ws = ocp.eq.workspace::<f64>();
+    let mut xdot = vec![0.0; ocp.nx()];
+    mesh.states
+        .iter()
+        .zip(&mesh.controls)
+        .map(
+            |(x, u)| match ocp.eq.rhs(&ocp.laws, &mut ws, x, u, &mut xdot) {
+                Ok(()) => grf_of(&ocp.eq, &ws, x),
+                Err(_) => [f64::NAN; 12],
+            },
+        )
+        .collect()
+}
+
+/// The solution as a Moco solution table: time, states, then excitations,
+/// with `MocoSolution`'s metadata.
+pub fn solution_table(
+    ocp: &JumpOcp,
+    mesh: &MeshTrajectory,
+    r: &SqpResult,
+    report: &SolveReport,
+) -> StoTable {
+    let mut t = StoTable::default();
+    let md = &mut t.metadata;
+    md.insert("inDegrees".into(), "no".into());
+    md.insert("num_states".into(), ocp.nx().to_string());
+    md.insert("num_controls".into(), ocp.nu().to_string());
+    for k in [
+        "num_multipliers",
+        "num_derivatives",
+        "num_parameters",
+        "num_slacks",
+    ] {
+        md.insert(k.into(), "0".into());
+    }
+    md.insert("num_iterations".into(), r.iterations.to_string());
+    md.insert("objective".into(), format!("{}", report.objective));
+    md.insert("solver_duration".into(), format!("{:.6}", r.time.total_s));
+    md.insert("status".into(), moco_status(r.status).into());
+    md.insert("success".into(), r.status.success().to_string());
+    t.labels = ocp.eq.state_names();
+    t.labels.extend(ocp.eq.control_names());
+    t.time = mesh.time.clone();
+    t.rows = mesh
+        .states
+        .iter()
+        .zip(&mesh.controls)
+        .map(|(x, u)| x.iter().chain(u).copied().collect())
+        .collect();
+    t
+}
+
+/// A guess from a `.sto` with every state and excitation column (a
+/// previous solution), from t = 0, resampled onto the mesh with t_f its
+/// last time.
+pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
+    let t = StoTable::read(path)?;
+    let bad = |reason: String| SolveError::Guess {
+        file: path.into(),
+        reason,
+    };
+    if t.time.is_empty() {
+        return Err(bad("no data rows".into()));
+    }
+    if t.time[0].abs() > 1e-9 {
+        return Err(bad(format!(
+            "time: starts at {} s; a guess must start at 0 (the squat)",
+            t.time[0]
+        )));
+    }
+    let eq = &tr.ocp.eq;
+    let column = |name: &str| -> Result<usize, SolveError> {
+        t.labels.iter().position(|l| l == name).ok_or_else(|| {
+            bad(format!(
+                "column '{name}': missing (a guess needs every state and control column)"
+            ))
+        })
+    };
+    let sc = eq
+        .state_names()
+        .iter()
+        .map(|n| column(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let cc = eq
+        .control_names()
+        .iter()
+        .map(|n| column(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    let states: Vec<Vec<f64>> = t
+        .rows
+        .iter()
+        .map(|r| sc.iter().map(|&k| r[k]).collect())
+        .collect();
+    let controls: Vec<Vec<f64>> = t
+        .rows
+        .iter()
+        .map(|r| cc.iter().map(|&k| r[k]).collect())
+        .collect();
+    let tf = *t.time.last().unwrap_or(&0.0);
+    tr.guess_from_trajectory(&t.time, &states, &controls, tf)
+        .map_err(|e| bad(e.to_string()))
+}
+
+/// Integrate the node excitations (linear between nodes, held after t_f)
+/// from the squat with Simbody and with the Rust-native integrator; write
+/// Simbody's trajectory as `<name>_forward_*`.
+fn forward_check(
+    ocp: &Arc<JumpOcp>,
+    mesh: &MeshTrajectory,
+    fc: ForwardCheck,
+    dir: &Path,
+    name: &str,
+) -> Result<(ForwardCheckReport, Vec<PathBuf>), SolveError> {
+    let mut report = ForwardCheckReport {
+        integrator: format!("{:?}", fc.integrator),
+        accuracy: fc.accuracy,
+        summary: None,
+        rust_summary: None,
+        errors: Vec::new(),
+    };
+    let tf = mesh.time.last().copied().unwrap_or(f64::NAN);
+    if !(tf.is_finite() && tf > 0.0) || mesh.time.windows(2).any(|w| w[1] <= w[0]) {
+        report
+            .errors
+            .push(format!("no forward check: final time {tf} s"));
+        return Ok((report, Vec::new()));
+    }
+    let controls = Controls {
+        time: mesh.time.clone(),
+        values: mesh.controls.clone(),
+    };
+    let t_max = tf + FORWARD_FLIGHT_TIME;
+    let eq = Arc::new(ocp.eq.clone());
+    let laws = Arc::new(ocp.laws.clone());
+    let simbody = simulate_simbody(
+        &eq,
+        &laws,
+        &controls,
+        ocp.x0(),
+        ocp.standing_com_height,
+        fc.integrator,
+        fc.accuracy,
+        t_max,
+        1e-3,
+    );
+    let prefix = format!("{name}_forward");
+    let files = match simbody {
+        Ok((summary, traj)) => {
+            report.summary = Some(summary);
+            write_trajectory(&ocp.eq, &traj, dir, &prefix)?
+        }
+        Err(f) => {
+            report
+                .errors
+                .push(format!("{:?} (Simbody): {f}", fc.integrator));
+            write_trajectory(&ocp.eq, &f.trajectory, dir, &prefix)?
+        }
+    };
+    let opts = SimulateOptions {
+        integrator: crate::integrator::Dopri5Options {
+            accuracy: 1e-6,
+            ..Default::default()
+        },
+        t_max,
+    };
+    match simulate_rust(
+        &ocp.eq,
+        &ocp.laws,
+        &controls,
+        ocp.x0(),
+        ocp.standing_com_height,
+        opts,
+    ) {
+        Ok((summary, _)) => report.rust_summary = Some(summary),
+        Err(f) => report.errors.push(format!("Dormand-Prince (Rust): {f}")),
+    }
+    Ok((report, files))
+}
+
+impl SolveReport {
+    /// The paper's Table 2 row and the forward check, for a terminal.
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        t.set_header(vec![
+            "iterations",
+            "time (s)",
+            "time / iteration (s)",
+            "jump height (cm)",
+            "ground contact time (s)",
+            "lift-off COM velocity (m/s)",
+            "peak vertical GRF (BW)",
+            "max constraint violation",
+        ]);
+        t.add_row(vec![
+            self.iterations.to_string(),
+            format!("{:.2}", self.wall_time_s),
+            format!("{:.3}", self.wall_time_per_iteration_s),
+            format!("{:.2}", 100.0 * self.jump_height_m),
+            format!("{:.3}", self.ground_contact_time_s),
+            format!("{:.3}", self.liftoff_com_velocity_mps),
+            format!("{:.2}", self.peak_vertical_grf_bw),
+            format!("{:.2e}", self.max_constraint_violation),
+        ]);
+        let mut s = format!(
+            "jump solve ({} mesh intervals, {}, {:?} Hessian): {} ({}){}\n{t}\n",
+            self.num_mesh_intervals,
+            self.scheme,
+            self.hessian,
+            serde_json::to_value(self.status)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default(),
+            self.moco_status,
+            if self.message.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", self.message)
+            }
+        );
+        s.push_str("  times are wall times of the SQP\n");
+        if let Some(fc) = &self.forward_check {
+            match (&fc.summary, self.forward_check_difference_m) {
+                (Some(sm), Some(d)) => s.push_str(&format!(
+                    "  forward check ({}, accuracy {:e}): jump height {:.2} cm ({:+.2} cm from the prediction), lift-off at {}\n",
+                    fc.integrator,
+                    fc.accuracy,
+                    100.0 * sm.jump_height_m,
+                    100.0 * d,
+                    sm.liftoff_time_s
+                        .map(|t| format!("{t:.3} s"))
+                        .unwrap_or_else(|| "— (no lift-off)".into())
+                )),
+                _ => s.push_str("  forward check (Simbody): failed\n"),
+            }
+            if let Some(r) = &fc.rust_summary {
+                s.push_str(&format!(
+                    "  forward check (Dormand-Prince, Rust): jump height {:.2} cm\n",
+                    100.0 * r.jump_height_m
+                ));
+            }
+            for e in &fc.errors {
+                s.push_str(&format!("  forward check: {e}\n"));
+            }
+        }
+        if let Some(g) = self.guess_jump_height_m {
+            s.push_str(&format!(
+                "  initial guess {}: jump height {:.2} cm\n",
+                self.guess,
+                100.0 * g
+            ));
+        }
+        s
+    }
+}

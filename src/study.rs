@@ -1,0 +1,598 @@
+//! The study file of `leap solve` (JSON): which model, which method, the
+//! mesh, the initial guess, the optimizer's tolerances and where results go.
+//! Setting names follow Moco's `MocoDirectCollocationSolver`
+//! (`num_mesh_intervals`, `optim_convergence_tolerance`,
+//! `optim_constraint_tolerance`, `optim_max_iterations`) where it has one.
+//!
+//! ```json
+//! {
+//!   "description": "Porsa, Lin & Pandy (2016): maximum-height squat jump",
+//!   "model": "jumper.json",
+//!   "method": "collocation",
+//!   "mesh": {"num_mesh_intervals": 28, "scheme": "midpoint-euler"},
+//!   "guess": "bang-bang",
+//!   "tolerances": {"optim_convergence_tolerance": 1e-6,
+//!                  "optim_constraint_tolerance": 1e-8, "max_iterations": 3000},
+//!   "hessian": "bfgs",
+//!   "output_directory": "../results"
+//! }
+//! ```
+//!
+//! Every field is optional; the built-in study (no file) is the paper's
+//! problem. Paths written in a study file are relative to the file's
+//! directory; the defaults (`models/jumper.json`, `results/`) are relative
+//! to the working directory. A bad study is reported with the file, the
+//! JSON path of the field and the reason ([`StudyError`]).
+
+use crate::simbody::SimbodyIntegrator;
+use crate::simulate::{parse_integrator, IntegratorChoice};
+use crate::sqp::{HessianMode, SqpSettings};
+use crate::transcription::{Scheme, TranscriptionOptions};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// Methods a study may name; only collocation is implemented.
+pub const METHODS: [&str; 2] = ["collocation", "shooting"];
+
+/// Collocation schemes by name (Moco's spelling where it has one).
+pub const SCHEMES: [(&str, Scheme); 3] = [
+    ("midpoint-euler", Scheme::MidpointEuler),
+    ("trapezoidal", Scheme::Trapezoidal),
+    ("hermite-simpson", Scheme::HermiteSimpson),
+];
+
+/// The model when a study names none (relative to the working directory,
+/// else to the crate's source directory).
+pub const DEFAULT_MODEL: &str = "models/jumper.json";
+/// The results directory when a study names none.
+pub const DEFAULT_OUTPUT_DIRECTORY: &str = "results";
+
+/// A study could not be read, or one of its settings is unusable.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error("{file}: cannot read the study file: {source}")]
+    Io {
+        file: PathBuf,
+        source: std::io::Error,
+    },
+    /// `origin` is the study file, or "command line" for an override.
+    #[error("{origin}: {field}: {reason}")]
+    Field {
+        origin: String,
+        field: String,
+        reason: String,
+    },
+}
+
+/// The study file as written. Unknown fields are refused.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct SolveStudy {
+    /// Free text (JSON has no comments).
+    #[serde(default)]
+    pub description: Option<String>,
+    /// Prefix of the output files (default "jump": `jump_solution.sto`, ...).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Model file (default `models/jumper.json`).
+    #[serde(default)]
+    pub model: Option<String>,
+    /// "collocation" (default); "shooting" is reserved.
+    #[serde(default)]
+    pub method: Option<String>,
+    #[serde(default)]
+    pub mesh: MeshSpec,
+    /// "bang-bang" (default: the bang-bang jump resampled onto the mesh,
+    /// t_f its lift-off time) or a `.sto` file with every state and control
+    /// column (a previous solution), resampled onto the mesh with t_f its
+    /// last time.
+    #[serde(default, alias = "guess_file")]
+    pub guess: Option<String>,
+    #[serde(default)]
+    pub tolerances: TolerancesSpec,
+    /// "bfgs" (partitioned damped BFGS, default) or "exact" (convexified
+    /// exact element Hessians).
+    #[serde(default)]
+    pub hessian: Option<String>,
+    /// Results directory (default `results/`).
+    #[serde(default, alias = "results_directory")]
+    pub output_directory: Option<String>,
+    #[serde(default)]
+    pub forward_check: ForwardCheckSpec,
+}
+
+/// The mesh (Moco's names).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSpec {
+    /// Uniform mesh intervals N ≥ 2 (default 28, the paper's 29 nodes).
+    /// Signed so that a negative count is reported as such.
+    #[serde(default)]
+    pub num_mesh_intervals: Option<i64>,
+    /// "midpoint-euler" (default, Porsa et al. eq. 7), "trapezoidal" or
+    /// "hermite-simpson".
+    #[serde(default, alias = "transcription_scheme")]
+    pub scheme: Option<String>,
+}
+
+/// Stopping rules of the optimizer (Moco's names; −1 means the default,
+/// as in Moco).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct TolerancesSpec {
+    #[serde(default)]
+    pub optim_convergence_tolerance: Option<f64>,
+    #[serde(default)]
+    pub optim_constraint_tolerance: Option<f64>,
+    #[serde(default, alias = "optim_max_iterations")]
+    pub max_iterations: Option<i64>,
+    /// Also stop when |Δf| < 1e-6 (1 + |f|) with the constraints within
+    /// 1e-3 (Porsa et al. 2016's criterion). Default false.
+    #[serde(default)]
+    pub paper_criterion: Option<bool>,
+}
+
+/// The forward check: the optimal excitations integrated from the squat
+/// with a Simbody integrator (OpenSim's names) and with the Rust-native
+/// Dormand–Prince 5(4).
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ForwardCheckSpec {
+    /// Default true.
+    #[serde(default)]
+    pub enabled: Option<bool>,
+    /// Simbody integrator (default "RungeKuttaMerson", OpenSim's default).
+    #[serde(default)]
+    pub integrator: Option<String>,
+    /// Integrator accuracy (default 1e-5, OpenSim's).
+    #[serde(default)]
+    pub accuracy: Option<f64>,
+}
+
+/// Where the initial guess comes from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum GuessChoice {
+    BangBang,
+    File(PathBuf),
+}
+
+/// The forward check, resolved.
+#[derive(Debug, Clone, Copy)]
+pub struct ForwardCheck {
+    pub integrator: SimbodyIntegrator,
+    pub accuracy: f64,
+}
+
+/// A study with defaults filled in, paths resolved and values checked.
+#[derive(Debug, Clone)]
+pub struct SolveConfig {
+    /// The study file it came from (None: the built-in study).
+    pub study_file: Option<PathBuf>,
+    pub name: String,
+    pub model: PathBuf,
+    pub transcription: TranscriptionOptions,
+    pub guess: GuessChoice,
+    pub settings: SqpSettings,
+    pub output_directory: PathBuf,
+    /// None: skipped.
+    pub forward_check: Option<ForwardCheck>,
+}
+
+/// Command-line overrides of a study (`leap solve --...`); paths relative
+/// to the working directory.
+#[derive(Debug, Clone, Default)]
+pub struct Overrides {
+    pub output_directory: Option<PathBuf>,
+    pub num_mesh_intervals: Option<i64>,
+    pub max_iterations: Option<i64>,
+    /// "bang-bang" or a file.
+    pub guess: Option<String>,
+    pub scheme: Option<String>,
+    pub hessian: Option<String>,
+    pub no_forward_check: bool,
+}
+
+impl SolveStudy {
+    /// Read a study file (unknown fields and wrong types are errors naming
+    /// the JSON path).
+    pub fn from_file(path: &Path) -> Result<Self, StudyError> {
+        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
+            file: path.into(),
+            source,
+        })?;
+        Self::from_json_str(&text, &path.display().to_string())
+    }
+
+    /// Parse study JSON; `origin` names it in errors.
+    pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
+        let de = &mut serde_json::Deserializer::from_str(text);
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let path = e.path().to_string();
+            StudyError::Field {
+                origin: origin.into(),
+                field: if path == "." { "(study)".into() } else { path },
+                reason: e.into_inner().to_string(),
+            }
+        })
+    }
+
+    /// Fill in the defaults, resolve paths against the directory of
+    /// `file` (the study's own file, None for the built-in study) and check
+    /// every value.
+    pub fn resolve(&self, file: Option<&Path>) -> Result<SolveConfig, StudyError> {
+        let origin = file
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| "built-in study".into());
+        let err = |field: &str, reason: String| StudyError::Field {
+            origin: origin.clone(),
+            field: field.into(),
+            reason,
+        };
+        let base = file
+            .and_then(|p| p.parent())
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let rel = |s: &str| base.join(s);
+
+        let name = self.name.clone().unwrap_or_else(|| "jump".into());
+        check_name(&name).map_err(|r| err("name", r))?;
+
+        let method = self.method.as_deref().unwrap_or("collocation");
+        check_method(method).map_err(|r| err("method", r))?;
+
+        let model = match &self.model {
+            Some(m) => {
+                let p = rel(m);
+                if !p.is_file() {
+                    return Err(err(
+                        "model",
+                        format!("model file '{}' not found", p.display()),
+                    ));
+                }
+                p
+            }
+            None => default_model()
+                .ok_or_else(|| err("model", format!("the default model '{DEFAULT_MODEL}' is not found in the working directory; name one")))?,
+        };
+
+        let mut transcription = TranscriptionOptions::default();
+        if let Some(n) = self.mesh.num_mesh_intervals {
+            transcription.num_mesh_intervals =
+                check_mesh_intervals(n).map_err(|r| err("mesh.num_mesh_intervals", r))?;
+        }
+        if let Some(s) = &self.mesh.scheme {
+            transcription.scheme = parse_scheme(s).map_err(|r| err("mesh.scheme", r))?;
+        }
+
+        let guess = match self.guess.as_deref() {
+            None | Some("bang-bang") => GuessChoice::BangBang,
+            Some(f) => {
+                let p = rel(f);
+                if !p.is_file() {
+                    return Err(err(
+                        "guess",
+                        format!(
+                            "guess file '{}' not found (use \"bang-bang\" or a .sto file)",
+                            p.display()
+                        ),
+                    ));
+                }
+                GuessChoice::File(p)
+            }
+        };
+
+        let mut settings = SqpSettings::default();
+        let t = &self.tolerances;
+        if let Some(v) = t.optim_convergence_tolerance {
+            if let Some(v) =
+                check_tolerance(v).map_err(|r| err("tolerances.optim_convergence_tolerance", r))?
+            {
+                settings.optim_convergence_tolerance = v;
+            }
+        }
+        if let Some(v) = t.optim_constraint_tolerance {
+            if let Some(v) =
+                check_tolerance(v).map_err(|r| err("tolerances.optim_constraint_tolerance", r))?
+            {
+                settings.optim_constraint_tolerance = v;
+            }
+        }
+        if let Some(v) = t.max_iterations {
+            if let Some(v) =
+                check_max_iterations(v).map_err(|r| err("tolerances.max_iterations", r))?
+            {
+                settings.max_iterations = v;
+            }
+        }
+        if let Some(p) = t.paper_criterion {
+            settings.paper_criterion = p;
+        }
+        if let Some(h) = &self.hessian {
+            settings.hessian = parse_hessian(h).map_err(|r| err("hessian", r))?;
+        }
+
+        let output_directory = match &self.output_directory {
+            Some(d) => rel(d),
+            None => PathBuf::from(DEFAULT_OUTPUT_DIRECTORY),
+        };
+
+        let fc = &self.forward_check;
+        let forward_check = if fc.enabled.unwrap_or(true) {
+            let integrator = match fc.integrator.as_deref() {
+                None => SimbodyIntegrator::RungeKuttaMerson,
+                Some(s) => match parse_integrator(s) {
+                    Ok(IntegratorChoice::Simbody(i)) => i,
+                    Ok(IntegratorChoice::DormandPrince) => return Err(err(
+                        "forward_check.integrator",
+                        "the Rust-native Dormand-Prince runs anyway; name a Simbody integrator (RungeKuttaMerson, RungeKuttaFeldberg, RungeKutta3, CPodes, ExplicitEuler)".into(),
+                    )),
+                    Err(r) => return Err(err("forward_check.integrator", r)),
+                },
+            };
+            let accuracy = fc.accuracy.unwrap_or(1e-5);
+            if !(accuracy.is_finite() && accuracy > 0.0) {
+                return Err(err(
+                    "forward_check.accuracy",
+                    format!("must be positive, got {accuracy}"),
+                ));
+            }
+            Some(ForwardCheck {
+                integrator,
+                accuracy,
+            })
+        } else {
+            None
+        };
+
+        Ok(SolveConfig {
+            study_file: file.map(Path::to_path_buf),
+            name,
+            model,
+            transcription,
+            guess,
+            settings,
+            output_directory,
+            forward_check,
+        })
+    }
+}
+
+impl SolveConfig {
+    /// The built-in study: the paper's problem with the defaults.
+    pub fn builtin() -> Result<Self, StudyError> {
+        SolveStudy::default().resolve(None)
+    }
+
+    /// Read and resolve a study file, or the built-in study.
+    pub fn load(file: Option<&Path>) -> Result<Self, StudyError> {
+        match file {
+            Some(p) => SolveStudy::from_file(p)?.resolve(Some(p)),
+            None => Self::builtin(),
+        }
+    }
+
+    /// Apply command-line overrides; errors name the option.
+    pub fn apply(&mut self, o: &Overrides) -> Result<(), StudyError> {
+        let err = |field: &str, reason: String| StudyError::Field {
+            origin: "command line".into(),
+            field: field.into(),
+            reason,
+        };
+        if let Some(d) = &o.output_directory {
+            self.output_directory = d.clone();
+        }
+        if let Some(n) = o.num_mesh_intervals {
+            self.transcription.num_mesh_intervals =
+                check_mesh_intervals(n).map_err(|r| err("--num-mesh-intervals", r))?;
+        }
+        if let Some(n) = o.max_iterations {
+            if let Some(n) = check_max_iterations(n).map_err(|r| err("--max-iterations", r))? {
+                self.settings.max_iterations = n;
+            }
+        }
+        if let Some(s) = &o.scheme {
+            self.transcription.scheme = parse_scheme(s).map_err(|r| err("--scheme", r))?;
+        }
+        if let Some(h) = &o.hessian {
+            self.settings.hessian = parse_hessian(h).map_err(|r| err("--hessian", r))?;
+        }
+        if let Some(g) = &o.guess {
+            self.guess = if g == "bang-bang" {
+                GuessChoice::BangBang
+            } else {
+                let p = PathBuf::from(g);
+                if !p.is_file() {
+                    return Err(err(
+                        "--guess",
+                        format!("guess file '{g}' not found (use bang-bang or a .sto file)"),
+                    ));
+                }
+                GuessChoice::File(p)
+            };
+        }
+        if o.no_forward_check {
+            self.forward_check = None;
+        }
+        Ok(())
+    }
+}
+
+/// The default model: `models/jumper.json` in the working directory, else
+/// in the crate's source tree.
+fn default_model() -> Option<PathBuf> {
+    let here = PathBuf::from(DEFAULT_MODEL);
+    if here.is_file() {
+        return Some(here);
+    }
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join(DEFAULT_MODEL);
+    src.is_file().then_some(src)
+}
+
+fn check_name(name: &str) -> Result<(), String> {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
+    {
+        return Err(format!(
+            "'{name}' must be a non-empty file prefix of letters, digits, '_', '-' or '.'"
+        ));
+    }
+    Ok(())
+}
+
+fn check_method(method: &str) -> Result<(), String> {
+    match method {
+        "collocation" => Ok(()),
+        "shooting" => Err("method 'shooting' is not implemented yet; use 'collocation'".into()),
+        other => Err(format!(
+            "unknown method '{other}' (valid: {})",
+            METHODS.join(", ")
+        )),
+    }
+}
+
+/// N ≥ 2 uniform mesh intervals.
+pub fn check_mesh_intervals(n: i64) -> Result<usize, String> {
+    if n < 2 {
+        return Err(format!("must be an integer ≥ 2, got {n}"));
+    }
+    usize::try_from(n).map_err(|_| format!("{n} is too large"))
+}
+
+/// A positive tolerance, or −1 for the default (Moco's convention).
+fn check_tolerance(v: f64) -> Result<Option<f64>, String> {
+    if v == -1.0 {
+        Ok(None)
+    } else if v.is_finite() && v > 0.0 {
+        Ok(Some(v))
+    } else {
+        Err(format!("must be positive (or -1 for the default), got {v}"))
+    }
+}
+
+/// A positive iteration limit, or −1 for the default (Moco's convention).
+fn check_max_iterations(n: i64) -> Result<Option<usize>, String> {
+    match n {
+        -1 => Ok(None),
+        n if n >= 1 => usize::try_from(n)
+            .map(Some)
+            .map_err(|_| format!("{n} is too large")),
+        n => Err(format!("must be ≥ 1 (or -1 for the default), got {n}")),
+    }
+}
+
+/// A scheme by name.
+pub fn parse_scheme(s: &str) -> Result<Scheme, String> {
+    SCHEMES
+        .iter()
+        .find(|(n, _)| *n == s)
+        .map(|(_, sch)| *sch)
+        .ok_or_else(|| {
+            format!(
+                "unknown scheme '{s}' (valid: {})",
+                SCHEMES.map(|(n, _)| n).join(", ")
+            )
+        })
+}
+
+/// The name of a scheme.
+pub fn scheme_name(s: Scheme) -> &'static str {
+    SCHEMES
+        .iter()
+        .find(|(_, sch)| *sch == s)
+        .map(|(n, _)| *n)
+        .unwrap_or("?")
+}
+
+fn parse_hessian(s: &str) -> Result<HessianMode, String> {
+    s.parse::<HessianMode>()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn field_error(json: &str) -> (String, String) {
+        let r = SolveStudy::from_json_str(json, "s.json").and_then(|s| s.resolve(None));
+        match r {
+            Err(StudyError::Field { field, reason, .. }) => (field, reason),
+            other => panic!("expected a field error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn defaults_are_the_papers_problem() {
+        let c = SolveStudy::default().resolve(None).unwrap();
+        assert_eq!(c.transcription.num_mesh_intervals, 28);
+        assert_eq!(c.transcription.scheme, Scheme::MidpointEuler);
+        assert_eq!(c.guess, GuessChoice::BangBang);
+        assert_eq!(c.name, "jump");
+        assert_eq!(c.output_directory, PathBuf::from("results"));
+    }
+
+    #[test]
+    fn bad_values_name_their_field() {
+        let (f, r) = field_error(r#"{"mesh": {"num_mesh_intervals": -3}}"#);
+        assert_eq!(f, "mesh.num_mesh_intervals");
+        assert!(r.contains("-3"), "{r}");
+        let (f, _) = field_error(r#"{"mesh": {"num_mesh_intervals": 0}}"#);
+        assert_eq!(f, "mesh.num_mesh_intervals");
+        let (f, r) = field_error(r#"{"method": "pseudospectral"}"#);
+        assert_eq!(f, "method");
+        assert!(r.contains("collocation") && r.contains("shooting"), "{r}");
+        let (f, r) = field_error(r#"{"mesh": {"scheme": "euler"}}"#);
+        assert_eq!(f, "mesh.scheme");
+        assert!(r.contains("hermite-simpson"), "{r}");
+        let (f, r) = field_error(r#"{"tolerances": {"max_iteration": 3}}"#);
+        assert_eq!(f, "tolerances");
+        assert!(r.contains("max_iteration"), "{r}");
+        let (f, _) = field_error(r#"{"tolerances": {"optim_constraint_tolerance": "tight"}}"#);
+        assert_eq!(f, "tolerances.optim_constraint_tolerance");
+        let (f, _) = field_error(r#"{"tolerances": {"optim_convergence_tolerance": 0}}"#);
+        assert_eq!(f, "tolerances.optim_convergence_tolerance");
+        let (f, _) = field_error(r#"{"hessian": "newton"}"#);
+        assert_eq!(f, "hessian");
+        let (f, _) = field_error(r#"{"name": "../x"}"#);
+        assert_eq!(f, "name");
+    }
+
+    #[test]
+    fn minus_one_means_the_default() {
+        let s = SolveStudy::from_json_str(
+            r#"{"tolerances": {"optim_max_iterations": -1, "optim_constraint_tolerance": -1}}"#,
+            "s",
+        )
+        .unwrap();
+        let c = s.resolve(None).unwrap();
+        let d = SqpSettings::default();
+        assert_eq!(c.settings.max_iterations, d.max_iterations);
+        assert_eq!(
+            c.settings.optim_constraint_tolerance,
+            d.optim_constraint_tolerance
+        );
+    }
+
+    #[test]
+    fn overrides_name_the_option() {
+        let mut c = SolveConfig::builtin().unwrap();
+        let e = c
+            .apply(&Overrides {
+                num_mesh_intervals: Some(1),
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--num-mesh-intervals"), "{e}");
+        c.apply(&Overrides {
+            num_mesh_intervals: Some(4),
+            max_iterations: Some(3),
+            scheme: Some("trapezoidal".into()),
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(c.transcription.num_mesh_intervals, 4);
+        assert_eq!(c.settings.max_iterations, 3);
+        assert_eq!(c.transcription.scheme, Scheme::Trapezoidal);
+    }
+}
