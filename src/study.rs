@@ -210,7 +210,11 @@ impl SolveStudy {
             let path = e.path().to_string();
             StudyError::Field {
                 origin: origin.into(),
-                field: if path == "." { "(study)".into() } else { path },
+                field: if path == "." || path == "?" {
+                    "(document)".into()
+                } else {
+                    path
+                },
                 reason: e.into_inner().to_string(),
             }
         })
@@ -545,7 +549,7 @@ mod tests {
         assert_eq!(f, "mesh.scheme");
         assert!(r.contains("hermite-simpson"), "{r}");
         let (f, r) = field_error(r#"{"tolerances": {"max_iteration": 3}}"#);
-        assert_eq!(f, "tolerances");
+        assert_eq!(f, "tolerances.max_iteration");
         assert!(r.contains("max_iteration"), "{r}");
         let (f, _) = field_error(r#"{"tolerances": {"optim_constraint_tolerance": "tight"}}"#);
         assert_eq!(f, "tolerances.optim_constraint_tolerance");

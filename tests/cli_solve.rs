@@ -1,0 +1,314 @@
+//! `leap solve`: bad study files are refused naming the file, the field and
+//! the reason; a small solve writes its files into `--out` only, and they
+//! parse back with the right columns. Convergence of the full problem is
+//! not asserted here (a small mesh and a few iterations keep this fast).
+
+use assert_cmd::Command;
+use leap::io::StoTable;
+use std::path::{Path, PathBuf};
+
+/// A fresh, empty directory under the system's temporary directory.
+fn fresh_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("leap_cli_solve_{}_{tag}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn bad_study_files_name_file_field_and_reason() {
+    let out = fresh_dir("bad");
+    for (file, field, reason) in [
+        (
+            "unknown_method.json",
+            "method",
+            "unknown method 'pseudospectral'",
+        ),
+        ("shooting.json", "method", "not implemented yet"),
+        (
+            "negative_intervals.json",
+            "mesh.num_mesh_intervals",
+            "got -3",
+        ),
+        ("zero_intervals.json", "mesh.num_mesh_intervals", "got 0"),
+        ("missing_model.json", "model", "not found"),
+        (
+            "unknown_field.json",
+            "mesh.num_mesh_interval",
+            "unknown field",
+        ),
+        (
+            "wrong_type.json",
+            "tolerances.max_iterations",
+            "invalid type",
+        ),
+        ("unknown_scheme.json", "mesh.scheme", "hermite-simpson"),
+        ("broken_json.json", "(document)", "EOF while parsing"),
+    ] {
+        let path = format!("tests/data/studies/{file}");
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["solve", &path, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{file}: {err}");
+        assert!(
+            err.contains(&path) && err.contains(field) && err.contains(reason),
+            "{file}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    // Nothing was written for a refused study.
+    assert!(files_in(&out).is_empty(), "{:?}", files_in(&out));
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn bad_command_line_values_name_the_option() {
+    for (args, what) in [
+        (
+            vec!["solve", "--num-mesh-intervals", "1"],
+            "--num-mesh-intervals",
+        ),
+        (vec!["solve", "--max-iterations", "0"], "--max-iterations"),
+        (vec!["solve", "--scheme", "euler"], "--scheme"),
+        (vec!["solve", "--guess", "no_such_guess.sto"], "--guess"),
+        (vec!["solve", "no_such_study.json"], "no_such_study.json"),
+    ] {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(what), "{args:?}: {err}");
+    }
+}
+
+/// The keys the `--json` object must have.
+const KEYS: [&str; 12] = [
+    "status",
+    "iterations",
+    "wall_time_s",
+    "jump_height_m",
+    "ground_contact_time_s",
+    "liftoff_com_velocity_mps",
+    "peak_vertical_grf_bw",
+    "max_constraint_violation",
+    "forward_jump_height_m",
+    "forward_check_difference_m",
+    "objective",
+    "output_files",
+];
+
+#[test]
+fn small_solve_writes_only_into_out_and_files_parse_back() {
+    // Run from an empty working directory: the default model is found next
+    // to the crate, and nothing may appear there (no results/).
+    let cwd = fresh_dir("cwd");
+    let out = fresh_dir("out");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .current_dir(&cwd)
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "3",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)));
+    for k in KEYS {
+        assert!(v.get(k).is_some(), "missing key {k} in {v}");
+    }
+    // Exit code 0 exactly when the SQP succeeded.
+    assert_eq!(v["success"].as_bool(), Some(o.status.code() == Some(0)));
+    assert!(v["iterations"].as_u64().unwrap() <= 3);
+    assert_eq!(v["num_mesh_intervals"].as_u64(), Some(4));
+    let tf = v["ground_contact_time_s"].as_f64().unwrap();
+    assert!((0.1..=1.0).contains(&tf), "t_f {tf}");
+    // The forward check ran (Simbody and the Rust integrator).
+    assert!(v["forward_jump_height_m"].as_f64().is_some(), "{v}");
+    let d = v["forward_check_difference_m"].as_f64().unwrap();
+    let h = v["jump_height_m"].as_f64().unwrap();
+    let hf = v["forward_jump_height_m"].as_f64().unwrap();
+    assert!((hf - h - d).abs() < 1e-12);
+
+    assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
+    let expected = [
+        "jump_forward_controls.sto",
+        "jump_forward_grf.mot",
+        "jump_forward_states.sto",
+        "jump_grf.mot",
+        "jump_history.csv",
+        "jump_solution.sto",
+        "jump_summary.json",
+    ];
+    assert_eq!(files_in(&out), expected);
+    let listed: Vec<String> = v["output_files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap().to_string())
+        .collect();
+    for f in &listed {
+        assert!(Path::new(f).starts_with(&out), "{f}");
+        assert!(Path::new(f).is_file(), "{f}");
+    }
+    assert_eq!(listed.len(), expected.len());
+
+    // The solution: N + 1 = 5 nodes, time 0..t_f, Moco names and header.
+    let sol = StoTable::read(&out.join("jump_solution.sto")).unwrap();
+    assert_eq!(sol.time.len(), 5);
+    assert_eq!(sol.time[0], 0.0);
+    assert!((sol.time[4] - tf).abs() < 1e-12 * tf.max(1.0));
+    assert_eq!(sol.labels.len(), 62 + 24);
+    for l in [
+        "/jointset/ground_pelvis/pelvis_ty/value",
+        "/jointset/knee_r/knee_angle_r/value",
+        "/jointset/knee_r/knee_angle_r/speed",
+        "/forceset/soleus_r/fiber_length",
+        "/forceset/soleus_r/activation",
+        "/forceset/soleus_r",
+    ] {
+        assert!(sol.labels.iter().any(|x| x == l), "no column {l}");
+    }
+    for k in [
+        "num_iterations",
+        "objective",
+        "solver_duration",
+        "status",
+        "success",
+        "num_states",
+        "num_controls",
+    ] {
+        assert!(sol.metadata.contains_key(k), "no header key {k}");
+    }
+    assert_eq!(sol.metadata["num_states"], "62");
+    assert_eq!(sol.metadata["num_controls"], "24");
+    assert_eq!(
+        sol.metadata["success"],
+        v["success"].as_bool().unwrap().to_string()
+    );
+    let obj: f64 = sol.metadata["objective"].parse().unwrap();
+    assert!((obj - v["objective"].as_f64().unwrap()).abs() < 1e-9);
+    // Excitations within [0, 1]; activations within [0.01, 1].
+    for c in sol.column("/forceset/soleus_r").unwrap() {
+        assert!((0.0..=1.0).contains(&c), "{c}");
+    }
+
+    // Ground forces: both feet in ExternalLoads columns at the nodes; the
+    // squat (node 0) stands on the ground.
+    let grf = StoTable::read(&out.join("jump_grf.mot")).unwrap();
+    assert_eq!(grf.time.len(), 5);
+    for side in ["r", "l"] {
+        for c in ["vx", "vy", "vz", "px", "py", "pz"] {
+            let l = format!("ground_force_{side}_{c}");
+            assert!(grf.labels.contains(&l), "no column {l}");
+        }
+    }
+    let fy0 =
+        grf.column("ground_force_r_vy").unwrap()[0] + grf.column("ground_force_l_vy").unwrap()[0];
+    assert!(fy0 > 0.0, "no ground force at the squat: {fy0}");
+
+    // History: a header and one row per iteration (plus the start).
+    let hist = std::fs::read_to_string(out.join("jump_history.csv")).unwrap();
+    let mut lines = hist.lines();
+    assert!(lines.next().unwrap().starts_with("iter,objective,inf_pr"));
+    assert!(lines.count() >= 1);
+
+    // The forward trajectory parses with the states' names.
+    let fw = StoTable::read(&out.join("jump_forward_states.sto")).unwrap();
+    assert_eq!(fw.labels, sol.labels[..62].to_vec());
+
+    // That solution is a guess for another mesh (resampled).
+    let out2 = fresh_dir("out2");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "6",
+            "--max-iterations",
+            "1",
+            "--no-forward-check",
+            "--json",
+            "--guess",
+        ])
+        .arg(out.join("jump_solution.sto"))
+        .arg("--out")
+        .arg(&out2)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    let v2: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v2["num_mesh_intervals"].as_u64(), Some(6));
+    assert!(v2["forward_jump_height_m"].is_null());
+    assert!(v2["guess"].as_str().unwrap().ends_with("jump_solution.sto"));
+    let sol2 = StoTable::read(&out2.join("jump_solution.sto")).unwrap();
+    assert_eq!(sol2.time.len(), 7);
+
+    for d in [cwd, out, out2] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
+#[test]
+fn study_file_settings_reach_the_solve() {
+    // tests/data/studies/small.json: 4 intervals, trapezoidal, 3 iterations,
+    // no forward check, name "small".
+    let out = fresh_dir("study");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["solve", "tests/data/studies/small.json", "--json", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["scheme"].as_str(), Some("trapezoidal"));
+    assert_eq!(v["num_mesh_intervals"].as_u64(), Some(4));
+    assert!(v["iterations"].as_u64().unwrap() <= 3);
+    assert_eq!(
+        files_in(&out),
+        [
+            "small_grf.mot",
+            "small_history.csv",
+            "small_solution.sto",
+            "small_summary.json"
+        ]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
+fn example_study_parses() {
+    let s = leap::study::SolveStudy::from_file(Path::new("models/jump_collocation.json")).unwrap();
+    let c = s
+        .resolve(Some(Path::new("models/jump_collocation.json")))
+        .unwrap();
+    assert_eq!(c.transcription.num_mesh_intervals, 28);
+    assert_eq!(c.model, Path::new("models/jumper.json"));
+}
