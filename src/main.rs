@@ -101,6 +101,9 @@ enum Command {
         /// No progress output or iteration log.
         #[arg(long)]
         quiet: bool,
+        /// The SQP's iteration log on stderr even when it is not a terminal.
+        #[arg(long, conflicts_with = "quiet")]
+        verbose: bool,
     },
     /// ẋ = f(x, u) and its parts (muscle, contact and joint quantities) at
     /// given states, like OpenSim's Analyze tool. Input: JSON
@@ -258,6 +261,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             no_forward_check,
             json,
             quiet,
+            verbose,
         } => {
             let overrides = leap::study::Overrides {
                 output_directory: out,
@@ -268,7 +272,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 hessian,
                 no_forward_check,
             };
-            solve(study, overrides, json, quiet)
+            solve(study, overrides, json, quiet, verbose)
         }
         Command::Eval {
             model,
@@ -711,12 +715,13 @@ fn solve(
     overrides: leap::study::Overrides,
     json: bool,
     quiet: bool,
+    force_log: bool,
 ) -> Result<ExitCode> {
     use std::io::IsTerminal;
     let mut config = leap::study::SolveConfig::load(study.as_deref())?;
     config.apply(&overrides)?;
     let chatty = !json && !quiet;
-    let verbose = chatty && std::io::stderr().is_terminal();
+    let verbose = force_log || (chatty && std::io::stderr().is_terminal());
     let mut progress = |line: &str| {
         if chatty {
             eprintln!("leap solve: {line}");

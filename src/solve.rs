@@ -147,10 +147,6 @@ pub fn run(
     progress: &mut dyn FnMut(&str),
 ) -> Result<SolveReport, SolveError> {
     let dir = &config.output_directory;
-    std::fs::create_dir_all(dir).map_err(|source| SolveError::Io {
-        file: dir.clone(),
-        source,
-    })?;
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
     let big_n = config.transcription.num_mesh_intervals;
@@ -180,6 +176,11 @@ pub fn run(
             (guess_from_file(&tr, p)?, p.display().to_string(), None)
         }
     };
+    // The results directory only once the problem is set up.
+    std::fs::create_dir_all(dir).map_err(|source| SolveError::Io {
+        file: dir.clone(),
+        source,
+    })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
     progress(&format!(
