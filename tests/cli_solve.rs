@@ -304,6 +304,32 @@ fn study_file_settings_reach_the_solve() {
 }
 
 #[test]
+fn a_guess_without_state_columns_is_refused_naming_file_and_column() {
+    let out = fresh_dir("guess");
+    let guess = "tests/data/controls/jumper_missing_soleus.sto";
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--guess",
+            guess,
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(guess) && err.contains("/jointset/") && err.contains("missing"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+#[test]
 fn example_study_parses() {
     let s = leap::study::SolveStudy::from_file(Path::new("models/jump_collocation.json")).unwrap();
     let c = s
