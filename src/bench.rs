@@ -578,6 +578,7 @@ pub fn sqp_jump(
         hessian,
         max_iterations: iterations,
         qp_equilibrate,
+        scale_variables_using_bounds: true,
         ..Default::default()
     };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);

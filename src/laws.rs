@@ -37,6 +37,11 @@ pub struct Thelen {
     pennated: bool,
     e_toe: f64,
     k_lin: f64,
+    /// None: OpenSim's switch between the activation and deactivation time
+    /// constants at u = a (a kink in da/dt). Some(b): the switch blended by
+    /// ½ + ½·tanh(b·(u − a)), De Groote et al.'s (2016) smoothing, for
+    /// gradient-based optimal control (see [`Thelen::activation_rate`]).
+    pub activation_smoothing: Option<f64>,
 }
 
 /// Everything Thelen2003Muscle computes at one state (OpenSim's names).
@@ -81,6 +86,7 @@ impl Thelen {
             pennated: m.pennation_angle_at_optimal > f64::EPSILON,
             e_toe,
             k_lin: 0.67 / (m.FmaxTendonStrain - e_toe),
+            activation_smoothing: None,
         }
     }
 
@@ -194,10 +200,17 @@ impl Thelen {
     /// Activation rate (OpenSim 4.x: excitation not clamped; §1.1).
     pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let z = ac * 1.5 + 0.5;
+        if let Some(b) = self.activation_smoothing {
+            // 1/τ = s/(τ_act z) + (1 − s) z/τ_deact, s = ½ + ½ tanh(b (u − a)):
+            // the same rates as OpenSim's away from u = a, smooth across it.
+            let s = ((u - ac) * b).tanh() * 0.5 + 0.5;
+            return (u - ac) * (s / (z * self.tau_act) + (s * -1.0 + 1.0) * z / self.tau_deact);
+        }
         let tau = if u.re() > ac.re() {
-            (ac * 1.5 + 0.5) * self.tau_act
+            z * self.tau_act
         } else {
-            (ac * 1.5 + 0.5).recip() * self.tau_deact
+            z.recip() * self.tau_deact
         };
         (u - ac) / tau
     }

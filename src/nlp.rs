@@ -420,3 +420,164 @@ pub fn assemble_hessian<N: Nlp + ?Sized>(
     }
     Ok(out)
 }
+
+/// `nlp` in scaled variables x̃ = x / D (Moco's
+/// `scale_variables_using_bounds`): D_j is the width of variable j's bounds
+/// where both are finite and differ, else 1. The optimizer sees O(1)
+/// variables whatever their units (fibre lengths of centimetres next to
+/// speeds of tens of rad/s), so an identity Hessian model and a box step
+/// bound mean the same in every direction.
+pub struct ScaledVariables<'a, N: Nlp + ?Sized> {
+    inner: &'a mut N,
+    /// D (length n).
+    pub scale: Vec<f64>,
+    x: Vec<f64>,
+    jac_cols: Vec<usize>,
+    element_variables: Vec<Vec<usize>>,
+}
+
+impl<'a, N: Nlp + ?Sized> ScaledVariables<'a, N> {
+    /// Scales from `inner`'s variable bounds.
+    pub fn from_bounds(inner: &'a mut N) -> Self {
+        let n = inner.num_variables();
+        let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
+        inner.variable_bounds(&mut lo, &mut hi);
+        let scale = lo
+            .iter()
+            .zip(&hi)
+            .map(|(&l, &u)| {
+                let w = u - l;
+                if l.abs() < INFINITE_BOUND && u.abs() < INFINITE_BOUND && w > 0.0 && w.is_finite()
+                {
+                    w
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        let jac_cols = inner.jacobian_structure().iter().map(|&(_, j)| j).collect();
+        let element_variables = inner.elements().into_iter().map(|e| e.variables).collect();
+        ScaledVariables {
+            inner,
+            scale,
+            x: vec![0.0; n],
+            jac_cols,
+            element_variables,
+        }
+    }
+    /// x = D x̃.
+    pub fn unscale(&self, xs: &[f64]) -> Vec<f64> {
+        xs.iter().zip(&self.scale).map(|(v, d)| v * d).collect()
+    }
+    /// x̃ = x / D.
+    pub fn scale_point(&self, x: &[f64]) -> Vec<f64> {
+        x.iter().zip(&self.scale).map(|(v, d)| v / d).collect()
+    }
+    fn set(&mut self, xs: &[f64]) {
+        for ((o, v), d) in self.x.iter_mut().zip(xs).zip(&self.scale) {
+            *o = v * d;
+        }
+    }
+}
+
+impl<N: Nlp + ?Sized> Nlp for ScaledVariables<'_, N> {
+    fn num_variables(&self) -> usize {
+        self.inner.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.inner.num_constraints()
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.variable_bounds(lower, upper);
+        for j in 0..self.scale.len() {
+            if lower[j].abs() < INFINITE_BOUND {
+                lower[j] /= self.scale[j];
+            }
+            if upper[j].abs() < INFINITE_BOUND {
+                upper[j] /= self.scale[j];
+            }
+        }
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        self.inner.constraint_bounds(lower, upper);
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.inner.initial_point(x);
+        for (v, d) in x.iter_mut().zip(&self.scale) {
+            *v /= d;
+        }
+    }
+    fn objective(&mut self, xs: &[f64]) -> Result<f64, EvalError> {
+        self.set(xs);
+        let x = std::mem::take(&mut self.x);
+        let r = self.inner.objective(&x);
+        self.x = x;
+        r
+    }
+    fn gradient(&mut self, xs: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
+        self.set(xs);
+        let x = std::mem::take(&mut self.x);
+        let r = self.inner.gradient(&x, g);
+        self.x = x;
+        r?;
+        for (v, d) in g.iter_mut().zip(&self.scale) {
+            *v *= d;
+        }
+        Ok(())
+    }
+    fn constraints(&mut self, xs: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        self.set(xs);
+        let x = std::mem::take(&mut self.x);
+        let r = self.inner.constraints(&x, c);
+        self.x = x;
+        r
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.inner.jacobian_structure()
+    }
+    fn jacobian_values(&mut self, xs: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.set(xs);
+        let x = std::mem::take(&mut self.x);
+        let r = self.inner.jacobian_values(&x, values);
+        self.x = x;
+        r?;
+        for (v, &j) in values.iter_mut().zip(&self.jac_cols) {
+            *v *= self.scale[j];
+        }
+        Ok(())
+    }
+    fn elements(&self) -> Vec<Element> {
+        self.inner.elements()
+    }
+    fn has_hessian(&self) -> bool {
+        self.inner.has_hessian()
+    }
+    fn element_hessian(
+        &mut self,
+        xs: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
+        self.set(xs);
+        let x = std::mem::take(&mut self.x);
+        let r = self.inner.element_hessian(&x, e, sigma, lambda, h);
+        self.x = x;
+        r?;
+        let vars = &self.element_variables[e];
+        let k = vars.len();
+        for a in 0..k {
+            for b in 0..k {
+                h[a * k + b] *= self.scale[vars[a]] * self.scale[vars[b]];
+            }
+        }
+        Ok(())
+    }
+    fn variable_name(&self, i: usize) -> String {
+        self.inner.variable_name(i)
+    }
+    fn constraint_name(&self, i: usize) -> String {
+        self.inner.constraint_name(i)
+    }
+}

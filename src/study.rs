@@ -285,7 +285,13 @@ impl SolveStudy {
             }
         };
 
-        let mut settings = SqpSettings::default();
+        // The jump's variables range from centimetres (fibre lengths) to
+        // tens of rad/s (speeds): the SQP works in variables scaled by
+        // their bounds (Moco's scale_variables_using_bounds).
+        let mut settings = SqpSettings {
+            scale_variables_using_bounds: true,
+            ..Default::default()
+        };
         let t = &self.tolerances;
         if let Some(v) = t.optim_convergence_tolerance {
             if let Some(v) =

@@ -1253,6 +1253,23 @@ impl Transcription {
         self.num_intervals() * self.nx + self.n_cm
     }
 
+    /// The defect rows grouped by their node columns S_r = pattern(f_r) ∪
+    /// {r} (increasing), in order of each group's first row.
+    fn defect_row_groups(&self) -> Vec<(Vec<usize>, Vec<usize>)> {
+        let mut groups: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
+        for r in 0..self.nx {
+            let mut cols = self.pattern.rows[r].clone();
+            cols.push(r);
+            cols.sort_unstable();
+            cols.dedup();
+            match groups.iter_mut().find(|g| g.0 == cols) {
+                Some(g) => g.1.push(r),
+                None => groups.push((cols, vec![r])),
+            }
+        }
+        groups
+    }
+
     /// Y_C, Ẏ_C and J = Y_C + Ẏ_C²/(2g) at the final node.
     pub fn jump_objective(&self, v: &[f64]) -> (f64, f64, f64) {
         let mut ws = self.ocp.eq.multibody.workspace::<f64>();
@@ -1689,15 +1706,45 @@ impl Nlp for Transcription {
         let nx = self.nx;
         let tf = self.final_time_index();
         let mut out = Vec::with_capacity(big_n + self.n_cm + 1);
-        for k in 1..=big_n {
-            let start = if k >= 2 { (k - 2) * nv } else { 0 };
-            let mut variables: Vec<usize> = (start..k * nv).collect();
-            variables.push(tf);
-            out.push(Element {
-                variables,
-                constraints: ((k - 1) * nx..k * nx).collect(),
-                objective: false,
-            });
+        if self.options.scheme == Scheme::HermiteSimpson {
+            // The centre state couples every row to all of f at both nodes:
+            // one element per interval.
+            for k in 1..=big_n {
+                let start = if k >= 2 { (k - 2) * nv } else { 0 };
+                let mut variables: Vec<usize> = (start..k * nv).collect();
+                variables.push(tf);
+                out.push(Element {
+                    variables,
+                    constraints: ((k - 1) * nx..k * nx).collect(),
+                    objective: false,
+                });
+            }
+        } else {
+            // Midpoint and trapezoidal defect row r depends on the node
+            // columns S_r = pattern(f_r) ∪ {r} of both nodes and on t_f.
+            // Rows with the same S_r form one element per interval: the q̈
+            // rows (dense over q, q̇, l^M) together, every other row alone
+            // (q_j with q̇_j; l^M_i with a_i and the coordinates its path
+            // spans; a_i with u_i). Small elements keep the stiff curvature
+            // of contact and tendons out of the excitations' BFGS blocks
+            // and the QP's Hessian sparse.
+            for group in self.defect_row_groups() {
+                let cols = &group.0;
+                for k in 1..=big_n {
+                    let mut variables = Vec::with_capacity(2 * cols.len() + 1);
+                    for node in [k - 1, k] {
+                        if node >= 1 {
+                            variables.extend(cols.iter().map(|&c| (node - 1) * nv + c));
+                        }
+                    }
+                    variables.push(tf);
+                    out.push(Element {
+                        variables,
+                        constraints: group.1.iter().map(|&r| (k - 1) * nx + r).collect(),
+                        objective: false,
+                    });
+                }
+            }
         }
         for j in 0..self.n_cm {
             let mut variables = Vec::new();

@@ -257,3 +257,53 @@ fn contact_laws_match_opensim_46_tables() {
     }
     assert_eq!(checked, 24);
 }
+
+/// The smoothed activation switch (OcpOptions::activation_smoothing): with a
+/// very sharp blend it is OpenSim's law wherever u ≠ a; at moderate
+/// sharpness its derivative is continuous across u = a (dual number against
+/// central differences), where OpenSim's own law has a kink.
+#[test]
+fn smoothed_activation_switch() {
+    use leap::scalar::Dual64;
+    let p = serde_json::json!({"activation_time_constant": 0.01, "deactivation_time_constant": 0.04,
+        "FmaxTendonStrain": 0.033, "KshapeActive": 0.5, "KshapePassive": 4.0, "Af": 0.3, "Flen": 1.8});
+    let opensim = Thelen::new(&muscle(0.1, &p));
+    let mut sharp = opensim.clone();
+    sharp.activation_smoothing = Some(1e6);
+    for &(a, u) in &[
+        (0.2f64, 0.9f64),
+        (0.9, 0.2),
+        (0.5, 0.51),
+        (0.5, 0.49),
+        (0.01, 1.0),
+        (1.0, 0.01),
+    ] {
+        let (r0, r1): (f64, f64) = (opensim.activation_rate(a, u), sharp.activation_rate(a, u));
+        assert!(
+            (r0 - r1).abs() <= 1e-12 * r0.abs(),
+            "a {a} u {u}: {r0} vs {r1}"
+        );
+    }
+    let mut smooth = opensim.clone();
+    smooth.activation_smoothing = Some(10.0);
+    let h = 1e-6;
+    for &a in &[0.01f64, 0.3, 0.8] {
+        let d = smooth.activation_rate(Dual64::from(a), Dual64::new(a, 1.0));
+        let fd: f64 =
+            (smooth.activation_rate(a, a + h) - smooth.activation_rate(a, a - h)) / (2.0 * h);
+        assert!(
+            (d.eps - fd).abs() <= 1e-6 * fd.abs(),
+            "∂/∂u at u = a = {a}: {} vs {fd}",
+            d.eps
+        );
+        // OpenSim's law: the one-sided slopes differ by the time constants.
+        let right: f64 = (opensim.activation_rate(a, a + h) - opensim.activation_rate(a, a)) / h;
+        let left: f64 = (opensim.activation_rate(a, a) - opensim.activation_rate(a, a - h)) / h;
+        assert!(
+            (right - left).abs() > 0.1 * right.abs(),
+            "a {a}: kink {right} vs {left}"
+        );
+        // The smoothed slope lies between them.
+        assert!(d.eps > left.min(right) && d.eps < left.max(right));
+    }
+}

@@ -298,16 +298,27 @@ fn sizes_bounds_and_elements() {
     // The partially separable structure.
     let el = tr.elements();
     check_elements(&el, n, m).unwrap();
-    assert_eq!(el.len(), 28 + 7 + 1);
-    assert_eq!(el[5].variables.len(), 2 * 86 + 1);
+    // Per interval, rows with the same node columns share an element: each
+    // q̇ row (q_j, q̇_j), the q̈ rows together (q, q̇, l^M), each fibre-length
+    // row, each activation row (a_i, u_i): 7 + 1 + 24 + 24 = 56 groups.
+    assert_eq!(el.len(), 56 * 28 + 7 + 1);
     assert_eq!(el.iter().filter(|e| e.objective).count(), 1);
-    // Every Jacobian entry lies inside its row's element.
     let mut owner = vec![0; m];
     for (e, x) in el.iter().enumerate() {
         for &i in &x.constraints {
             owner[i] = e;
         }
     }
+    // Interval 2: the q̈ rows' element spans q, q̇ and l^M of nodes 1 and 2
+    // and t_f; an activation row's element a_i, u_i of both nodes and t_f.
+    let qdd = &el[owner[62 + 7]];
+    assert_eq!(qdd.constraints, (62 + 7..62 + 14).collect::<Vec<_>>());
+    assert_eq!(qdd.variables.len(), 2 * (7 + 7 + 24) + 1);
+    assert_eq!(
+        el[owner[62 + 38]].variables,
+        vec![38, 62, 86 + 38, 86 + 62, n - 1]
+    );
+    // Every Jacobian entry lies inside its row's element.
     for &(i, j) in &s {
         assert!(
             el[owner[i]].variables.binary_search(&j).is_ok(),

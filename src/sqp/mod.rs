@@ -103,6 +103,13 @@ pub struct SqpSettings {
     /// starting point (IPOPT's default); tolerances apply to the scaled
     /// problem.
     pub nlp_scaling: bool,
+    /// Solve in variables scaled by the widths of their bounds
+    /// ([`crate::nlp::ScaledVariables`]; Moco's name). Results are
+    /// returned in the problem's own variables.
+    pub scale_variables_using_bounds: bool,
+    /// With `verbose`: for each rejected full step, the objective and
+    /// violation changes and the constraints that grew most.
+    pub verbose_line_search: bool,
 }
 
 impl Default for SqpSettings {
@@ -125,6 +132,8 @@ impl Default for SqpSettings {
             qp_dump_dir: None,
             qp_dump_every: false,
             nlp_scaling: true,
+            scale_variables_using_bounds: false,
+            verbose_line_search: false,
         }
     }
 }
@@ -582,6 +591,20 @@ pub fn solve<N: Nlp + ?Sized>(nlp: &mut N, settings: &SqpSettings) -> SqpResult 
 
 /// Solve `nlp` from `x0` (projected into the variable bounds).
 pub fn solve_from<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettings) -> SqpResult {
+    if settings.scale_variables_using_bounds && x0.len() == nlp.num_variables() {
+        let mut scaled = crate::nlp::ScaledVariables::from_bounds(nlp);
+        let xs = scaled.scale_point(x0);
+        let mut r = solve_unscaled(&mut scaled, &xs, settings);
+        r.x = scaled.unscale(&r.x);
+        for (z, d) in r.zeta.iter_mut().zip(&scaled.scale) {
+            *z /= d;
+        }
+        return r;
+    }
+    solve_unscaled(nlp, x0, settings)
+}
+
+fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettings) -> SqpResult {
     let start = Instant::now();
     let hessian = settings.hessian;
     let mut result = SqpResult {
@@ -1277,7 +1300,7 @@ impl<'s> Solver<'s> {
             let needed = 1.1 * norm_inf(&lam_qp) + 1e-6;
             if nu < needed {
                 nu = (1.5 * needed).max(1.5 * nu);
-            } else if nu > 100.0 * needed {
+            } else if nu > 10.0 * needed {
                 nu = (nu / 10.0).max(1.5 * needed);
             }
             let gd: f64 = p.g.iter().zip(&d).map(|(a, b)| a * b).sum();
@@ -1315,6 +1338,21 @@ impl<'s> Solver<'s> {
                     if phi <= phi0 + 1e-4 * alpha * dphi + 10.0 * f64::EPSILON * phi0.abs() {
                         accepted = Some((trial_x.clone(), f, trial_c.clone()));
                         break;
+                    }
+                    if alpha == 1.0 && st.verbose_line_search {
+                        let (v0s, _) = self.pb.violation(&p.c);
+                        eprintln!("  rejected full step: Δf {:.3e} (gᵀd {:.3e}), ν·Δviol {:.3e} (viol {:.3e} → {:.3e}), |d| {:.3e}, Δ {:.3e}", f - p.f, gd, nu * (v1 - v0s), v0s, v1, dnorm, delta);
+                        let mut worst: Vec<(f64, usize)> = (0..m)
+                            .map(|i| {
+                                let viol =
+                                    |c: f64| (self.pb.cl[i] - c).max(c - self.pb.cu[i]).max(0.0);
+                                (viol(trial_c[i]) - viol(p.c[i]), i)
+                            })
+                            .collect();
+                        worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+                        for &(dv, i) in worst.iter().take(6) {
+                            eprintln!("    {:.3e} {}", dv, nlp.constraint_name(i));
+                        }
                     }
                     // Second-order correction (Nocedal & Wright §18.3)
                     // when the full step made the constraints worse.

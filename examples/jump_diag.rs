@@ -1,0 +1,82 @@
+//! Diagnose the SQP on the jump: `cargo run --release --example jump_diag -- N ITERATIONS`
+//! runs the collocation with N mesh intervals, prints the largest multipliers,
+//! then (unless NOFD is set) checks the Jacobian at the last iterate by central
+//! differences, naming the worst entries. SQP iterations on the jump, then a finite-difference check
+//! of the Jacobian at the last iterate, naming the worst entries.
+use leap::nlp::Nlp;
+use std::sync::Arc;
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1);
+    let n: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(28);
+    let iterations: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(8);
+    let model = leap::model::Model::from_file(std::path::Path::new("models/jumper.json"))?;
+    let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
+    let opts = leap::transcription::TranscriptionOptions {
+        num_mesh_intervals: n,
+        ..Default::default()
+    };
+    let mut tr = leap::transcription::Transcription::new(ocp.clone(), opts)?;
+    let (guess, _) = tr.bang_bang_guess()?;
+    let settings = leap::sqp::SqpSettings {
+        max_iterations: iterations,
+        verbose: true,
+        scale_variables_using_bounds: std::env::var("NOSCALE").is_err(),
+        ..Default::default()
+    };
+    let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
+    let x = r.x.clone();
+    let mut li: Vec<usize> = (0..r.lambda.len()).collect();
+    li.sort_by(|&a, &b| r.lambda[b].abs().partial_cmp(&r.lambda[a].abs()).unwrap());
+    for &i in li.iter().take(12) {
+        println!("lambda {:.3e} {}", r.lambda[i], tr.constraint_name(i));
+    }
+    let mut zi: Vec<usize> = (0..r.zeta.len()).collect();
+    zi.sort_by(|&a, &b| r.zeta[b].abs().partial_cmp(&r.zeta[a].abs()).unwrap());
+    for &i in zi.iter().take(8) {
+        println!("zeta {:.3e} {}", r.zeta[i], tr.variable_name(i));
+    }
+    if std::env::var("NOFD").is_ok() {
+        return Ok(());
+    }
+    let (nv, m) = (tr.num_variables(), tr.num_constraints());
+    let pat = tr.jacobian_structure();
+    let mut jv = vec![0.0; pat.len()];
+    tr.jacobian_values(&x, &mut jv)?;
+    let mut dense = std::collections::HashMap::new();
+    for (k, &(i, j)) in pat.iter().enumerate() {
+        dense.insert((i, j), jv[k]);
+    }
+    let mut worst: Vec<(f64, usize, usize, f64, f64)> = Vec::new();
+    let mut cp = vec![0.0; m];
+    let mut cm = vec![0.0; m];
+    for j in 0..nv {
+        let h = 1e-7 * x[j].abs().max(1.0);
+        let mut xp = x.clone();
+        xp[j] += h;
+        tr.constraints(&xp, &mut cp)?;
+        let mut xm = x.clone();
+        xm[j] -= h;
+        tr.constraints(&xm, &mut cm)?;
+        for i in 0..m {
+            let fd = (cp[i] - cm[i]) / (2.0 * h);
+            let an = dense.get(&(i, j)).copied().unwrap_or(0.0);
+            let err = (fd - an).abs() / fd.abs().max(1.0);
+            if err > 1e-4 {
+                worst.push((err, i, j, an, fd));
+            }
+        }
+    }
+    worst.sort_by(|a, b| b.0.partial_cmp(&a.0).unwrap());
+    println!("{} entries with relative error > 1e-4", worst.len());
+    for w in worst.iter().take(30) {
+        println!(
+            "{:.2e}  {} / {}: analytic {:.6e} fd {:.6e}",
+            w.0,
+            tr.constraint_name(w.1),
+            tr.variable_name(w.2),
+            w.3,
+            w.4
+        );
+    }
+    Ok(())
+}
