@@ -1,8 +1,7 @@
 //! Diagnose the SQP on the jump: `cargo run --release --example jump_diag -- N ITERATIONS`
 //! runs the collocation with N mesh intervals, prints the largest multipliers,
 //! then (unless NOFD is set) checks the Jacobian at the last iterate by central
-//! differences, naming the worst entries. SQP iterations on the jump, then a finite-difference check
-//! of the Jacobian at the last iterate, naming the worst entries.
+//! differences, naming the worst entries.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {

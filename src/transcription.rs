@@ -57,7 +57,7 @@ use crate::ocp::JumpOcp;
 use crate::ode::StateWorkspace;
 use crate::scalar::Dual64;
 use crate::simulate::{JumpSummary, SimulationFailure};
-use num_dual::DualSVec64;
+use num_dual::{DualSVec64, HyperDual64, HyperDualSVec64};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
@@ -644,6 +644,10 @@ pub struct EvalCounters {
     pub constraints_time: f64,
     pub jacobians: usize,
     pub jacobian_time: f64,
+    /// Second-order sweeps over the points (one per x the element
+    /// Hessians are asked at) and their time.
+    pub hessians: usize,
+    pub hessian_time: f64,
 }
 
 /// A trajectory on the mesh: node times, states and excitations (node 0
@@ -692,6 +696,15 @@ pub struct Transcription {
     /// Column layout of node k's element in the no-countermovement rows etc.
     ydd_cols: Vec<usize>,
     fy_cols: Vec<usize>,
+    /// The final node's columns of the objective and lift-off element.
+    final_cols: Vec<usize>,
+    /// [`Transcription::defect_row_groups`].
+    groups: Vec<(Vec<usize>, Vec<usize>)>,
+    /// Exact Hessians: the seeding (None: not available), what each
+    /// element holds, and the point derivatives of the last x.
+    hess_plan: Option<HessPlan>,
+    hess_elements: Vec<HessElement>,
+    hess: Option<Box<HessCache>>,
 }
 
 impl Transcription {
@@ -952,7 +965,32 @@ impl Transcription {
             initial: Vec::new(),
             ydd_cols,
             fy_cols,
+            final_cols: Vec::new(),
+            groups: Vec::new(),
+            hess_plan: None,
+            hess_elements: Vec::new(),
+            hess: None,
         };
+        me.groups = me.defect_row_groups();
+        {
+            let n = me.ocp.nq();
+            let mut cols: Vec<usize> = (0..2 * n).chain(me.fy_cols.iter().copied()).collect();
+            cols.sort_unstable();
+            cols.dedup();
+            me.final_cols = cols;
+        }
+        if me.options.scheme != Scheme::HermiteSimpson {
+            me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
+            for g in 0..me.groups.len() {
+                for k in 1..=big_n {
+                    me.hess_elements.push(HessElement::Defect { group: g, k });
+                }
+            }
+            for j in 0..n_cm {
+                me.hess_elements.push(HessElement::NoCountermovement(j));
+            }
+            me.hess_elements.push(HessElement::Final);
+        }
         // Until a guess is set: the squat held, t_f = 0.3 s within its bounds.
         let [t0, t1] = me.ocp.options.final_time_bounds;
         me.initial = me.constant_guess(0.3f64.clamp(t0, t1));
@@ -1728,7 +1766,7 @@ impl Nlp for Transcription {
             // spans; a_i with u_i). Small elements keep the stiff curvature
             // of contact and tendons out of the excitations' BFGS blocks
             // and the QP's Hessian sparse.
-            for group in self.defect_row_groups() {
+            for group in &self.groups {
                 let cols = &group.0;
                 for k in 1..=big_n {
                     let mut variables = Vec::with_capacity(2 * cols.len() + 1);
@@ -1759,16 +1797,32 @@ impl Nlp for Transcription {
                 objective: false,
             });
         }
-        let n = self.ocp.nq();
-        let mut cols: Vec<usize> = (0..2 * n).chain(self.fy_cols.iter().copied()).collect();
-        cols.sort_unstable();
-        cols.dedup();
         out.push(Element {
-            variables: cols.iter().map(|&c| (big_n - 1) * nv + c).collect(),
+            variables: self
+                .final_cols
+                .iter()
+                .map(|&c| (big_n - 1) * nv + c)
+                .collect(),
             constraints: vec![self.liftoff_row()],
             objective: true,
         });
         out
+    }
+
+    /// Midpoint Euler and trapezoidal only (see [`Transcription::element_hessian`]).
+    fn has_hessian(&self) -> bool {
+        self.hess_plan.is_some()
+    }
+
+    fn element_hessian(
+        &mut self,
+        x: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
+        self.hessian_of_element(x, e, sigma, lambda, h)
     }
 
     fn variable_name(&self, i: usize) -> String {
@@ -1827,4 +1881,572 @@ pub fn time_point_jacobian<const W: usize>(
     }
     times.sort_by(|a, b| a.total_cmp(b));
     Ok(times[times.len() / 2])
+}
+
+// ---------------------------------------------------------------------------
+// Exact element Hessians of the Lagrangian (midpoint Euler and trapezoidal).
+
+/// eps1 directions per second-order pass of the state equation.
+const HESS_M: usize = 20;
+/// eps2 directions: q, q̇ and the sums over the fibre lengths, the
+/// activations and the excitations (2·n_q + 3 ≤ 17; models with more
+/// coordinates have no Hessian).
+const HESS_N: usize = 17;
+type Hd = HyperDualSVec64<HESS_M, HESS_N>;
+
+/// How an input column of (x, u) is seeded in the second-order passes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ColClass {
+    /// q and q̇: its own direction in eps1 and eps2.
+    Full,
+    /// A fibre length: its own eps1 direction, the sum of all fibre lengths in eps2.
+    Fibre,
+    /// An activation or excitation: the sum over its kind in eps1 and eps2.
+    Summed,
+}
+
+/// The seeding of the second-order passes (see [`Transcription::element_hessian`]).
+#[derive(Debug, Clone)]
+struct HessPlan {
+    /// eps1 and eps2 directions in total.
+    m1: usize,
+    n2: usize,
+    /// Per input column: eps1 and eps2 direction, class.
+    e1: Vec<usize>,
+    e2: Vec<usize>,
+    class: Vec<ColClass>,
+    /// (n_x + 2) × n_in: whether output r depends on input c.
+    in_pat: Vec<bool>,
+    nin: usize,
+    /// Values per output in the point data: m1 first derivatives, then the
+    /// m1 × n2 second derivatives.
+    block: usize,
+}
+
+impl HessPlan {
+    /// The plan for `pattern`, or None where the seeding would not separate
+    /// the second derivatives: more than 2·7 + 3 eps2 directions, or an
+    /// output depending on several activations or excitations, or on
+    /// activations or excitations and several fibre lengths.
+    fn new(pattern: &StatePattern, n: usize, nm: usize) -> Option<Self> {
+        let (nx, nu) = (pattern.nx, pattern.nu);
+        let nin = nx + nu;
+        if nx != 2 * n + 2 * nm || nu != nm || 2 * n + 3 > HESS_N {
+            return None;
+        }
+        let (m1, n2) = (2 * n + nm + 2, 2 * n + 3);
+        let mut e1 = vec![0; nin];
+        let mut e2 = vec![0; nin];
+        let mut class = vec![ColClass::Full; nin];
+        for c in 0..nin {
+            (e1[c], e2[c], class[c]) = if c < 2 * n {
+                (c, c, ColClass::Full)
+            } else if c < 2 * n + nm {
+                (c, 2 * n, ColClass::Fibre)
+            } else if c < nx {
+                (2 * n + nm, 2 * n + 1, ColClass::Summed)
+            } else {
+                (2 * n + nm + 1, 2 * n + 2, ColClass::Summed)
+            };
+        }
+        let mut in_pat = vec![false; (nx + 2) * nin];
+        for (r, cols) in pattern.rows.iter().enumerate() {
+            let (mut nl, mut na, mut nuu) = (0, 0, 0);
+            for &c in cols {
+                in_pat[r * nin + c] = true;
+                if c >= 2 * n && c < 2 * n + nm {
+                    nl += 1;
+                } else if c >= 2 * n + nm && c < nx {
+                    na += 1;
+                } else if c >= nx {
+                    nuu += 1;
+                }
+            }
+            if na > 1 || nuu > 1 || (na + nuu > 0 && nl > 1) {
+                return None;
+            }
+        }
+        Some(HessPlan {
+            m1,
+            n2,
+            e1,
+            e2,
+            class,
+            in_pat,
+            nin,
+            block: m1 + m1 * n2,
+        })
+    }
+
+    /// ∂²g_r/∂c∂d from output r's block of point data.
+    #[inline]
+    fn hess(&self, data: &[f64], r: usize, c: usize, d: usize) -> f64 {
+        if !(self.in_pat[r * self.nin + c] && self.in_pat[r * self.nin + d]) {
+            return 0.0;
+        }
+        let (i, j) = match (self.class[c], self.class[d]) {
+            (_, ColClass::Full) => (self.e1[c], self.e2[d]),
+            (ColClass::Full, _) => (self.e1[d], self.e2[c]),
+            // Muscle forces are separate: no fibre length couples another
+            // (the eps2 direction is the sum over all of them).
+            (ColClass::Fibre, ColClass::Fibre) if c != d => return 0.0,
+            _ => (self.e1[c], self.e2[d]),
+        };
+        data[r * self.block + self.m1 + i * self.n2 + j]
+    }
+
+    /// ∂g_r/∂c from output r's block of point data.
+    #[inline]
+    fn grad(&self, data: &[f64], r: usize, c: usize) -> f64 {
+        if !self.in_pat[r * self.nin + c] {
+            return 0.0;
+        }
+        data[r * self.block + self.e1[c]]
+    }
+}
+
+/// What an element of [`Nlp::elements`] holds (midpoint and trapezoidal).
+#[derive(Debug, Clone, Copy)]
+enum HessElement {
+    /// The defect rows of group `group` in interval `k`.
+    Defect { group: usize, k: usize },
+    /// No-countermovement row j.
+    NoCountermovement(usize),
+    /// Objective and lift-off row.
+    Final,
+}
+
+/// Buffers of one second-order evaluation thread.
+struct HessWorker {
+    ws: StateWorkspace<Hd>,
+    xd: Vec<Hd>,
+    ud: Vec<Hd>,
+    xdotd: Vec<Hd>,
+    x: Vec<f64>,
+    u: Vec<f64>,
+}
+
+impl HessWorker {
+    fn new(ocp: &JumpOcp) -> Self {
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let z = Hd::from_re(0.0);
+        HessWorker {
+            ws: ocp.eq.workspace(),
+            xd: vec![z; nx],
+            ud: vec![z; nu],
+            xdotd: vec![z; nx],
+            x: vec![0.0; nx],
+            u: vec![0.0; nu],
+        }
+    }
+}
+
+/// The point second derivatives, computed once per x.
+struct HessCache {
+    workers: Vec<HessWorker>,
+    /// The x the data belong to (empty: none).
+    x: Vec<f64>,
+    /// Per point, per output g_r: [`HessPlan::block`] values.
+    data: Vec<f64>,
+    /// Hessian of J over the final node's (q, q̇), 2n × 2n.
+    objective: Vec<f64>,
+    /// Scratch: a λ-weighted block and gradient.
+    hw: Vec<f64>,
+    gw: Vec<f64>,
+}
+
+/// First and second derivatives of g = (f, Ÿ_C, F_y/(m g)) at the worker's
+/// (x, u) into `out` (per output, [`HessPlan::block`] values).
+fn eval_hess_point(
+    ocp: &JumpOcp,
+    plan: &HessPlan,
+    w: &mut HessWorker,
+    out: &mut [f64],
+) -> Result<(), String> {
+    let (nx, nu) = (w.x.len(), w.u.len());
+    let (m1, n2, block) = (plan.m1, plan.n2, plan.block);
+    for lo in (0..m1).step_by(HESS_M) {
+        let hi = (lo + HESS_M).min(m1);
+        for c in 0..nx + nu {
+            let v = if c < nx { w.x[c] } else { w.u[c - nx] };
+            let mut d = Hd::from_re(v).derivative2(plan.e2[c]);
+            let i = plan.e1[c];
+            if (lo..hi).contains(&i) {
+                d = d.derivative1(i - lo);
+            }
+            if c < nx {
+                w.xd[c] = d;
+            } else {
+                w.ud[c - nx] = d;
+            }
+        }
+        let (ydd, fy) = ocp
+            .state_rates(&mut w.ws, &w.xd, &w.ud, &mut w.xdotd)
+            .map_err(|e| e.to_string())?;
+        for r in 0..nx + 2 {
+            let d = if r < nx {
+                &w.xdotd[r]
+            } else if r == nx {
+                &ydd
+            } else {
+                &fy
+            };
+            let o = &mut out[r * block..(r + 1) * block];
+            match &d.eps1.0 {
+                Some(g) => {
+                    for i in lo..hi {
+                        o[i] = g[i - lo];
+                    }
+                }
+                None => o[lo..hi].iter_mut().for_each(|v| *v = 0.0),
+            }
+            let hs = &mut o[m1 + lo * n2..m1 + hi * n2];
+            match &d.eps1eps2.0 {
+                Some(hm) => {
+                    for i in lo..hi {
+                        for j in 0..n2 {
+                            hs[(i - lo) * n2 + j] = hm[(i - lo, j)];
+                        }
+                    }
+                }
+                None => hs.iter_mut().for_each(|v| *v = 0.0),
+            }
+        }
+    }
+    if let Some(i) = out.iter().position(|v| !v.is_finite()) {
+        return Err(format!(
+            "derivative {} of output {} is {}",
+            i % block,
+            i / block,
+            out[i]
+        ));
+    }
+    Ok(())
+}
+
+impl Transcription {
+    /// Compute the second derivatives at every point (in parallel) and of
+    /// the objective, unless they are cached for this x.
+    fn refresh_hessian(&mut self, v: &[f64]) -> Result<(), EvalError> {
+        let Some(plan) = &self.hess_plan else {
+            return Err(EvalError::new(
+                "hessian",
+                "no exact Hessian for this scheme or model",
+            ));
+        };
+        if self.hess.as_ref().is_some_and(|h| h.x == v) {
+            return Ok(());
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(EvalError::new(
+                "hessian",
+                format!("{} is {}", self.variable_name(i), v[i]),
+            ));
+        }
+        let start = std::time::Instant::now();
+        let ocp: &JumpOcp = &self.ocp;
+        let npts = self.points.len();
+        let nout = self.nx + 2;
+        let block = plan.block;
+        let threads = self.options.threads;
+        let cache = self.hess.get_or_insert_with(|| {
+            Box::new(HessCache {
+                workers: (0..threads).map(|_| HessWorker::new(ocp)).collect(),
+                x: Vec::new(),
+                data: vec![0.0; npts * nout * block],
+                objective: Vec::new(),
+                hw: Vec::new(),
+                gw: Vec::new(),
+            })
+        });
+        cache.x.clear();
+        let (nx, nu) = (self.nx, self.nu);
+        let nv = nx + nu;
+        let node = |k: usize| -> (&[f64], &[f64]) {
+            if k == 0 {
+                (ocp.x0(), ocp.u0())
+            } else {
+                let o = (k - 1) * nv;
+                (&v[o..o + nx], &v[o + nx..o + nv])
+            }
+        };
+        let run = |w: &mut HessWorker,
+                   first: usize,
+                   pts: &[Point],
+                   out: &mut [f64]|
+         -> Result<(), (usize, String)> {
+            for (i, p) in pts.iter().enumerate() {
+                match *p {
+                    Point::Node(k) => {
+                        let (x, u) = node(k);
+                        w.x.copy_from_slice(x);
+                        w.u.copy_from_slice(u);
+                    }
+                    Point::Mid(k) => {
+                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
+                        for j in 0..nx {
+                            w.x[j] = 0.5 * (xa[j] + xb[j]);
+                        }
+                        for j in 0..nu {
+                            w.u[j] = 0.5 * (ua[j] + ub[j]);
+                        }
+                    }
+                    Point::Center(_) => {
+                        return Err((first + i, "no Hessian at Hermite–Simpson centres".into()))
+                    }
+                }
+                let o = &mut out[i * nout * block..(i + 1) * nout * block];
+                eval_hess_point(ocp, plan, w, o).map_err(|e| (first + i, e))?;
+            }
+            Ok(())
+        };
+        let points = &self.points[..];
+        let nt = cache.workers.len().min(npts).max(1);
+        let per = npts.div_ceil(nt).max(1);
+        let result = std::thread::scope(|s| {
+            let mut jobs = cache
+                .workers
+                .iter_mut()
+                .zip(cache.data.chunks_mut(per * nout * block))
+                .zip(points.chunks(per).enumerate());
+            let first = jobs.next();
+            let run = &run;
+            let handles: Vec<_> = jobs
+                .map(|((w, out), (ci, pts))| s.spawn(move || run(w, ci * per, pts, out)))
+                .collect();
+            let mut res = match first {
+                Some(((w, out), (_, pts))) => run(w, 0, pts, out),
+                None => Ok(()),
+            };
+            for h in handles {
+                let r = h
+                    .join()
+                    .unwrap_or_else(|_| Err((0, "an evaluation thread panicked".into())));
+                if res.is_ok() {
+                    res = r;
+                }
+            }
+            res
+        });
+        result.map_err(|(p, e)| {
+            let at = match self.points[p] {
+                Point::Node(k) => format!("node {k}"),
+                Point::Mid(k) => format!("midpoint of interval {k}"),
+                Point::Center(k) => format!("centre of interval {k}"),
+            };
+            EvalError::new("hessian", format!("{at}: {e}"))
+        })?;
+        // Hessian of J over the final node's q, q̇.
+        let n2 = 2 * self.ocp.nq();
+        let xn = self.node_state(v, self.num_intervals());
+        let mut ws = self.ocp.eq.multibody.workspace::<HyperDual64>();
+        let mut xd: Vec<HyperDual64> = xn[..n2].iter().map(|&v| HyperDual64::from(v)).collect();
+        let mut obj = vec![0.0; n2 * n2];
+        for i in 0..n2 {
+            for j in i..n2 {
+                for (l, x) in xd.iter_mut().enumerate() {
+                    *x = HyperDual64::new(
+                        xn[l],
+                        if l == i { 1.0 } else { 0.0 },
+                        if l == j { 1.0 } else { 0.0 },
+                        0.0,
+                    );
+                }
+                let (_, _, jv) = self.ocp.jump_objective(&mut ws, &xd);
+                obj[i * n2 + j] = jv.eps1eps2;
+                obj[j * n2 + i] = jv.eps1eps2;
+            }
+        }
+        if let Some(i) = obj.iter().position(|v| !v.is_finite()) {
+            return Err(EvalError::new(
+                "hessian",
+                format!("∂²J/∂x_{}∂x_{} is {}", i / n2, i % n2, obj[i]),
+            ));
+        }
+        let Some(cache) = self.hess.as_mut() else {
+            return Err(EvalError::new("hessian", "no cache"));
+        };
+        cache.objective = obj;
+        cache.x.extend_from_slice(v);
+        self.counters.hessians += 1;
+        self.counters.hessian_time += start.elapsed().as_secs_f64();
+        Ok(())
+    }
+
+    /// λ-weighted Hessian (into `hw`, |cols|², symmetric) and gradient
+    /// (into `gw`) of Σ_r λ_r g_r over node-local columns `cols` at point `p`.
+    fn weighted_block(
+        plan: &HessPlan,
+        data: &[f64],
+        rows: &[(usize, f64)],
+        cols: &[usize],
+        hw: &mut Vec<f64>,
+        gw: &mut Vec<f64>,
+    ) {
+        let ks = cols.len();
+        hw.clear();
+        hw.resize(ks * ks, 0.0);
+        gw.clear();
+        gw.resize(ks, 0.0);
+        for &(r, l) in rows {
+            if l == 0.0 {
+                continue;
+            }
+            for a in 0..ks {
+                gw[a] += l * plan.grad(data, r, cols[a]);
+                for b in a..ks {
+                    hw[a * ks + b] += l * plan.hess(data, r, cols[a], cols[b]);
+                }
+            }
+        }
+        for a in 0..ks {
+            for b in 0..a {
+                hw[a * ks + b] = hw[b * ks + a];
+            }
+        }
+    }
+
+    fn hessian_of_element(
+        &mut self,
+        x: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
+        check_len("hessian", "x", x.len(), self.num_variables())?;
+        check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
+        let Some(&kind) = self.hess_elements.get(e) else {
+            return Err(EvalError::new(
+                "hessian",
+                format!(
+                    "element {e} does not exist ({} elements)",
+                    self.hess_elements.len()
+                ),
+            ));
+        };
+        self.refresh_hessian(x)?;
+        let (Some(plan), Some(cache)) = (self.hess_plan.as_ref(), self.hess.as_mut()) else {
+            return Err(EvalError::new("hessian", "no Hessian data"));
+        };
+        let (nx, big_n) = (self.nx, self.options.num_mesh_intervals);
+        let stride = (nx + 2) * plan.block;
+        let data = |p: usize| &cache.data[p * stride..(p + 1) * stride];
+        let hstep = x[big_n * (nx + self.nu)] / big_n as f64;
+        let inv_n = 1.0 / big_n as f64;
+        let (mut hw, mut gw) = (std::mem::take(&mut cache.hw), std::mem::take(&mut cache.gw));
+        match kind {
+            HessElement::Defect { group, k } => {
+                let (cols, grows) = &self.groups[group];
+                let ks = cols.len();
+                let nodes: Vec<usize> = [k - 1, k].into_iter().filter(|&n| n >= 1).collect();
+                let kk = nodes.len() * ks + 1;
+                check_len("hessian", "h", h.len(), kk * kk)?;
+                h.iter_mut().for_each(|v| *v = 0.0);
+                let rows: Vec<(usize, f64)> = grows
+                    .iter()
+                    .map(|&r| (r, lambda[(k - 1) * nx + r]))
+                    .collect();
+                let t = kk - 1;
+                match self.options.scheme {
+                    Scheme::MidpointEuler => {
+                        let p = self.interval_point[k - 1];
+                        Self::weighted_block(plan, data(p), &rows, cols, &mut hw, &mut gw);
+                        for bi in 0..nodes.len() {
+                            for bj in 0..nodes.len() {
+                                for a in 0..ks {
+                                    for b in 0..ks {
+                                        h[(bi * ks + a) * kk + bj * ks + b] =
+                                            -0.25 * hstep * hw[a * ks + b];
+                                    }
+                                }
+                            }
+                            for a in 0..ks {
+                                let v = -0.5 * inv_n * gw[a];
+                                h[(bi * ks + a) * kk + t] = v;
+                                h[t * kk + bi * ks + a] = v;
+                            }
+                        }
+                    }
+                    Scheme::Trapezoidal => {
+                        for (bi, &node) in nodes.iter().enumerate() {
+                            let Some(p) = self.node_point[node] else {
+                                return Err(EvalError::new(
+                                    "hessian",
+                                    format!("node {node} is not evaluated"),
+                                ));
+                            };
+                            Self::weighted_block(plan, data(p), &rows, cols, &mut hw, &mut gw);
+                            for a in 0..ks {
+                                for b in 0..ks {
+                                    h[(bi * ks + a) * kk + bi * ks + b] =
+                                        -0.5 * hstep * hw[a * ks + b];
+                                }
+                                let v = -0.5 * inv_n * gw[a];
+                                h[(bi * ks + a) * kk + t] = v;
+                                h[t * kk + bi * ks + a] = v;
+                            }
+                        }
+                    }
+                    Scheme::HermiteSimpson => {
+                        return Err(EvalError::new(
+                            "hessian",
+                            "no exact Hessian for Hermite–Simpson",
+                        ))
+                    }
+                }
+            }
+            HessElement::NoCountermovement(j) => {
+                let cols = &self.ydd_cols;
+                let ks = cols.len();
+                let nodes: Vec<(usize, f64)> = [(j, 1.0), (j + 1, -1.0)]
+                    .into_iter()
+                    .filter(|&(n, _)| n >= 1)
+                    .collect();
+                let kk = nodes.len() * ks;
+                check_len("hessian", "h", h.len(), kk * kk)?;
+                h.iter_mut().for_each(|v| *v = 0.0);
+                let l = lambda[big_n * nx + j];
+                for (bi, &(node, sign)) in nodes.iter().enumerate() {
+                    let Some(p) = self.node_point[node] else {
+                        return Err(EvalError::new(
+                            "hessian",
+                            format!("node {node} is not evaluated"),
+                        ));
+                    };
+                    Self::weighted_block(plan, data(p), &[(nx, sign * l)], cols, &mut hw, &mut gw);
+                    for a in 0..ks {
+                        for b in 0..ks {
+                            h[(bi * ks + a) * kk + bi * ks + b] = hw[a * ks + b];
+                        }
+                    }
+                }
+            }
+            HessElement::Final => {
+                let n2 = 2 * self.ocp.nq();
+                let cols = &self.final_cols;
+                let ks = cols.len();
+                check_len("hessian", "h", h.len(), ks * ks)?;
+                let Some(p) = self.node_point[big_n] else {
+                    return Err(EvalError::new("hessian", "the final node is not evaluated"));
+                };
+                let l = lambda[big_n * nx + self.n_cm];
+                Self::weighted_block(plan, data(p), &[(nx + 1, l)], cols, &mut hw, &mut gw);
+                for a in 0..ks {
+                    for b in 0..ks {
+                        let (c, d) = (cols[a], cols[b]);
+                        let obj = if c < n2 && d < n2 {
+                            -sigma * cache.objective[c * n2 + d]
+                        } else {
+                            0.0
+                        };
+                        h[a * ks + b] = obj + hw[a * ks + b];
+                    }
+                }
+            }
+        }
+        cache.hw = hw;
+        cache.gw = gw;
+        finite("hessian", h, |i| format!("element {e} entry {i}"))
+    }
 }

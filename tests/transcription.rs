@@ -943,6 +943,46 @@ fn timing() {
             by_kind(38, 62)
         );
     }
+    for scheme in [Scheme::MidpointEuler, Scheme::Trapezoidal] {
+        for threads in [1, 2] {
+            let mut tr = transcription(TranscriptionOptions {
+                threads,
+                scheme,
+                ..Default::default()
+            });
+            let els = tr.elements();
+            let lambda: Vec<f64> = (0..tr.num_constraints())
+                .map(|i| ((i * 7919) % 1000) as f64 / 500.0 - 1.0)
+                .collect();
+            let mut hs: Vec<Vec<f64>> = els
+                .iter()
+                .map(|e| vec![0.0; e.variables.len().pow(2)])
+                .collect();
+            let mut xs = x.clone();
+            let (mut th, mut ta) = (vec![], vec![]);
+            for rep in 0..10 {
+                // A new x each sweep (the point derivatives are cached per x).
+                xs[0] = x[0] + 1e-9 * rep as f64;
+                let t = std::time::Instant::now();
+                for (e, h) in hs.iter_mut().enumerate() {
+                    tr.element_hessian(&xs, e, 1.0, &lambda, h).unwrap();
+                }
+                th.push(t.elapsed().as_secs_f64());
+                // The same x again: assembly from the cache only.
+                let t = std::time::Instant::now();
+                for (e, h) in hs.iter_mut().enumerate() {
+                    tr.element_hessian(&xs, e, 1.0, &lambda, h).unwrap();
+                }
+                ta.push(t.elapsed().as_secs_f64());
+            }
+            eprintln!(
+                "{scheme:?}, {threads} thread(s): all {} element Hessians {:.1} ms (of which assembling the blocks {:.1} ms; median of 10)",
+                els.len(),
+                1e3 * median(th),
+                1e3 * median(ta)
+            );
+        }
+    }
     for scheme in [
         Scheme::MidpointEuler,
         Scheme::Trapezoidal,
@@ -968,5 +1008,151 @@ fn timing() {
             let st = tr.jacobian_stats();
             eprintln!("{scheme:?}, {threads} thread(s): constraints {:.3} ms, Jacobian {:.3} ms (median of 40; {} non-zeros, {} per defect block)", 1e3 * median(tc), 1e3 * median(tj), st.nnz, st.nnz_interval);
         }
+    }
+}
+
+/// Uniform multipliers in [-1, 1) (SplitMix64).
+fn random_multipliers(m: usize, seed: u64) -> Vec<f64> {
+    let mut s = seed;
+    (0..m)
+        .map(|_| {
+            s = s.wrapping_add(0x9E3779B97F4A7C15);
+            let mut z = s;
+            z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+            z ^= z >> 31;
+            (z >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        })
+        .collect()
+}
+
+/// Every element Hessian at `x`: finite and exactly symmetric.
+fn element_hessians_symmetric(tr: &mut Transcription, x: &[f64], lambda: &[f64]) {
+    for (e, el) in tr.elements().iter().enumerate() {
+        let k = el.variables.len();
+        let mut h = vec![f64::NAN; k * k];
+        tr.element_hessian(x, e, 0.7, lambda, &mut h).unwrap();
+        for a in 0..k {
+            for b in 0..k {
+                assert!(h[a * k + b].is_finite(), "element {e} ({a}, {b})");
+                assert_eq!(h[a * k + b], h[b * k + a], "element {e} ({a}, {b})");
+            }
+        }
+    }
+}
+
+#[test]
+fn element_hessians_match_finite_differences() {
+    for scheme in [Scheme::MidpointEuler, Scheme::Trapezoidal] {
+        let mut tr = transcription(TranscriptionOptions {
+            num_mesh_intervals: 8,
+            scheme,
+            ..Default::default()
+        });
+        assert!(tr.has_hessian());
+        let (guess, _) = tr.bang_bang_guess().unwrap();
+        let m = tr.num_constraints();
+        for (i, x) in [guess.clone(), perturbed(&tr, &guess, 7)]
+            .iter()
+            .enumerate()
+        {
+            let lambda = random_multipliers(m, 11 + i as u64);
+            element_hessians_symmetric(&mut tr, x, &lambda);
+            let rep = leap::nlp::check_derivatives(&mut tr, x, &lambda, 1e-6).unwrap();
+            eprintln!("{scheme:?} point {i}: {rep:?}");
+            let err = rep.hessian.unwrap();
+            assert!(err < 1e-5, "{scheme:?} point {i}: Hessian error {err:.3e}");
+        }
+    }
+    let tr = transcription(TranscriptionOptions {
+        num_mesh_intervals: 8,
+        scheme: Scheme::HermiteSimpson,
+        ..Default::default()
+    });
+    assert!(!tr.has_hessian());
+}
+
+/// The worst Hessian entries against central differences of the
+/// Lagrangian gradient (diagnostic).
+fn hessian_fd_report(
+    tr: &mut Transcription,
+    x: &[f64],
+    lambda: &[f64],
+    step: f64,
+) -> Vec<(f64, String, f64, f64, f64)> {
+    let n = tr.num_variables();
+    let hm = leap::nlp::assemble_hessian(tr, x, 1.0, lambda).unwrap();
+    let pattern = tr.jacobian_structure();
+    let lag = |tr: &mut Transcription, x: &[f64]| {
+        let mut g = vec![0.0; n];
+        tr.gradient(x, &mut g).unwrap();
+        let mut jv = vec![0.0; pattern.len()];
+        tr.jacobian_values(x, &mut jv).unwrap();
+        for (k, &(i, j)) in pattern.iter().enumerate() {
+            g[j] += lambda[i] * jv[k];
+        }
+        g
+    };
+    let mut out = Vec::new();
+    let mut xp = x.to_vec();
+    for j in 0..n {
+        let fd = |tr: &mut Transcription, xp: &mut Vec<f64>, s: f64| {
+            xp[j] = x[j] + s;
+            let gp = lag(tr, xp);
+            xp[j] = x[j] - s;
+            let gm = lag(tr, xp);
+            xp[j] = x[j];
+            (0..n)
+                .map(|i| (gp[i] - gm[i]) / (2.0 * s))
+                .collect::<Vec<_>>()
+        };
+        let s = step * x[j].abs().max(1.0);
+        let d1 = fd(tr, &mut xp, s);
+        let d2 = fd(tr, &mut xp, 0.1 * s);
+        for i in 0..n {
+            let err = ((hm[i * n + j] - d1[i]).abs() / d1[i].abs().max(1.0))
+                .min((hm[i * n + j] - d2[i]).abs() / d2[i].abs().max(1.0));
+            if err > 1e-7 {
+                out.push((
+                    err,
+                    format!("{} / {}", tr.variable_name(i), tr.variable_name(j)),
+                    hm[i * n + j],
+                    d1[i],
+                    d2[i],
+                ));
+            }
+        }
+    }
+    out.sort_by(|a, b| b.0.total_cmp(&a.0));
+    out
+}
+
+#[test]
+#[ignore]
+fn hessian_diagnostic() {
+    let scheme = if std::env::var("TRAP").is_ok() {
+        Scheme::Trapezoidal
+    } else {
+        Scheme::MidpointEuler
+    };
+    let mut tr = transcription(TranscriptionOptions {
+        num_mesh_intervals: 8,
+        scheme,
+        ..Default::default()
+    });
+    let (guess, _) = tr.bang_bang_guess().unwrap();
+    let x = if std::env::var("PERTURB").is_ok() {
+        perturbed(&tr, &guess, 7)
+    } else {
+        guess
+    };
+    let lambda = random_multipliers(tr.num_constraints(), 11);
+    let rep = hessian_fd_report(&mut tr, &x, &lambda, 1e-6);
+    eprintln!("{} entries > 1e-6", rep.len());
+    for r in rep.iter().take(40) {
+        eprintln!(
+            "{:.2e} {}: exact {:.6e} fd {:.6e} fd/10 {:.6e}",
+            r.0, r.1, r.2, r.3, r.4
+        );
     }
 }

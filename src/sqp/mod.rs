@@ -49,6 +49,20 @@ pub enum HessianMode {
     PartitionedBfgs,
 }
 
+/// How a step is accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LineSearch {
+    /// Backtracking on the ℓ1 merit function f + ν‖c‖₁.
+    L1Merit,
+    /// Backtracking with IPOPT's filter (Wächter & Biegler 2006): a trial
+    /// point is accepted when it reduces the violation or the objective
+    /// enough and no earlier point dominates it; near feasibility an
+    /// Armijo decrease of f alone. Falls back to the merit search when no
+    /// trial is acceptable and in elastic mode.
+    Filter,
+}
+
 impl std::str::FromStr for HessianMode {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
@@ -107,6 +121,8 @@ pub struct SqpSettings {
     /// ([`crate::nlp::ScaledVariables`]; Moco's name). Results are
     /// returned in the problem's own variables.
     pub scale_variables_using_bounds: bool,
+    /// Step acceptance (default: the filter, see `leap bench sqp`).
+    pub line_search: LineSearch,
     /// With `verbose`: for each rejected full step, the objective and
     /// violation changes and the constraints that grew most.
     pub verbose_line_search: bool,
@@ -125,7 +141,7 @@ impl Default for SqpSettings {
             acceptable_iterations: 15,
             initial_step_bound: 10.0,
             unbounded_objective: -1e20,
-            qp_tolerance: 1e-8,
+            qp_tolerance: 1e-10,
             qp_equilibrate: true,
             second_order_correction: true,
             verbose: false,
@@ -134,6 +150,7 @@ impl Default for SqpSettings {
             nlp_scaling: true,
             scale_variables_using_bounds: false,
             verbose_line_search: false,
+            line_search: LineSearch::Filter,
         }
     }
 }
@@ -1010,8 +1027,16 @@ impl<'s> Solver<'s> {
         let mut delta = st.initial_step_bound * scale_x;
         let mut prev: Option<(Point, Vec<Vec<f64>>)> = None;
         let mut acceptable_count = 0usize;
+        // Filter (θ, f) pairs and the violation limits θ_max, θ_min, set at
+        // the first iteration from θ₀ as IPOPT does.
+        let mut filter: Vec<(f64, f64)> = Vec::new();
+        let (mut theta_max, mut theta_min) = (f64::NAN, f64::NAN);
         let mut last_f = f64::NAN;
         let mut skips = 0usize;
+        // QP failures retried at a smaller step bound, and the last step's
+        // norm.
+        let mut qp_retries = 0usize;
+        let mut last_step = f64::INFINITY;
         let finish = |result: &mut SqpResult,
                       status: SqpStatus,
                       msg: String,
@@ -1213,6 +1238,15 @@ impl<'s> Solver<'s> {
                 rec.qp_mode = "failed".into();
                 rec.qp_iterations = qp_its;
                 self.log(&rec, start, result);
+                // A smaller step bound makes the QP better conditioned (the
+                // box rows bind); retry from the same point, whose Hessian
+                // update is already done.
+                if qp_retries < 4 && delta > 1e-6 * scale_x {
+                    qp_retries += 1;
+                    delta = (delta.min(10.0 * last_step) / 4.0).max(1e-6 * scale_x);
+                    prev = None;
+                    continue;
+                }
                 finish(
                     result,
                     SqpStatus::NumericalError,
@@ -1325,7 +1359,85 @@ impl<'s> Solver<'s> {
             let bound_hit = dnorm >= 0.999 * delta;
             let mut soc_used = false;
             let mut soc_qp_s = 0.0;
-            while alpha > 1e-12 {
+            let mut filter_accepted = false;
+            if st.line_search == LineSearch::Filter && !elastic {
+                if theta_max.is_nan() {
+                    theta_max = 1e4 * viol1.max(1.0);
+                    theta_min = 1e-4 * viol1.max(1.0);
+                }
+                let theta0 = viol1;
+                // Some(f-type) when the trial (θ, f) at step a is acceptable.
+                let acceptable_trial = |th: f64, f: f64, a: f64, filter: &[(f64, f64)]| {
+                    if !(th < theta_max) || !f.is_finite() {
+                        return None;
+                    }
+                    if filter.iter().any(|&(tj, fj)| th >= tj && f >= fj) {
+                        return None;
+                    }
+                    let switching = gd < 0.0 && a * (-gd).powf(2.3) > theta0.powf(1.1);
+                    if theta0 <= theta_min && switching {
+                        (f <= p.f + 1e-4 * a * gd + 10.0 * f64::EPSILON * p.f.abs()).then_some(true)
+                    } else {
+                        (th <= (1.0 - 1e-5) * theta0 || f <= p.f - 1e-8 * theta0).then_some(false)
+                    }
+                };
+                let mut a = 1.0;
+                while a >= 1e-8 {
+                    trials += 1;
+                    for j in 0..n {
+                        trial_x[j] = (p.x[j] + a * d[j]).clamp(self.pb.xl[j], self.pb.xu[j]);
+                    }
+                    if let Ok(f) = eval_fc(nlp, &trial_x, &mut trial_c) {
+                        let (th, _) = self.pb.violation(&trial_c);
+                        if let Some(f_type) = acceptable_trial(th, f, a, &filter) {
+                            if !f_type {
+                                filter.push(((1.0 - 1e-5) * theta0, p.f - 1e-8 * theta0));
+                            }
+                            accepted = Some((trial_x.clone(), f, trial_c.clone()));
+                            filter_accepted = true;
+                            alpha = a;
+                            break;
+                        }
+                        if a == 1.0 && st.second_order_correction && th >= theta0 {
+                            soc_tried = true;
+                            let mut jd = vec![0.0; m];
+                            for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
+                                jd[i] += p.jv[k] * d[j];
+                            }
+                            let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
+                            let tq = Instant::now();
+                            let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
+                            let dq = tq.elapsed().as_secs_f64();
+                            time.qp_s += dq;
+                            rec.qp_s += dq;
+                            soc_qp_s += dq;
+                            if let Ok(QpOutcome::Solved) = soc {
+                                let q = self.qp.as_ref().expect("solved");
+                                let soc_x: Vec<f64> = (0..n)
+                                    .map(|j| (p.x[j] + q.d[j]).clamp(self.pb.xl[j], self.pb.xu[j]))
+                                    .collect();
+                                let mut soc_c = vec![0.0; m];
+                                if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
+                                    let (th2, _) = self.pb.violation(&soc_c);
+                                    if let Some(f_type) = acceptable_trial(th2, f2, 1.0, &filter) {
+                                        if !f_type {
+                                            filter
+                                                .push(((1.0 - 1e-5) * theta0, p.f - 1e-8 * theta0));
+                                        }
+                                        accepted = Some((soc_x, f2, soc_c));
+                                        filter_accepted = true;
+                                        soc_used = true;
+                                        alpha = 1.0;
+                                        break;
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    a *= 0.5;
+                }
+            }
+            while !filter_accepted && alpha > 1e-12 {
                 trials += 1;
                 for j in 0..n {
                     trial_x[j] = (p.x[j] + alpha * d[j]).clamp(self.pb.xl[j], self.pb.xu[j]);
@@ -1400,6 +1512,7 @@ impl<'s> Solver<'s> {
             time.line_search_s += rec.line_search_s;
             rec.ls_trials = trials;
             rec.step_norm = dnorm * alpha;
+            last_step = rec.step_norm.max(1e-12 * scale_x);
             rec.alpha = alpha;
             rec.merit = phi0;
             if soc_used {
@@ -1438,6 +1551,7 @@ impl<'s> Solver<'s> {
             // The step bound acts as a box trust region: it grows when a
             // full step reached it and shrinks to twice the accepted step
             // when the line search had to cut the step short.
+            qp_retries = 0;
             if alpha == 1.0 {
                 if bound_hit {
                     delta *= 4.0;
