@@ -22,7 +22,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scale_variables_using_bounds: std::env::var("NOSCALE").is_err(),
         ..Default::default()
     };
+    let settings = leap::sqp::SqpSettings {
+        qp_dump_dir: std::env::var_os("QPDUMP").map(Into::into),
+        hessian: if std::env::var("HESSIAN").as_deref() == Ok("exact") {
+            leap::sqp::HessianMode::ExactConvexified
+        } else {
+            settings.hessian
+        },
+        ..settings
+    };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
+    println!("{:?} after {} iterations: {}", r.status, r.iterations, r.message);
     let x = r.x.clone();
     let mut li: Vec<usize> = (0..r.lambda.len()).collect();
     li.sort_by(|&a, &b| r.lambda[b].abs().partial_cmp(&r.lambda[a].abs()).unwrap());

@@ -515,6 +515,11 @@ impl SolveReport {
             }
         );
         s.push_str("  times are wall times of the SQP\n");
+        let t = &self.time_split;
+        s.push_str(&format!(
+            "  time split: derivatives {:.2} s, Hessian {:.2} s, QP {:.2} s, line search {:.2} s, other {:.2} s\n",
+            t.derivatives_s, t.hessian_s, t.qp_s, t.line_search_s, t.other_s
+        ));
         if let Some(fc) = &self.forward_check {
             match (&fc.summary, self.forward_check_difference_m) {
                 (Some(sm), Some(d)) => s.push_str(&format!(

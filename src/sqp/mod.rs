@@ -526,6 +526,14 @@ fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
     if sr <= 1e-300 {
         return false;
     }
+    // A step too short to measure curvature (an element whose variables
+    // barely moved while round-off changed its gradient) would add a
+    // curvature rᵀr/sᵀr of 1e20 and more: skip it. Curvature above 1e10 has
+    // no meaning in a scaled problem.
+    let rr: f64 = r.iter().map(|v| v * v).sum();
+    if rr / sr > 1e10 {
+        return false;
+    }
     for a in 0..k {
         for c in 0..k {
             b[a * k + c] += r[a] * r[c] / sr - bs[a] * bs[c] / sbs;
