@@ -836,6 +836,18 @@ struct Solver<'s> {
 }
 
 impl<'s> Solver<'s> {
+    /// Every BFGS block back to the identity, rescaled at its next update.
+    fn reset_bfgs(&mut self) {
+        for (b, first) in self.blocks.iter_mut().zip(&mut self.bfgs_first) {
+            let k = (b.len() as f64).sqrt().round() as usize;
+            b.iter_mut().for_each(|v| *v = 0.0);
+            for a in 0..k {
+                b[a * k + a] = 1.0;
+            }
+            *first = true;
+        }
+    }
+
     fn new(pb: Problem, mode: HessianMode, settings: &'s SqpSettings) -> Self {
         let blocks: Vec<Vec<f64>> = pb
             .elements
@@ -1251,6 +1263,12 @@ impl<'s> Solver<'s> {
                 // update is already done.
                 if qp_retries < 4 && delta > 1e-6 * scale_x {
                     qp_retries += 1;
+                    // From the second retry on, the quasi-Newton blocks
+                    // start afresh (SNOPT resets its BFGS when the QP
+                    // fails): their conditioning may be what failed.
+                    if qp_retries >= 2 && self.mode == HessianMode::PartitionedBfgs {
+                        self.reset_bfgs();
+                    }
                     delta = (delta.min(10.0 * last_step) / 4.0).max(1e-6 * scale_x);
                     prev = None;
                     continue;
