@@ -428,6 +428,7 @@ pub fn integrator_table(rows: &[IntegratorRow]) -> String {
 #[derive(Debug, Clone, Serialize)]
 pub struct SqpTestSetRow {
     pub hessian: crate::sqp::HessianMode,
+    pub line_search: crate::sqp::LineSearch,
     pub problems: usize,
     /// Status solved with the book's f* within 1e-6 relative.
     pub at_published_optimum: usize,
@@ -447,17 +448,24 @@ pub struct SqpTestSetRow {
 /// times, and report the median wall time with the time split of the
 /// median run.
 pub fn sqp_test_set(repeats: usize) -> Vec<SqpTestSetRow> {
-    use crate::sqp::{solve, HessianMode, SqpSettings};
+    use crate::sqp::{solve, HessianMode, LineSearch, SqpSettings};
     let mut rows = Vec::new();
-    for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
+    for (mode, line_search) in [
+        (HessianMode::ExactConvexified, LineSearch::Filter),
+        (HessianMode::PartitionedBfgs, LineSearch::Filter),
+        (HessianMode::ExactConvexified, LineSearch::L1Merit),
+        (HessianMode::PartitionedBfgs, LineSearch::L1Merit),
+    ] {
         let settings = SqpSettings {
             hessian: mode,
+            line_search,
             ..Default::default()
         };
         let mut runs = Vec::new();
         for _ in 0..repeats.max(1) {
             let mut row = SqpTestSetRow {
                 hessian: mode,
+                line_search,
                 problems: 0,
                 at_published_optimum: 0,
                 solved_or_acceptable: 0,
@@ -503,6 +511,7 @@ pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
     let mut t = comfy_table::Table::new();
     t.set_header(vec![
         "Hessian",
+        "line search",
         "problems",
         "at reference f* (solved)",
         "solved/acceptable",
@@ -518,6 +527,7 @@ pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
     for r in rows {
         t.add_row(vec![
             format!("{:?}", r.hessian),
+            format!("{:?}", r.line_search),
             r.problems.to_string(),
             r.at_published_optimum.to_string(),
             r.solved_or_acceptable.to_string(),
