@@ -1886,13 +1886,20 @@ pub fn time_point_jacobian<const W: usize>(
 // ---------------------------------------------------------------------------
 // Exact element Hessians of the Lagrangian (midpoint Euler and trapezoidal).
 
-/// eps1 directions per second-order pass of the state equation.
-const HESS_M: usize = 20;
-/// eps2 directions: q, q̇ and the sums over the fibre lengths, the
-/// activations and the excitations (2·n_q + 3 ≤ 17; models with more
-/// coordinates have no Hessian).
-const HESS_N: usize = 17;
-type Hd = HyperDualSVec64<HESS_M, HESS_N>;
+/// The second-order passes over the state equation (HyperDualSVec64<M, N>:
+/// M eps1 and N eps2 directions; the cost of an operation grows with M·N):
+/// 1. eps1 = q, eps2 = (q, q̇): every output's (q, q̇) × q block;
+/// 2. eps1 = q̇, eps2 = q̇: the q̇ × q̇ block (position-level work stays f64);
+/// 3. eps1 = (each l^M_i, Σa, Σu), eps2 = (q, q̇, Σl^M, Σa, Σu): the
+///    rest. Kinematics and muscle paths depend on q and q̇ only, so there
+///    they carry eps2 alone (first order); the second-order work is the
+///    muscle forces and the dynamics.
+///
+/// Pass 3 runs in chunks of [`HESS_B`] eps1 directions. Models with more
+/// than [`HESS_Q`] coordinates have no exact Hessian.
+const HESS_Q: usize = 7;
+const HESS_B: usize = 13;
+const HESS_N: usize = 2 * HESS_Q + 3;
 
 /// How an input column of (x, u) is seeded in the second-order passes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -1931,7 +1938,7 @@ impl HessPlan {
     fn new(pattern: &StatePattern, n: usize, nm: usize) -> Option<Self> {
         let (nx, nu) = (pattern.nx, pattern.nu);
         let nin = nx + nu;
-        if nx != 2 * n + 2 * nm || nu != nm || 2 * n + 3 > HESS_N {
+        if nx != 2 * n + 2 * nm || nu != nm || n > HESS_Q {
             return None;
         }
         let (m1, n2) = (2 * n + nm + 2, 2 * n + 3);
@@ -1985,6 +1992,8 @@ impl HessPlan {
             return 0.0;
         }
         let (i, j) = match (self.class[c], self.class[d]) {
+            // q before q̇ (passes 1 and 2 fill the q and q̇ × q̇ rows only).
+            (ColClass::Full, ColClass::Full) => (self.e1[c.min(d)], self.e2[c.max(d)]),
             (_, ColClass::Full) => (self.e1[c], self.e2[d]),
             (ColClass::Full, _) => (self.e1[d], self.e2[c]),
             // Muscle forces are separate: no fibre length couples another
@@ -2016,27 +2025,106 @@ enum HessElement {
     Final,
 }
 
+/// Buffers of one second-order pass.
+struct PassBuf<const M: usize, const N: usize> {
+    ws: StateWorkspace<HyperDualSVec64<M, N>>,
+    xd: Vec<HyperDualSVec64<M, N>>,
+    ud: Vec<HyperDualSVec64<M, N>>,
+    xdotd: Vec<HyperDualSVec64<M, N>>,
+}
+
+impl<const M: usize, const N: usize> PassBuf<M, N> {
+    fn new(ocp: &JumpOcp) -> Self {
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let z = HyperDualSVec64::<M, N>::from_re(0.0);
+        PassBuf {
+            ws: ocp.eq.workspace(),
+            xd: vec![z; nx],
+            ud: vec![z; nu],
+            xdotd: vec![z; nx],
+        }
+    }
+
+    /// One pass at (x, u): input column c seeded in eps1 direction
+    /// `s1(c)` and eps2 direction `s2(c)`; output r's first derivatives
+    /// along eps1 direction i go to plan row `row0 + i`, its second
+    /// derivatives (i, j) to (`row0 + i`, `col0 + j`), for i < `m`, j < `n`.
+    #[allow(clippy::too_many_arguments)]
+    fn run(
+        &mut self,
+        ocp: &JumpOcp,
+        plan: &HessPlan,
+        x: &[f64],
+        u: &[f64],
+        s1: impl Fn(usize) -> Option<usize>,
+        s2: impl Fn(usize) -> Option<usize>,
+        (row0, m, col0, n): (usize, usize, usize, usize),
+        out: &mut [f64],
+    ) -> Result<(), String> {
+        let nx = x.len();
+        for c in 0..nx + u.len() {
+            let v = if c < nx { x[c] } else { u[c - nx] };
+            let mut d = HyperDualSVec64::<M, N>::from_re(v);
+            if let Some(i) = s1(c) {
+                d = d.derivative1(i);
+            }
+            if let Some(j) = s2(c) {
+                d = d.derivative2(j);
+            }
+            if c < nx {
+                self.xd[c] = d;
+            } else {
+                self.ud[c - nx] = d;
+            }
+        }
+        let (ydd, fy) = ocp
+            .state_rates(&mut self.ws, &self.xd, &self.ud, &mut self.xdotd)
+            .map_err(|e| e.to_string())?;
+        let (m1, n2, block) = (plan.m1, plan.n2, plan.block);
+        for r in 0..nx + 2 {
+            let d = if r < nx {
+                &self.xdotd[r]
+            } else if r == nx {
+                &ydd
+            } else {
+                &fy
+            };
+            let o = &mut out[r * block..(r + 1) * block];
+            if let Some(g) = &d.eps1.0 {
+                for i in 0..m {
+                    o[row0 + i] = g[i];
+                }
+            }
+            if let Some(hm) = &d.eps1eps2.0 {
+                for i in 0..m {
+                    let base = m1 + (row0 + i) * n2 + col0;
+                    for j in 0..n {
+                        o[base + j] = hm[(i, j)];
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Buffers of one second-order evaluation thread.
 struct HessWorker {
-    ws: StateWorkspace<Hd>,
-    xd: Vec<Hd>,
-    ud: Vec<Hd>,
-    xdotd: Vec<Hd>,
+    a: PassBuf<HESS_Q, { 2 * HESS_Q }>,
+    b: PassBuf<HESS_Q, HESS_Q>,
+    c: PassBuf<HESS_B, HESS_N>,
     x: Vec<f64>,
     u: Vec<f64>,
 }
 
 impl HessWorker {
     fn new(ocp: &JumpOcp) -> Self {
-        let (nx, nu) = (ocp.nx(), ocp.nu());
-        let z = Hd::from_re(0.0);
         HessWorker {
-            ws: ocp.eq.workspace(),
-            xd: vec![z; nx],
-            ud: vec![z; nu],
-            xdotd: vec![z; nx],
-            x: vec![0.0; nx],
-            u: vec![0.0; nu],
+            a: PassBuf::new(ocp),
+            b: PassBuf::new(ocp),
+            c: PassBuf::new(ocp),
+            x: vec![0.0; ocp.nx()],
+            u: vec![0.0; ocp.nu()],
         }
     }
 }
@@ -2056,63 +2144,60 @@ struct HessCache {
 }
 
 /// First and second derivatives of g = (f, Ÿ_C, F_y/(m g)) at the worker's
-/// (x, u) into `out` (per output, [`HessPlan::block`] values).
+/// (x, u) into `out` (per output, [`HessPlan::block`] values; see
+/// [`HESS_Q`] for the passes).
 fn eval_hess_point(
     ocp: &JumpOcp,
     plan: &HessPlan,
     w: &mut HessWorker,
     out: &mut [f64],
 ) -> Result<(), String> {
-    let (nx, nu) = (w.x.len(), w.u.len());
-    let (m1, n2, block) = (plan.m1, plan.n2, plan.block);
-    for lo in (0..m1).step_by(HESS_M) {
-        let hi = (lo + HESS_M).min(m1);
-        for c in 0..nx + nu {
-            let v = if c < nx { w.x[c] } else { w.u[c - nx] };
-            let mut d = Hd::from_re(v).derivative2(plan.e2[c]);
-            let i = plan.e1[c];
-            if (lo..hi).contains(&i) {
-                d = d.derivative1(i - lo);
-            }
-            if c < nx {
-                w.xd[c] = d;
-            } else {
-                w.ud[c - nx] = d;
-            }
-        }
-        let (ydd, fy) = ocp
-            .state_rates(&mut w.ws, &w.xd, &w.ud, &mut w.xdotd)
-            .map_err(|e| e.to_string())?;
-        for r in 0..nx + 2 {
-            let d = if r < nx {
-                &w.xdotd[r]
-            } else if r == nx {
-                &ydd
-            } else {
-                &fy
-            };
-            let o = &mut out[r * block..(r + 1) * block];
-            match &d.eps1.0 {
-                Some(g) => {
-                    for i in lo..hi {
-                        o[i] = g[i - lo];
-                    }
-                }
-                None => o[lo..hi].iter_mut().for_each(|v| *v = 0.0),
-            }
-            let hs = &mut o[m1 + lo * n2..m1 + hi * n2];
-            match &d.eps1eps2.0 {
-                Some(hm) => {
-                    for i in lo..hi {
-                        for j in 0..n2 {
-                            hs[(i - lo) * n2 + j] = hm[(i - lo, j)];
-                        }
-                    }
-                }
-                None => hs.iter_mut().for_each(|v| *v = 0.0),
-            }
-        }
+    let (n, nm) = (ocp.nq(), ocp.nm());
+    let nx = w.x.len();
+    out.iter_mut().for_each(|v| *v = 0.0);
+    let (x, u) = (&w.x[..], &w.u[..]);
+    // 1. q × (q, q̇).
+    w.a.run(
+        ocp,
+        plan,
+        x,
+        u,
+        |c| (c < n).then_some(c),
+        |c| (c < 2 * n).then_some(c),
+        (0, n, 0, 2 * n),
+        out,
+    )?;
+    // 2. q̇ × q̇.
+    w.b.run(
+        ocp,
+        plan,
+        x,
+        u,
+        |c| (n..2 * n).contains(&c).then(|| c - n),
+        |c| (n..2 * n).contains(&c).then(|| c - n),
+        (n, n, n, n),
+        out,
+    )?;
+    // 3. (l^M_i, Σa, Σu) × (q, q̇, Σl^M, Σa, Σu).
+    // Muscles outside a chunk stay first order in their own work.
+    for lo in (0..nm + 2).step_by(HESS_B) {
+        let hi = (lo + HESS_B).min(nm + 2);
+        w.c.run(
+            ocp,
+            plan,
+            x,
+            u,
+            |c| {
+                let i = plan.e1[c];
+                (c >= 2 * n && (2 * n + lo..2 * n + hi).contains(&i)).then(|| i - 2 * n - lo)
+            },
+            |c| Some(plan.e2[c]),
+            (2 * n + lo, hi - lo, 0, plan.n2),
+            out,
+        )?;
     }
+    let block = plan.block;
+    let _ = nx;
     if let Some(i) = out.iter().position(|v| !v.is_finite()) {
         return Err(format!(
             "derivative {} of output {} is {}",
@@ -2449,4 +2534,56 @@ impl Transcription {
         cache.gw = gw;
         finite("hessian", h, |i| format!("element {e} entry {i}"))
     }
+}
+
+/// Median times (s) of the first two second-order passes of the exact
+/// Hessian (see [`HESS_Q`]) and of all passes at (x, u), over `reps`
+/// evaluations.
+pub fn time_hessian_passes(
+    ocp: &JumpOcp,
+    pattern: &StatePattern,
+    x: &[f64],
+    u: &[f64],
+    reps: usize,
+) -> Result<[f64; 3], String> {
+    let plan = HessPlan::new(pattern, ocp.nq(), ocp.nm()).ok_or("no Hessian for this model")?;
+    let n = ocp.nq();
+    let mut w = HessWorker::new(ocp);
+    let mut out = vec![0.0; (ocp.nx() + 2) * plan.block];
+    let mut times = [vec![], vec![], vec![]];
+    for _ in 0..reps.max(1) {
+        let t = std::time::Instant::now();
+        w.a.run(
+            ocp,
+            &plan,
+            x,
+            u,
+            |c| (c < n).then_some(c),
+            |c| (c < 2 * n).then_some(c),
+            (0, n, 0, 2 * n),
+            &mut out,
+        )?;
+        times[0].push(t.elapsed().as_secs_f64());
+        let t = std::time::Instant::now();
+        w.b.run(
+            ocp,
+            &plan,
+            x,
+            u,
+            |c| (n..2 * n).contains(&c).then(|| c - n),
+            |c| (n..2 * n).contains(&c).then(|| c - n),
+            (n, n, n, n),
+            &mut out,
+        )?;
+        times[1].push(t.elapsed().as_secs_f64());
+        let t = std::time::Instant::now();
+        w.x.copy_from_slice(x);
+        w.u.copy_from_slice(u);
+        eval_hess_point(ocp, &plan, &mut w, &mut out)?;
+        times[2].push(t.elapsed().as_secs_f64());
+    }
+    Ok(times.map(|mut v| {
+        v.sort_by(|a, b| a.total_cmp(b));
+        v[v.len() / 2]
+    }))
 }
