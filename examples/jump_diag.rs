@@ -1,7 +1,8 @@
 //! Diagnose the SQP on the jump: `cargo run --release --example jump_diag -- N ITERATIONS`
 //! runs the collocation with N mesh intervals, prints the largest multipliers,
 //! then (unless NOFD is set) checks the Jacobian at the last iterate by central
-//! differences, naming the worst entries.
+//! differences, naming the worst entries. `HESSIAN=exact` uses the exact
+//! convexified element Hessians instead of the default model.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -20,6 +21,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_iterations: iterations,
         verbose: true,
         scale_variables_using_bounds: std::env::var("NOSCALE").is_err(),
+        hessian: if std::env::var("HESSIAN").as_deref() == Ok("exact") {
+            leap::sqp::HessianMode::ExactConvexified
+        } else {
+            leap::sqp::SqpSettings::default().hessian
+        },
         ..Default::default()
     };
     let settings = leap::sqp::SqpSettings {
@@ -32,7 +38,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..settings
     };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
-    println!("{:?} after {} iterations: {}", r.status, r.iterations, r.message);
+    println!(
+        "{:?} after {} iterations: {}",
+        r.status, r.iterations, r.message
+    );
     let x = r.x.clone();
     let mut li: Vec<usize> = (0..r.lambda.len()).collect();
     li.sort_by(|&a, &b| r.lambda[b].abs().partial_cmp(&r.lambda[a].abs()).unwrap());
