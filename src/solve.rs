@@ -428,7 +428,15 @@ fn forward_check(
     };
     let t_max = tf + FORWARD_FLIGHT_TIME;
     let eq = Arc::new(ocp.eq.clone());
-    let laws = Arc::new(ocp.laws.clone());
+    // The forward check integrates the model's own laws: OpenSim's
+    // activation switch, not the optimizer's smoothed one.
+    let mut own_laws = ocp.laws.clone();
+    for law in &mut own_laws.muscles {
+        if let crate::laws::MuscleLaw::Thelen(t) = law {
+            t.activation_smoothing = None;
+        }
+    }
+    let laws = Arc::new(own_laws);
     let simbody = simulate_simbody(
         &eq,
         &laws,
@@ -462,7 +470,7 @@ fn forward_check(
     };
     match simulate_rust(
         &ocp.eq,
-        &ocp.laws,
+        laws.as_ref(),
         &controls,
         ocp.x0(),
         ocp.standing_com_height,
