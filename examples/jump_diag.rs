@@ -2,7 +2,8 @@
 //! runs the collocation with N mesh intervals, prints the largest multipliers,
 //! then (unless NOFD is set) checks the Jacobian at the last iterate by central
 //! differences, naming the worst entries. `HESSIAN=exact` uses the exact
-//! convexified element Hessians instead of the default model.
+//! convexified element Hessians instead of the default model, `DELTA0=v`
+//! sets the initial step bound, `QPDUMP=DIR` writes failing QPs there.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -30,6 +31,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let settings = leap::sqp::SqpSettings {
         qp_dump_dir: std::env::var_os("QPDUMP").map(Into::into),
+        initial_step_bound: std::env::var("DELTA0")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(settings.initial_step_bound),
         hessian: if std::env::var("HESSIAN").as_deref() == Ok("exact") {
             leap::sqp::HessianMode::ExactConvexified
         } else {
