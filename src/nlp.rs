@@ -473,10 +473,12 @@ impl<'a, N: Nlp + ?Sized> ScaledVariables<'a, N> {
     pub fn scale_point(&self, x: &[f64]) -> Vec<f64> {
         x.iter().zip(&self.scale).map(|(v, d)| v / d).collect()
     }
-    fn set(&mut self, xs: &[f64]) {
+    /// `f` of the inner problem at x = D x̃ (kept in a reused buffer).
+    fn at<R>(&mut self, xs: &[f64], f: impl FnOnce(&mut N, &[f64]) -> R) -> R {
         for ((o, v), d) in self.x.iter_mut().zip(xs).zip(&self.scale) {
             *o = v * d;
         }
+        f(self.inner, &self.x)
     }
 }
 
@@ -508,39 +510,23 @@ impl<N: Nlp + ?Sized> Nlp for ScaledVariables<'_, N> {
         }
     }
     fn objective(&mut self, xs: &[f64]) -> Result<f64, EvalError> {
-        self.set(xs);
-        let x = std::mem::take(&mut self.x);
-        let r = self.inner.objective(&x);
-        self.x = x;
-        r
+        self.at(xs, |n, x| n.objective(x))
     }
     fn gradient(&mut self, xs: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
-        self.set(xs);
-        let x = std::mem::take(&mut self.x);
-        let r = self.inner.gradient(&x, g);
-        self.x = x;
-        r?;
+        self.at(xs, |n, x| n.gradient(x, g))?;
         for (v, d) in g.iter_mut().zip(&self.scale) {
             *v *= d;
         }
         Ok(())
     }
     fn constraints(&mut self, xs: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        self.set(xs);
-        let x = std::mem::take(&mut self.x);
-        let r = self.inner.constraints(&x, c);
-        self.x = x;
-        r
+        self.at(xs, |n, x| n.constraints(x, c))
     }
     fn jacobian_structure(&self) -> Vec<(usize, usize)> {
         self.inner.jacobian_structure()
     }
     fn jacobian_values(&mut self, xs: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.set(xs);
-        let x = std::mem::take(&mut self.x);
-        let r = self.inner.jacobian_values(&x, values);
-        self.x = x;
-        r?;
+        self.at(xs, |n, x| n.jacobian_values(x, values))?;
         for (v, &j) in values.iter_mut().zip(&self.jac_cols) {
             *v *= self.scale[j];
         }
@@ -560,11 +546,7 @@ impl<N: Nlp + ?Sized> Nlp for ScaledVariables<'_, N> {
         lambda: &[f64],
         h: &mut [f64],
     ) -> Result<(), EvalError> {
-        self.set(xs);
-        let x = std::mem::take(&mut self.x);
-        let r = self.inner.element_hessian(&x, e, sigma, lambda, h);
-        self.x = x;
-        r?;
+        self.at(xs, |n, x| n.element_hessian(x, e, sigma, lambda, h))?;
         let vars = &self.element_variables[e];
         let k = vars.len();
         for a in 0..k {

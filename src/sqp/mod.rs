@@ -892,6 +892,42 @@ impl<'s> Solver<'s> {
     /// Set the QP's vectors and matrices and solve; `c` stands for the
     /// constraint values (the second-order correction passes others).
     #[allow(clippy::too_many_arguments)]
+    /// The second-order correction of a rejected full step d (Nocedal &
+    /// Wright §18.3): the QP re-solved with c_soc = c(x + d) − J d, so its
+    /// rows read J d̂ + c(x + d) − J d within bounds. Returns the corrected
+    /// point with f and c there (None when the QP or the evaluation failed)
+    /// and the QP's time.
+    #[allow(clippy::type_complexity)]
+    fn second_order_correction<N: Nlp + ?Sized>(
+        &mut self,
+        nlp: &mut N,
+        p: &Point,
+        d: &[f64],
+        c_full: &[f64],
+        delta: f64,
+        rho: f64,
+    ) -> (Option<(Vec<f64>, f64, Vec<f64>)>, f64) {
+        let mut c_soc = c_full.to_vec();
+        for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
+            c_soc[i] -= p.jv[k] * d[j];
+        }
+        let t = Instant::now();
+        let soc = self.solve_qp(false, p, &c_soc, None, delta, rho, false);
+        let dq = t.elapsed().as_secs_f64();
+        let Ok(QpOutcome::Solved) = soc else {
+            return (None, dq);
+        };
+        let q = self.qp.as_ref().expect("solved");
+        let x: Vec<f64> = (0..self.pb.n)
+            .map(|j| (p.x[j] + q.d[j]).clamp(self.pb.xl[j], self.pb.xu[j]))
+            .collect();
+        let mut c = vec![0.0; self.pb.m];
+        match eval_fc(nlp, &x, &mut c) {
+            Ok(f) => (Some((x, f, c)), dq),
+            Err(_) => (None, dq),
+        }
+    }
+
     fn solve_qp(
         &mut self,
         elastic: bool,
@@ -1426,36 +1462,22 @@ impl<'s> Solver<'s> {
                         }
                         if a == 1.0 && st.second_order_correction && th >= theta0 {
                             soc_tried = true;
-                            let mut jd = vec![0.0; m];
-                            for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
-                                jd[i] += p.jv[k] * d[j];
-                            }
-                            let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
-                            let tq = Instant::now();
-                            let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
-                            let dq = tq.elapsed().as_secs_f64();
+                            let (soc, dq) =
+                                self.second_order_correction(nlp, &p, &d, &trial_c, delta, rho);
                             time.qp_s += dq;
                             rec.qp_s += dq;
                             soc_qp_s += dq;
-                            if let Ok(QpOutcome::Solved) = soc {
-                                let q = self.qp.as_ref().expect("solved");
-                                let soc_x: Vec<f64> = (0..n)
-                                    .map(|j| (p.x[j] + q.d[j]).clamp(self.pb.xl[j], self.pb.xu[j]))
-                                    .collect();
-                                let mut soc_c = vec![0.0; m];
-                                if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
-                                    let (th2, _) = self.pb.violation(&soc_c);
-                                    if let Some(f_type) = acceptable_trial(th2, f2, 1.0, &filter) {
-                                        if !f_type {
-                                            filter
-                                                .push(((1.0 - 1e-5) * theta0, p.f - 1e-8 * theta0));
-                                        }
-                                        accepted = Some((soc_x, f2, soc_c));
-                                        filter_accepted = true;
-                                        soc_used = true;
-                                        alpha = 1.0;
-                                        break;
+                            if let Some((soc_x, f2, soc_c)) = soc {
+                                let (th2, _) = self.pb.violation(&soc_c);
+                                if let Some(f_type) = acceptable_trial(th2, f2, 1.0, &filter) {
+                                    if !f_type {
+                                        filter.push(((1.0 - 1e-5) * theta0, p.f - 1e-8 * theta0));
                                     }
+                                    accepted = Some((soc_x, f2, soc_c));
+                                    filter_accepted = true;
+                                    soc_used = true;
+                                    alpha = 1.0;
+                                    break;
                                 }
                             }
                         }
@@ -1501,33 +1523,17 @@ impl<'s> Solver<'s> {
                         && !elastic
                     {
                         soc_tried = true;
-                        // c_soc = c(x + d) − J d, so the QP's rows read
-                        // J d̂ + c(x+d) − J d within bounds.
-                        let mut jd = vec![0.0; m];
-                        for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
-                            jd[i] += p.jv[k] * d[j];
-                        }
-                        let c_soc: Vec<f64> = (0..m).map(|i| trial_c[i] - jd[i]).collect();
-                        let tq = Instant::now();
-                        let soc = self.solve_qp(false, &p, &c_soc, None, delta, rho, false);
-                        let dq = tq.elapsed().as_secs_f64();
+                        let (soc, dq) =
+                            self.second_order_correction(nlp, &p, &d, &trial_c, delta, rho);
                         time.qp_s += dq;
                         rec.qp_s += dq;
                         soc_qp_s += dq;
-                        if let Ok(QpOutcome::Solved) = soc {
-                            let q = self.qp.as_ref().expect("solved");
-                            let d2 = q.d.clone();
-                            let soc_x: Vec<f64> = (0..n)
-                                .map(|j| (p.x[j] + d2[j]).clamp(self.pb.xl[j], self.pb.xu[j]))
-                                .collect();
-                            let mut soc_c = vec![0.0; m];
-                            if let Ok(f2) = eval_fc(nlp, &soc_x, &mut soc_c) {
-                                let (v2, _) = self.pb.violation(&soc_c);
-                                if f2 + nu * v2 <= phi0 + 1e-4 * dphi {
-                                    accepted = Some((soc_x, f2, soc_c));
-                                    soc_used = true;
-                                    break;
-                                }
+                        if let Some((soc_x, f2, soc_c)) = soc {
+                            let (v2, _) = self.pb.violation(&soc_c);
+                            if f2 + nu * v2 <= phi0 + 1e-4 * dphi {
+                                accepted = Some((soc_x, f2, soc_c));
+                                soc_used = true;
+                                break;
                             }
                         }
                     }
