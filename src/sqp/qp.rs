@@ -359,6 +359,21 @@ impl Qp {
 
     /// Solve with the current values (creating the solver on first use).
     pub fn solve(&mut self) -> Result<QpOutcome, String> {
+        let reused = self.solver.is_some();
+        let mut outcome = self.solve_once()?;
+        if reused && matches!(outcome, QpOutcome::Failed(_)) {
+            // The equilibration kept from the first QP can be far off for
+            // this one (exact Hessians change by orders of magnitude between
+            // iterations): a fresh solver equilibrates this QP itself.
+            let first = self.iterations;
+            self.solver = None;
+            outcome = self.solve_once()?;
+            self.iterations += first;
+        }
+        Ok(outcome)
+    }
+
+    fn solve_once(&mut self) -> Result<QpOutcome, String> {
         match &mut self.solver {
             Some(s) => {
                 s.update_P(&self.p.nzval).map_err(|e| e.to_string())?;
