@@ -3,7 +3,8 @@
 //! then (unless NOFD is set) checks the Jacobian at the last iterate by central
 //! differences, naming the worst entries. `HESSIAN=exact` uses the exact
 //! convexified element Hessians instead of the default model, `DELTA0=v`
-//! sets the initial step bound, `QPDUMP=DIR` writes failing QPs there.
+//! sets the initial step bound, `EIGFLOOR=v` the relative eigenvalue floor of
+//! the exact Hessians, `QPDUMP=DIR` writes failing QPs there.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -40,6 +41,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         } else {
             settings.hessian
         },
+        eigenvalue_floor: std::env::var("EIGFLOOR")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(settings.eigenvalue_floor),
         ..settings
     };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);

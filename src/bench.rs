@@ -589,6 +589,7 @@ pub fn sqp_jump(
         max_iterations: iterations,
         qp_equilibrate,
         scale_variables_using_bounds: true,
+        eigenvalue_floor: crate::study::JUMP_EIGENVALUE_FLOOR,
         ..Default::default()
     };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);

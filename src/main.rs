@@ -89,7 +89,8 @@ enum Command {
         /// midpoint-euler (default), trapezoidal or hermite-simpson.
         #[arg(long)]
         scheme: Option<String>,
-        /// bfgs (default) or exact.
+        /// exact (default: exact element Hessians, negative eigenvalues
+        /// clipped) or bfgs.
         #[arg(long)]
         hessian: Option<String>,
         /// Skip the forward simulation of the optimal excitations.
@@ -183,8 +184,8 @@ enum BenchCommand {
         model: PathBuf,
         #[arg(long, default_value_t = 3)]
         iterations: usize,
-        /// "bfgs" or "exact".
-        #[arg(long, default_value = "bfgs")]
+        /// "exact" (the jump's default) or "bfgs".
+        #[arg(long, default_value = "exact")]
         hessian: String,
         /// Turn off clarabel's equilibration of the QPs.
         #[arg(long)]

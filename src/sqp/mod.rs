@@ -1473,7 +1473,14 @@ impl<'s> Solver<'s> {
                 let theta0 = viol1;
                 // Some(f-type) when the trial (θ, f) at step a is acceptable.
                 let acceptable_trial = |th: f64, f: f64, a: f64, filter: &[(f64, f64)]| {
-                    if !(th < theta_max) || !f.is_finite() {
+                    // Besides IPOPT's global θ_max, a local limit: a step
+                    // that multiplies the violation by more than 10 left the
+                    // region where the linearisation holds (stiff tendon and
+                    // contact defects); backtracking shortens it and the
+                    // step bound follows (a trust region on the constraints'
+                    // curvature, as filter-SQP shrinks its trust region on
+                    // rejected steps, Fletcher & Leyffer 2002).
+                    if !(th < theta_max) || !f.is_finite() || th > 10.0 * theta0.max(theta_min) {
                         return None;
                     }
                     if filter.iter().any(|&(tj, fj)| th >= tj && f >= fj) {
