@@ -15,18 +15,21 @@ fn settings(mode: HessianMode) -> SqpSettings {
     }
 }
 
-/// Problems the SQP does not yet solve to the book's optimum from the
-/// book's starting point, with the reason; the note of each landing lists
-/// them. `None` = both Hessian modes.
+/// Problems the SQP does not solve to the book's optimum from the book's
+/// starting point, with the reason and the evidence that a good solver
+/// ends there too; the note of each landing lists them. `None` = both
+/// Hessian modes.
+///
+/// Checked: moving the projected start inside the bounds by IPOPT's
+/// bound_push (0.01) does not change hs002 (exact), hs016, hs020 or hs055.
 const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
-    ("hs002", Some(HessianMode::ExactConvexified), "nonconvex: ends at the other local minimum f = 4.9412"),
-    ("hs013", None, "degenerate: no KKT multipliers exist at x*; slow, inexact convergence"),
-    ("hs016", None, "the book's x0 = (−2, 1) violates x1 ≥ −0.5; from its projection the SQP ends at the local minimum f = 23.145"),
-    ("hs020", None, "nonconvex: ends at the local minimum f = 40.199 (−0.5, √3/2)"),
-    ("hs025", Some(HessianMode::PartitionedBfgs), "gradient below tolerance at x0: stops at the flat start"),
-    ("hs055", None, "rank-deficient: ends at the local minimum f = 20/3 at the other end of the feasible segment"),
-    ("hs061", Some(HessianMode::PartitionedBfgs), "nonconvex: ends at the local minimum f = −81.919"),
-    ("hs106", Some(HessianMode::ExactConvexified), "badly scaled (x up to 1e4): acceptable only, after 500 iterations"),
+    ("hs002", Some(HessianMode::ExactConvexified), "nonconvex: ends at the other local minimum f = 4.9412 (-1.2210, 1.5); the CasADi test suite (test/python/hock_schittkowski/hs002.py) expects IPOPT to end there from the book's x0"),
+    ("hs013", None, "degenerate: no KKT multipliers exist at x* (MFCQ fails), the SQP converges linearly with diverging multipliers; since the dual scaling s_d is capped it is no longer called solved at f = 1.00007 and ends at the iteration limit. IPOPT reports 'optimal' at f = 0.9946, x = (1.003, 0) (github.com/jkitchin/ripopt/issues/19; OPTI's fmin 0.9945785)"),
+    ("hs016", None, "the book's x0 = (−2, 1) violates x1 ≥ −0.5; its projection (−0.5, 1) lies next to the local minimum f = 23.1447 at (−0.5, 1/√2) (bound and x1 + x2² ≥ 0 active, positive multipliers), where the SQP ends, also from (−0.49, 1), where IPOPT's bound_push would start; no published run found"),
+    ("hs020", None, "nonconvex: ends at the local minimum f = 40.199 (−0.5, √3/2); the CasADi test suite (hs020.py: 'starts closer to local minimum') expects IPOPT there, and the SIF's SOLTN is 40.199"),
+    ("hs055", None, "rank-deficient: the feasible set is the segment x(t), t ∈ [0, 1]; the point of it nearest x0 (ℓ1 and ℓ2, SNOPT's proximal-point start) is t = 1, the local minimum f = 20/3, where the SQP ends; the SIF's SOLTN is 6.6666667"),
+    ("hs061", Some(HessianMode::PartitionedBfgs), "nonconvex: the quasi-Newton path ends at the local minimum f = −81.919 (the exact Hessian reaches −143.646); no published run to compare with"),
+    ("hs106", Some(HessianMode::ExactConvexified), "badly scaled (x up to 1e4): acceptable only (f within 5e-10, violation 1.2e-6)"),
 ];
 
 fn known_failure(name: &str, mode: HessianMode) -> bool {
@@ -45,6 +48,13 @@ fn run_all(mode: HessianMode) {
         if known_failure(name, mode) && std::env::var("LEAP_ALL").is_err() {
             continue;
         }
+        // LEAP_ONLY=hs013,hs016 runs only these (with LEAP_SQP_VERBOSE, to
+        // read their iteration logs).
+        if let Ok(only) = std::env::var("LEAP_ONLY") {
+            if !only.split(',').any(|n| n == name) {
+                continue;
+            }
+        }
         solved += 1;
         let r = solve(&mut AdNlp::new(p), &settings(mode));
         iterations += r.iterations;
@@ -61,7 +71,7 @@ fn run_all(mode: HessianMode) {
         "{mode:?}: {solved} of {} problems, {iterations} iterations",
         problems.len()
     );
-    assert!(solved >= 25);
+    assert!(solved >= 25 || std::env::var("LEAP_ONLY").is_ok());
     assert!(
         failures.is_empty(),
         "{mode:?}: {} of {} failed:\n{}",

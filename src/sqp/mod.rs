@@ -26,7 +26,9 @@
 //!   feasible point gives [`SqpStatus::Unbounded`].
 //! * Termination, with Moco's setting names: primal infeasibility (largest
 //!   constraint violation) ≤ `optim_constraint_tolerance` and scaled dual
-//!   infeasibility and complementarity (IPOPT's scaling, s_max = 100) ≤
+//!   infeasibility and complementarity (IPOPT's scaling, s_max = 100, with
+//!   the divisor s_d capped at 1e4 so diverging multipliers cannot hide
+//!   a residual) ≤
 //!   `optim_convergence_tolerance`; or, with `paper_criterion`, the change
 //!   of the objective below 1e-6 with constraints within 1e-3 (Porsa et al.
 //!   2016).
@@ -518,7 +520,7 @@ fn convexify(h: &mut [f64], k: usize, delta: f64, how: Convexification) {
 
 /// Damped BFGS update of B (k×k row-major) with step s and gradient
 /// change y (Powell 1978). Returns false when skipped.
-fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
+fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool, floor: f64) -> bool {
     let k = s.len();
     let ss: f64 = s.iter().map(|v| v * v).sum();
     if ss < 1e-300 {
@@ -527,9 +529,12 @@ fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool) -> bool {
     let sy: f64 = s.iter().zip(y).map(|(a, b)| a * b).sum();
     if *first {
         // Scale the initial identity to the curvature seen (Shanno & Phua).
+        // The lower limit is the exact mode's eigenvalue floor (it was
+        // 1e-6): on a plateau such as hs025's start the curvature is tiny,
+        // and a larger limit caps the steps at ‖g‖/limit.
         let yy: f64 = y.iter().map(|v| v * v).sum();
         if sy > 1e-12 * ss.sqrt() * yy.sqrt() && sy > 0.0 {
-            let gamma = (yy / sy).clamp(1e-6, 1e6);
+            let gamma = (yy / sy).clamp(floor, 1e6);
             for a in 0..k {
                 for c in 0..k {
                     b[a * k + c] = if a == c { gamma } else { 0.0 };
@@ -592,6 +597,10 @@ struct Measures {
     compl: f64,
 }
 
+/// Largest divisor of the dual infeasibility and complementarity: they are
+/// scaled by the mean multiplier size only up to 1e4 · s_max = 1e6.
+const S_D_LIMIT: f64 = 1e4;
+
 /// Scaled dual infeasibility and complementarity at p with (λ, ζ).
 fn measures(pb: &Problem, p: &Point, lambda: &[f64], zeta: &[f64]) -> Measures {
     let mut r = p.g.clone();
@@ -603,7 +612,12 @@ fn measures(pb: &Problem, p: &Point, lambda: &[f64], zeta: &[f64]) -> Measures {
     }
     let s_max = 100.0;
     let sum: f64 = lambda.iter().chain(zeta.iter()).map(|v| v.abs()).sum();
-    let s_d = (sum / ((pb.n + pb.m).max(1) as f64)).max(s_max) / s_max;
+    // IPOPT's s_d grows without limit with the multipliers. Where no KKT
+    // multipliers exist (MFCQ fails, hs013) they diverge along the
+    // iterates, and an unlimited s_d divides a dual residual that stays
+    // O(1) down to any tolerance: a point 7e-5 from x* passed as solved.
+    // Multipliers beyond s_max · S_D_LIMIT no longer loosen the test.
+    let s_d = ((sum / ((pb.n + pb.m).max(1) as f64)).max(s_max) / s_max).min(S_D_LIMIT);
     let mut compl = 0.0f64;
     for i in 0..pb.m {
         if pb.cl[i] == pb.cu[i] {
@@ -708,7 +722,12 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         .enumerate()
         .map(|(j, &v)| v.clamp(pb.xl[j], pb.xu[j]))
         .collect();
-    let mut scaled = GradientScaled::new(nlp, &x0p, pb.jac.clone());
+    let mut scaled = GradientScaled::new(
+        nlp,
+        &x0p,
+        pb.jac.clone(),
+        settings.optim_convergence_tolerance,
+    );
     let pb = match Problem::read(&scaled) {
         Ok(pb) => pb,
         Err(e) => {
@@ -742,7 +761,9 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
 /// IPOPT's gradient-based scaling (`nlp_scaling_method gradient-based`,
 /// `nlp_scaling_max_gradient` 100): the objective and each constraint row
 /// are multiplied by min(1, 100/‖∇‖∞) taken at the starting point, so no
-/// gradient exceeds 100 there.
+/// gradient exceeds 100 there. A flat start (objective gradient below the
+/// stationarity tolerance) has its objective scaled up instead, by
+/// min(100, 1/‖∇f‖∞).
 struct GradientScaled<'a, N: Nlp + ?Sized> {
     inner: &'a mut N,
     sf: f64,
@@ -752,7 +773,9 @@ struct GradientScaled<'a, N: Nlp + ?Sized> {
 }
 
 impl<'a, N: Nlp + ?Sized> GradientScaled<'a, N> {
-    fn new(inner: &'a mut N, x0: &[f64], jac: Vec<(usize, usize)>) -> Self {
+    /// `flat_tolerance`: the stationarity tolerance; an objective gradient
+    /// below it at x0 is scaled up.
+    fn new(inner: &'a mut N, x0: &[f64], jac: Vec<(usize, usize)>, flat_tolerance: f64) -> Self {
         let (n, m) = (inner.num_variables(), inner.num_constraints());
         let factor = |max: f64| {
             if max.is_finite() && max > 100.0 {
@@ -763,7 +786,20 @@ impl<'a, N: Nlp + ?Sized> GradientScaled<'a, N> {
         };
         let mut g = vec![0.0; n];
         let sf = if inner.gradient(x0, &mut g).is_ok() {
-            factor(norm_inf(&g))
+            let g_max = norm_inf(&g);
+            if g_max > 0.0 && g_max < flat_tolerance {
+                // A flat start: the objective's gradient at x0 already
+                // passes the stationarity test, which then cannot tell the
+                // start from a minimiser (hs025 begins on a plateau with
+                // ‖∇f‖ = 2e-8 and stops there). Scale the objective up, as
+                // IPOPT's nlp_scaling_obj_target_gradient does, by at most
+                // the factor 100 that gradient-based scaling takes off
+                // steep problems, so x0 is no longer stationary in the
+                // scaled problem.
+                (1.0 / g_max).min(100.0)
+            } else {
+                factor(g_max)
+            }
         } else {
             1.0
         };
@@ -1064,7 +1100,13 @@ impl<'s> Solver<'s> {
                         .zip(&old_grads[e])
                         .map(|(a, b)| a - b)
                         .collect();
-                    if !bfgs_update(&mut self.blocks[e], &s, &y, &mut self.bfgs_first[e]) {
+                    if !bfgs_update(
+                        &mut self.blocks[e],
+                        &s,
+                        &y,
+                        &mut self.bfgs_first[e],
+                        self.settings.eigenvalue_floor,
+                    ) {
                         *skips += 1;
                     }
                 }
