@@ -566,6 +566,8 @@ mod tests {
         assert_eq!(c.guess, GuessChoice::BangBang);
         assert_eq!(c.name, "jump");
         assert_eq!(c.output_directory, PathBuf::from("results"));
+        assert_eq!(c.settings.hessian, HessianMode::ExactConvexified);
+        assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
     }
 
     #[test]
@@ -590,6 +592,11 @@ mod tests {
         assert_eq!(f, "tolerances.optim_convergence_tolerance");
         let (f, _) = field_error(r#"{"hessian": "newton"}"#);
         assert_eq!(f, "hessian");
+        for bad in ["0", "-1e-4", "1.5"] {
+            let (f, r) = field_error(&format!(r#"{{"hessian_eigenvalue_floor": {bad}}}"#));
+            assert_eq!(f, "hessian_eigenvalue_floor");
+            assert!(r.contains("(0, 1)"), "{r}");
+        }
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");
     }
