@@ -4,7 +4,8 @@
 //! differences, naming the worst entries. `HESSIAN=exact` uses the exact
 //! convexified element Hessians instead of the default model, `DELTA0=v`
 //! sets the initial step bound, `EIGFLOOR=v` the relative eigenvalue floor of
-//! the exact Hessians, `QPDUMP=DIR` writes failing QPs there.
+//! the exact Hessians, `VGROWTH=v` the filter's local violation limit,
+//! `QPDUMP=DIR` writes failing QPs there.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -45,6 +46,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(settings.eigenvalue_floor),
+        max_violation_growth: std::env::var("VGROWTH")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(settings.max_violation_growth),
         ..settings
     };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);

@@ -148,6 +148,9 @@ pub struct SqpSettings {
     pub scale_variables_using_bounds: bool,
     /// Step acceptance (default: the filter, see `leap bench sqp`).
     pub line_search: LineSearch,
+    /// The filter rejects a trial point whose violation exceeds this
+    /// multiple of the current one (or of θ_min), besides IPOPT's θ_max.
+    pub max_violation_growth: f64,
     /// With `verbose`: for each rejected full step, the objective and
     /// violation changes and the constraints that grew most.
     pub verbose_line_search: bool,
@@ -178,6 +181,7 @@ impl Default for SqpSettings {
             scale_variables_using_bounds: false,
             verbose_line_search: false,
             line_search: LineSearch::Filter,
+            max_violation_growth: 10.0,
         }
     }
 }
@@ -1522,7 +1526,10 @@ impl<'s> Solver<'s> {
                     // step bound follows (a trust region on the constraints'
                     // curvature, as filter-SQP shrinks its trust region on
                     // rejected steps, Fletcher & Leyffer 2002).
-                    if !(th < theta_max) || !f.is_finite() || th > 10.0 * theta0.max(theta_min) {
+                    if !(th < theta_max)
+                        || !f.is_finite()
+                        || th > st.max_violation_growth * theta0.max(theta_min)
+                    {
                         return None;
                     }
                     if filter.iter().any(|&(tj, fj)| th >= tj && f >= fj) {
