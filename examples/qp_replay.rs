@@ -22,6 +22,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None)?;
     std::fs::remove_file(&tmp).ok();
     s.solve();
+    let ls = &s.info.linsolver;
+    println!(
+        "{}: KKT non-zeros {}, factor non-zeros {}",
+        ls.name, ls.nnzA, ls.nnzL
+    );
     println!(
         "{:?}: {} iterations, {:.3} s, objective {:e}, r_prim {:.1e}, r_dual {:.1e}",
         s.solution.status,

@@ -1,5 +1,6 @@
 //! Write the QPs of the first SQP iterations on the jump collocation
-//! problem as clarabel JSON, for profiling the QP solver:
+//! problem as clarabel JSON (exact element Hessians with the jump's
+//! eigenvalue floor 1e-4, as `leap solve`), for profiling the QP solver:
 //! `cargo run --release --example sqp_jump_dump -- DIR [ITERATIONS]`.
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -14,6 +15,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         max_iterations: iterations,
         qp_dump_dir: Some(dir.into()),
         qp_dump_every: true,
+        hessian: leap::sqp::HessianMode::ExactConvexified,
+        eigenvalue_floor: 1e-4,
         ..Default::default()
     };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
