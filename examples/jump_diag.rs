@@ -5,7 +5,8 @@
 //! convexified element Hessians instead of the default model, `DELTA0=v`
 //! sets the initial step bound, `EIGFLOOR=v` the relative eigenvalue floor of
 //! the exact Hessians, `VGROWTH=v` the filter's local violation limit,
-//! `QPDUMP=DIR` writes failing QPs there.
+//! `QPDUMP=DIR` writes failing QPs there, `TRRATIO=0` turns the
+//! trust-region ratio test off.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -46,6 +47,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .ok()
             .and_then(|v| v.parse().ok())
             .unwrap_or(settings.eigenvalue_floor),
+        trust_region_ratio: std::env::var("TRRATIO").map_or(true, |v| v != "0"),
         max_violation_growth: std::env::var("VGROWTH")
             .ok()
             .and_then(|v| v.parse().ok())

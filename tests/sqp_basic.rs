@@ -198,3 +198,53 @@ fn scaled_variables() {
         }
     }
 }
+
+/// A convex quadratic with one linear equality: the QP model of the ℓ1
+/// merit is exact, so the trust-region ratio (actual over predicted
+/// reduction) of every full step is 1.
+struct ConvexQuadratic;
+impl AdProblem for ConvexQuadratic {
+    fn name(&self) -> String {
+        "convex quadratic".into()
+    }
+    fn num_variables(&self) -> usize {
+        3
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(-100.0);
+        u.fill(100.0);
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l[0] = 1.0;
+        u[0] = 1.0;
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x.copy_from_slice(&[3.0, -2.0, 0.5]);
+    }
+    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
+        c[0] = x[0] + x[1] * 2.0 - x[2];
+        let a = x[0] - 1.0;
+        let b = x[1] + 0.5;
+        a * a + b * b * 2.0 + x[2] * x[2] * 3.0 + x[0] * x[1]
+    }
+}
+
+#[test]
+fn trust_region_ratio_is_one_where_the_model_is_exact() {
+    let r = run(ConvexQuadratic, HessianMode::ExactConvexified);
+    assert_eq!(r.status, SqpStatus::Solved, "{}", r.message);
+    let measured: Vec<f64> = r
+        .history
+        .iter()
+        .map(|h| h.model_ratio)
+        .filter(|v| !v.is_nan())
+        .collect();
+    // The first step is full (it lands on the solution) and measured.
+    assert!(!measured.is_empty(), "no full step was measured");
+    for v in &measured {
+        assert!((v - 1.0).abs() < 1e-6, "ratio {v}");
+    }
+}

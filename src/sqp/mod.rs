@@ -152,6 +152,14 @@ pub struct SqpSettings {
     /// multiple of the current one (or of θ_min), besides IPOPT's θ_max
     /// (default 100, measured on the jump with `jump_diag`, VGROWTH).
     pub max_violation_growth: f64,
+    /// Shrink the step bound Δ when a full step achieved less than a
+    /// quarter of the ℓ1-merit reduction its QP model predicted (the
+    /// trust-region ratio test of Fletcher's Sℓ1QP), grow it only when
+    /// the model was good. Without it Δ moves only with the line search,
+    /// and full steps that the filter accepts can cycle: on the jump,
+    /// consecutive steps of equal size and opposite sign (cos = −0.99)
+    /// for hundreds of iterations.
+    pub trust_region_ratio: bool,
     /// With `verbose`: for each rejected full step, the objective and
     /// violation changes and the constraints that grew most.
     pub verbose_line_search: bool,
@@ -183,6 +191,7 @@ impl Default for SqpSettings {
             verbose_line_search: false,
             line_search: LineSearch::Filter,
             max_violation_growth: 100.0,
+            trust_region_ratio: true,
         }
     }
 }
@@ -236,6 +245,9 @@ pub struct IterationRecord {
     pub step_norm: f64,
     /// The step bound Δ of the QP (|d_j| ≤ Δ).
     pub step_bound: f64,
+    /// Actual over predicted ℓ1-merit reduction of a full step (NaN when
+    /// not measured: shortened or corrected steps, or the test is off).
+    pub model_ratio: f64,
     pub alpha: f64,
     pub ls_trials: usize,
     pub qp_iterations: u32,
@@ -297,11 +309,11 @@ pub fn write_history_csv(
 ) -> std::io::Result<()> {
     use std::io::Write;
     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s")?;
+    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s")?;
     for r in history {
         writeln!(
             f,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e}",
             r.iter,
             r.objective,
             r.inf_pr,
@@ -309,6 +321,7 @@ pub fn write_history_csv(
             r.complementarity,
             r.step_norm,
             r.step_bound,
+            r.model_ratio,
             r.alpha,
             r.ls_trials,
             r.qp_iterations,
@@ -430,6 +443,24 @@ impl Problem {
         }
         (l1, inf)
     }
+}
+
+/// ½ dᵀBd of the QP's Hessian model, from its element blocks.
+fn model_curvature(elements: &[Element], blocks: &[Vec<f64>], d: &[f64]) -> f64 {
+    let mut sum = 0.0;
+    for (el, b) in elements.iter().zip(blocks) {
+        let k = el.variables.len();
+        for (a, &ja) in el.variables.iter().enumerate() {
+            let row = &b[a * k..(a + 1) * k];
+            let bd: f64 = row
+                .iter()
+                .zip(&el.variables)
+                .map(|(v, &jb)| v * d[jb])
+                .sum();
+            sum += d[ja] * bd;
+        }
+    }
+    0.5 * sum
 }
 
 /// The iterate's evaluations.
@@ -1205,6 +1236,7 @@ impl<'s> Solver<'s> {
             let mut rec = IterationRecord {
                 iter,
                 step_bound: delta,
+                model_ratio: f64::NAN,
                 ..Default::default()
             };
             // Derivatives at the iterate.
@@ -1682,14 +1714,39 @@ impl<'s> Solver<'s> {
                 finish(result, status, msg, &p, &lambda, &zeta, &mut time, &self.pb);
                 return;
             };
+            // Ratio of the actual to the predicted reduction of the ℓ1
+            // merit φ = f + ν‖c‖₁ over the full step; the model is the
+            // QP's: gᵀd + ½dᵀBd and the linearised constraints c + Jd.
+            let ratio = if st.trust_region_ratio && alpha == 1.0 && !soc_used && !elastic {
+                let mut lin = p.c.clone();
+                for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
+                    lin[i] += p.jv[k] * d[j];
+                }
+                let (lin1, _) = self.pb.violation(&lin);
+                let curv = model_curvature(&self.pb.elements, &self.blocks, &d);
+                let pred = -(gd + curv) + nu * (viol1 - lin1);
+                let (v_new, _) = self.pb.violation(&cn);
+                let ared = phi0 - (fn_ + nu * v_new);
+                (pred > 1e-12 * (1.0 + phi0.abs())).then(|| ared / pred)
+            } else {
+                None
+            };
+            rec.model_ratio = ratio.unwrap_or(f64::NAN);
             self.log(&rec, start, result);
             // The step bound acts as a box trust region: it grows when a
             // full step reached it and shrinks to twice the accepted step
             // when the line search had to cut the step short.
             qp_retries = 0;
             if alpha == 1.0 {
-                if bound_hit {
-                    delta *= 4.0;
+                match ratio {
+                    Some(r) if r < 0.25 => {
+                        delta = (0.5 * dnorm).max(1e-6 * scale_x).min(delta);
+                    }
+                    _ => {
+                        if bound_hit {
+                            delta *= 4.0;
+                        }
+                    }
                 }
             } else {
                 delta = (2.0 * alpha * dnorm).max(1e-3 * scale_x).min(delta);
@@ -1730,11 +1787,11 @@ impl<'s> Solver<'s> {
         rec.time_s = start.elapsed().as_secs_f64();
         if self.settings.verbose {
             if rec.iter.is_multiple_of(10) {
-                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta    alpha  ls  qp_it  qp_mode   penalty  time_s");
+                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta  ratio    alpha  ls  qp_it  qp_mode   penalty  time_s");
             }
             eprintln!(
-                "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:6.0e} {:8.2e} {:3} {:6} {:8} {:8.2e} {:7.2}",
-                rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.step_bound, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, rec.penalty, rec.time_s
+                "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:6.0e} {:6.2} {:8.2e} {:3} {:6} {:8} {:8.2e} {:7.2}",
+                rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.step_bound, rec.model_ratio, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, rec.penalty, rec.time_s
             );
         }
         result.history.push(rec);
