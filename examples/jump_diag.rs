@@ -6,14 +6,15 @@
 //! sets the initial step bound, `EIGFLOOR=v` the relative eigenvalue floor of
 //! the exact Hessians, `VGROWTH=v` the filter's local violation limit,
 //! `QPDUMP=DIR` writes failing QPs there, `TRRATIO=0` turns the
-//! trust-region ratio test off.
+//! trust-region ratio test off, `MODEL=F` solves with another model file.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let n: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(28);
     let iterations: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(8);
-    let model = leap::model::Model::from_file(std::path::Path::new("models/jumper.json"))?;
+    let model_path = std::env::var("MODEL").unwrap_or("models/jumper.json".into());
+    let model = leap::model::Model::from_file(std::path::Path::new(&model_path))?;
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
     let opts = leap::transcription::TranscriptionOptions {
         num_mesh_intervals: n,
