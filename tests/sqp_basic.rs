@@ -248,3 +248,49 @@ fn trust_region_ratio_is_one_where_the_model_is_exact() {
         assert!((v - 1.0).abs() < 1e-6, "ratio {v}");
     }
 }
+
+/// At the iteration limit the solve returns the iterate of lowest
+/// objective among those within `best_iterate_violation` (here checked
+/// against the solve's own history, unscaled so both are in one unit).
+#[test]
+fn iteration_limit_returns_the_best_iterate_within_the_violation_limit() {
+    let mut swapped = 0;
+    for p in leap::testset::hock_schittkowski() {
+        let name = p.name;
+        for max_iterations in [2, 4, 6] {
+            let settings = SqpSettings {
+                max_iterations,
+                nlp_scaling: false,
+                ..Default::default()
+            };
+            let r = solve(&mut AdNlp::new(p.clone()), &settings);
+            if r.status != SqpStatus::IterationLimit {
+                continue;
+            }
+            let tau = settings.best_iterate_violation;
+            let best = r
+                .history
+                .iter()
+                .filter(|h| h.inf_pr <= tau)
+                .map(|h| h.objective)
+                .fold(f64::INFINITY, f64::min);
+            if best.is_finite() {
+                assert_eq!(
+                    r.objective, best,
+                    "{name} after {max_iterations}: {}",
+                    r.message
+                );
+                assert!(r.constraint_violation <= tau, "{name}");
+            } else {
+                // None within the limit: the last iterate.
+                let last = r.history.last().unwrap();
+                assert_eq!(r.objective, last.objective, "{name}");
+            }
+            if r.message.contains("returned iteration") {
+                swapped += 1;
+            }
+        }
+    }
+    // Some of these short runs end on a worse or infeasible iterate.
+    assert!(swapped > 0, "no run returned an earlier iterate");
+}
