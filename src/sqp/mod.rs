@@ -160,10 +160,11 @@ pub struct SqpSettings {
     /// multiple of the current one (or of θ_min), besides IPOPT's θ_max
     /// (default 100, measured on the jump with `jump_diag`, VGROWTH).
     pub max_violation_growth: f64,
-    /// Shrink the step bound Δ when a full step achieved less than a
-    /// quarter of the ℓ1-merit reduction its QP model predicted (the
-    /// trust-region ratio test of Fletcher's Sℓ1QP), grow it only when
-    /// the model was good. Without it Δ moves only with the line search,
+    /// Shrink the step bound Δ to half the step when a full plain-QP step
+    /// achieved less than a quarter of the ℓ1-merit reduction its QP
+    /// model predicted (the trust-region ratio test of Fletcher's Sℓ1QP);
+    /// such a step does not grow Δ even when it reached it. Without the
+    /// test Δ moves only with the line search,
     /// and full steps that the filter accepts can cycle: on the jump,
     /// consecutive steps of equal size and opposite sign (cos = −0.99)
     /// for hundreds of iterations.
@@ -1783,8 +1784,9 @@ impl<'s> Solver<'s> {
             rec.model_ratio = ratio.unwrap_or(f64::NAN);
             self.log(&rec, start, result);
             // The step bound acts as a box trust region: it grows when a
-            // full step reached it and shrinks to twice the accepted step
-            // when the line search had to cut the step short.
+            // full step reached it, shrinks to half a full step that the
+            // model predicted badly (ratio below 1/4) and to twice the
+            // accepted step when the line search had to cut the step short.
             qp_retries = 0;
             if alpha == 1.0 {
                 match ratio {
