@@ -1374,7 +1374,7 @@ impl<'s> Solver<'s> {
                 if let Some(b) = best.filter(|b| b.iter != iter) {
                     if inf_pr > st.best_iterate_violation || b.f < p.f {
                         msg += &format!(
-                            "; returned iteration {} (objective {:e}, violation ≤ {:e}) instead of the last (objective {:e}, violation {:e})",
+                            "; returned iteration {} (objective {:e}, largest violation ≤ {:e} in the solver's scaling) instead of the last (objective {:e}, violation {:e})",
                             b.iter, b.f, st.best_iterate_violation, p.f, inf_pr
                         );
                         result.dual_infeasibility = b.inf_du;
