@@ -11,13 +11,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
     let mut tr = leap::transcription::Transcription::new(ocp, Default::default())?;
     let x = leap::solve::guess_from_file(&tr, std::path::Path::new(&path))?;
-    let m = tr.num_constraints();
-    let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
-    tr.constraint_bounds(&mut cl, &mut cu);
-    let mut c = vec![0.0; m];
-    tr.constraints(&x, &mut c)?;
-    let mut v: Vec<(f64, usize)> = (0..m)
-        .map(|i| ((cl[i] - c[i]).max(c[i] - cu[i]).max(0.0), i))
+    let mut v: Vec<(f64, usize)> = leap::nlp::constraint_violations(&mut tr, &x)?
+        .into_iter()
+        .zip(0..)
         .collect();
     v.sort_by(|a, b| b.0.total_cmp(&a.0));
     for &(val, i) in v.iter().take(15) {

@@ -128,6 +128,22 @@ impl Element {
     }
 }
 
+/// Each constraint row's violation at x: how far c_i(x) lies outside
+/// [c_l, c_u] (0 inside).
+pub fn constraint_violations<N: Nlp + ?Sized>(
+    nlp: &mut N,
+    x: &[f64],
+) -> Result<Vec<f64>, EvalError> {
+    let m = nlp.num_constraints();
+    let mut c = vec![0.0; m];
+    nlp.constraints(x, &mut c)?;
+    let (mut cl, mut cu) = (vec![0.0; m], vec![0.0; m]);
+    nlp.constraint_bounds(&mut cl, &mut cu);
+    Ok((0..m)
+        .map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0))
+        .collect())
+}
+
 /// Check that `elements` partition the constraint rows, hold the objective
 /// at most once and list valid, increasing variables.
 pub fn check_elements(elements: &[Element], n: usize, m: usize) -> Result<(), String> {

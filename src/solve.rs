@@ -247,15 +247,8 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         .iter()
         .map(|g| (g[1] + g[7]) / ocp.body_weight)
         .fold(f64::NAN, f64::max);
-    let mut c = vec![0.0; tr.num_constraints()];
-    let violation = match tr.constraints(x, &mut c) {
-        Ok(()) => {
-            let (mut cl, mut cu) = (vec![0.0; c.len()], vec![0.0; c.len()]);
-            tr.constraint_bounds(&mut cl, &mut cu);
-            (0..c.len())
-                .map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0))
-                .fold(0.0, f64::max)
-        }
+    let violation = match crate::nlp::constraint_violations(tr, x) {
+        Ok(v) => v.into_iter().fold(0.0, f64::max),
         Err(_) => f64::NAN,
     };
     SolveReport {

@@ -444,6 +444,13 @@ impl Problem {
         })
     }
 
+    /// out += s·J d, with J's values `jv`.
+    fn add_jacobian_times(&self, jv: &[f64], d: &[f64], s: f64, out: &mut [f64]) {
+        for (k, &(i, j)) in self.jac.iter().enumerate() {
+            out[i] += s * jv[k] * d[j];
+        }
+    }
+
     fn violation(&self, c: &[f64]) -> (f64, f64) {
         let (mut l1, mut inf) = (0.0f64, 0.0f64);
         for i in 0..self.m {
@@ -804,13 +811,8 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
     for z in result.zeta.iter_mut() {
         *z /= sf;
     }
-    let mut c = vec![0.0; sc.len()];
-    if nlp.constraints(&result.x, &mut c).is_ok() {
-        let (mut cl, mut cu) = (vec![0.0; c.len()], vec![0.0; c.len()]);
-        nlp.constraint_bounds(&mut cl, &mut cu);
-        result.constraint_violation = (0..c.len())
-            .map(|i| (cl[i] - c[i]).max(c[i] - cu[i]).max(0.0))
-            .fold(0.0, f64::max);
+    if let Ok(v) = crate::nlp::constraint_violations(nlp, &result.x) {
+        result.constraint_violation = v.into_iter().fold(0.0, f64::max);
     }
     result
 }
@@ -1033,9 +1035,7 @@ impl<'s> Solver<'s> {
         rho: f64,
     ) -> (Option<(Vec<f64>, f64, Vec<f64>)>, f64) {
         let mut c_soc = c_full.to_vec();
-        for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
-            c_soc[i] -= p.jv[k] * d[j];
-        }
+        self.pb.add_jacobian_times(&p.jv, d, -1.0, &mut c_soc);
         let t = Instant::now();
         let soc = self.solve_qp(false, p, &c_soc, None, delta, rho, false);
         let dq = t.elapsed().as_secs_f64();
@@ -1769,9 +1769,7 @@ impl<'s> Solver<'s> {
             // QP's: gᵀd + ½dᵀBd and the linearised constraints c + Jd.
             let ratio = if st.trust_region_ratio && alpha == 1.0 && !soc_used && !elastic {
                 let mut lin = p.c.clone();
-                for (k, &(i, j)) in self.pb.jac.iter().enumerate() {
-                    lin[i] += p.jv[k] * d[j];
-                }
+                self.pb.add_jacobian_times(&p.jv, &d, 1.0, &mut lin);
                 let (lin1, _) = self.pb.violation(&lin);
                 let curv = model_curvature(&self.pb.elements, &self.blocks, &d);
                 let pred = -(gd + curv) + nu * (viol1 - lin1);
