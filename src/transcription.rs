@@ -19,7 +19,10 @@
 //!   - Hermite–Simpson (compressed): d_k = x_k − x_{k−1} − (h/6)·(f_{k−1} + 4 f_c + f_k);
 //! - no countermovement (eq. 4), row j = 0..n_cm−1:
 //!   Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0 (Ÿ_C from q, q̇ and q̈ = f(x, u) at the node);
-//! - lift-off: F_y(t_f)/(m g) ≤ ε (or = ε), see [`crate::ocp::LiftOff`].
+//! - lift-off: F_y(t_f)/(m g) ≤ ε (or = ε), see [`crate::ocp::LiftOff`];
+//! - no descent (with [`crate::ocp::OcpOptions::no_com_descent`], default):
+//!   Ẏ_C(t_k) ≥ 0 at nodes k = 1..N (rows after the lift-off row; Ẏ_C from
+//!   the node's q and q̇).
 //!
 //! **Objective**: −J = −(Y_C(t_f) + Ẏ_C(t_f)²/(2g)) (eq. 3).
 //!
@@ -605,6 +608,8 @@ enum Src {
         entry: usize,
         scale: f64,
     },
+    /// ∂Ẏ_C/∂(q, q̇) of a node (filled node by node).
+    ComVelocity,
 }
 
 /// The first term of a t_f column entry.
@@ -625,6 +630,8 @@ pub struct JacobianStats {
     pub nnz_defects: usize,
     pub nnz_no_countermovement: usize,
     pub nnz_liftoff: usize,
+    /// Of the Ẏ_C ≥ 0 rows (zero without them).
+    pub nnz_no_descent: usize,
     /// Per defect block (interval 1 has no previous-node columns).
     pub nnz_first_interval: usize,
     pub nnz_interval: usize,
@@ -669,6 +676,8 @@ pub struct Transcription {
     nx: usize,
     nu: usize,
     n_cm: usize,
+    /// Rows Ẏ_C(t_k) ≥ 0, k = 1..n_cv (N with `no_com_descent`, else 0).
+    n_cv: usize,
     points: Vec<Point>,
     /// The midpoint (or Hermite–Simpson centre) of interval k at [k − 1].
     interval_point: Vec<usize>,
@@ -687,8 +696,9 @@ pub struct Transcription {
     node0: Vec<f64>,
     structure: Vec<(usize, usize)>,
     sources: Vec<Src>,
-    /// Offsets into `structure` of the defect, no-countermovement and lift-off rows.
-    block_offsets: [usize; 4],
+    /// Offsets into `structure` of the defect, no-countermovement, lift-off
+    /// and no-descent rows, and its end.
+    block_offsets: [usize; 5],
     point_vals: Vec<f64>,
     point_jac: Vec<f64>,
     workers: Vec<Worker<LANES>>,
@@ -927,6 +937,15 @@ impl Transcription {
                 });
             }
         }
+        let off_cv = structure.len();
+        let n_cv = if ocp.options.no_com_descent { big_n } else { 0 };
+        for k in 1..=n_cv {
+            let row = big_n * nx + n_cm + k;
+            for c in 0..2 * ocp.nq() {
+                structure.push((row, var(k, c)));
+                sources.push(Src::ComVelocity);
+            }
+        }
         let off_end = structure.len();
         // Node 0.
         let mut w0 = Worker::<LANES>::new(&ocp);
@@ -948,6 +967,7 @@ impl Transcription {
             nx,
             nu,
             n_cm,
+            n_cv,
             points,
             interval_point,
             first_stage,
@@ -958,7 +978,7 @@ impl Transcription {
             node0,
             structure,
             sources,
-            block_offsets: [0, off_cm, off_lo, off_end],
+            block_offsets: [0, off_cm, off_lo, off_cv, off_end],
             point_vals: vec![0.0; npts * (nx + 2)],
             point_jac: vec![0.0; npts * nnz_g],
             workers,
@@ -990,6 +1010,9 @@ impl Transcription {
                 me.hess_elements.push(HessElement::NoCountermovement(j));
             }
             me.hess_elements.push(HessElement::Final);
+            for k in 1..=n_cv {
+                me.hess_elements.push(HessElement::ComVelocity(k));
+            }
         }
         // Until a guess is set: the squat held, t_f = 0.3 s within its bounds.
         let [t0, t1] = me.ocp.options.final_time_bounds;
@@ -1256,7 +1279,7 @@ impl Transcription {
 
     /// Sizes of the Jacobian and its blocks.
     pub fn jacobian_stats(&self) -> JacobianStats {
-        let [_, cm, lo, end] = self.block_offsets;
+        let [_, cm, lo, cv, end] = self.block_offsets;
         let nx = self.nx;
         let first = self.structure.iter().take_while(|&&(r, _)| r < nx).count();
         let second = self
@@ -1268,7 +1291,8 @@ impl Transcription {
             nnz: end,
             nnz_defects: cm,
             nnz_no_countermovement: lo - cm,
-            nnz_liftoff: end - lo,
+            nnz_liftoff: cv - lo,
+            nnz_no_descent: end - cv,
             nnz_first_interval: first,
             nnz_interval: if self.num_intervals() >= 2 { second } else { 0 },
             nnz_state_equation: self.pattern.nnz_f(),
@@ -1289,6 +1313,59 @@ impl Transcription {
     }
     pub fn liftoff_row(&self) -> usize {
         self.num_intervals() * self.nx + self.n_cm
+    }
+    /// Rows Ẏ_C(t_k) ≥ 0, k = 1..N (empty without `no_com_descent`).
+    pub fn no_descent_rows(&self) -> std::ops::Range<usize> {
+        let s = self.liftoff_row() + 1;
+        s..s + self.n_cv
+    }
+
+    /// Ẏ_C at node k ≥ 1 (with `grad`, ∂Ẏ_C/∂(q, q̇) into it).
+    fn com_vertical_velocity(&self, v: &[f64], k: usize, grad: Option<&mut [f64]>) -> f64 {
+        let n2 = 2 * self.ocp.nq();
+        let xk = &self.node_state(v, k)[..n2];
+        match grad {
+            None => {
+                let mut ws = self.ocp.eq.multibody.workspace::<f64>();
+                self.ocp.jump_objective(&mut ws, xk).1
+            }
+            Some(g) => {
+                let mut ws = self.ocp.eq.multibody.workspace::<Dual64>();
+                let mut xd: Vec<Dual64> = xk.iter().map(|&x| Dual64::from(x)).collect();
+                let mut value = 0.0;
+                for i in 0..n2 {
+                    xd[i] = Dual64::from(xk[i]).derivative();
+                    let (_, yd, _) = self.ocp.jump_objective(&mut ws, &xd);
+                    xd[i] = Dual64::from(xk[i]);
+                    g[i] = yd.eps;
+                    value = yd.re;
+                }
+                value
+            }
+        }
+    }
+
+    /// ∂²Ẏ_C/∂(q, q̇)² at node k (2n × 2n, row-major) into `h`.
+    fn com_vertical_velocity_hessian(&self, v: &[f64], k: usize, h: &mut [f64]) {
+        let n2 = 2 * self.ocp.nq();
+        let xk = &self.node_state(v, k)[..n2];
+        let mut ws = self.ocp.eq.multibody.workspace::<HyperDual64>();
+        let mut xd: Vec<HyperDual64> = xk.iter().map(|&x| HyperDual64::from(x)).collect();
+        for i in 0..n2 {
+            for j in i..n2 {
+                for (l, x) in xd.iter_mut().enumerate() {
+                    *x = HyperDual64::new(
+                        xk[l],
+                        if l == i { 1.0 } else { 0.0 },
+                        if l == j { 1.0 } else { 0.0 },
+                        0.0,
+                    );
+                }
+                let (_, yd, _) = self.ocp.jump_objective(&mut ws, &xd);
+                h[i * n2 + j] = yd.eps1eps2;
+                h[j * n2 + i] = yd.eps1eps2;
+            }
+        }
     }
 
     /// The defect rows grouped by their node columns S_r = pattern(f_r) ∪
@@ -1576,7 +1653,7 @@ impl Nlp for Transcription {
     }
 
     fn num_constraints(&self) -> usize {
-        self.num_intervals() * self.nx + self.n_cm + 1
+        self.num_intervals() * self.nx + self.n_cm + 1 + self.n_cv
     }
 
     fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
@@ -1605,6 +1682,10 @@ impl Nlp for Transcription {
         let (a, b) = self.ocp.liftoff_bounds();
         lower[self.liftoff_row()] = a;
         upper[self.liftoff_row()] = b;
+        for i in self.no_descent_rows() {
+            lower[i] = 0.0;
+            upper[i] = f64::INFINITY;
+        }
     }
 
     fn initial_point(&self, x: &mut [f64]) {
@@ -1688,6 +1769,10 @@ impl Nlp for Transcription {
                 self.point_val(self.node_point[j], nx) - self.point_val(self.node_point[j + 1], nx);
         }
         c[self.liftoff_row()] = self.point_val(self.node_point[big_n], nx + 1);
+        let cv0 = self.liftoff_row() + 1;
+        for k in 1..=self.n_cv {
+            c[cv0 + k - 1] = self.com_vertical_velocity(x, k, None);
+        }
         self.counters.constraints += 1;
         self.counters.constraints_time += start.elapsed().as_secs_f64();
         finite("constraints", c, |i| self.constraint_name(i))
@@ -1710,7 +1795,7 @@ impl Nlp for Transcription {
         }
         for (v, src) in values.iter_mut().zip(&self.sources) {
             *v = match *src {
-                Src::Hs => continue,
+                Src::Hs | Src::ComVelocity => continue,
                 Src::Dyn { point, entry, diag } => match entry {
                     Some(e) => diag - half_h * self.point_jac[point * nnz + e],
                     None => diag,
@@ -1729,6 +1814,12 @@ impl Nlp for Transcription {
                     scale,
                 } => scale * self.point_jac[point * nnz + entry],
             };
+        }
+        let n2 = 2 * self.ocp.nq();
+        let off = self.block_offsets[3];
+        for k in 1..=self.n_cv {
+            let o = off + (k - 1) * n2;
+            self.com_vertical_velocity(x, k, Some(&mut values[o..o + n2]));
         }
         self.counters.jacobians += 1;
         self.counters.jacobian_time += start.elapsed().as_secs_f64();
@@ -1806,6 +1897,13 @@ impl Nlp for Transcription {
             constraints: vec![self.liftoff_row()],
             objective: true,
         });
+        for (k, row) in (1..=self.n_cv).zip(self.no_descent_rows()) {
+            out.push(Element {
+                variables: (0..2 * self.ocp.nq()).map(|c| (k - 1) * nv + c).collect(),
+                constraints: vec![row],
+                objective: false,
+            });
+        }
         out
     }
 
@@ -1849,6 +1947,9 @@ impl Nlp for Transcription {
         } else if self.no_countermovement_rows().contains(&i) {
             let j = i - self.num_intervals() * nx;
             format!("no countermovement: Ÿ_C(node {j}) ≤ Ÿ_C(node {})", j + 1)
+        } else if self.no_descent_rows().contains(&i) {
+            let k = i - self.liftoff_row();
+            format!("no descent: Ẏ_C(node {k}) ≥ 0")
         } else {
             "lift-off: vertical ground force at t_f / body weight".into()
         }
@@ -2023,6 +2124,8 @@ enum HessElement {
     NoCountermovement(usize),
     /// Objective and lift-off row.
     Final,
+    /// The no-descent row Ẏ_C(t_k) ≥ 0 of node k.
+    ComVelocity(usize),
 }
 
 /// Buffers of one second-order pass.
@@ -2410,6 +2513,15 @@ impl Transcription {
                 ),
             ));
         };
+        if let HessElement::ComVelocity(k) = kind {
+            // Kinematics only: no point data needed.
+            let n2 = 2 * self.ocp.nq();
+            check_len("hessian", "h", h.len(), n2 * n2)?;
+            let l = lambda[self.liftoff_row() + k];
+            self.com_vertical_velocity_hessian(x, k, h);
+            h.iter_mut().for_each(|v| *v *= l);
+            return finite("hessian", h, |i| format!("element {e} entry {i}"));
+        }
         self.refresh_hessian(x)?;
         let (Some(plan), Some(cache)) = (self.hess_plan.as_ref(), self.hess.as_mut()) else {
             return Err(EvalError::new("hessian", "no Hessian data"));
@@ -2507,6 +2619,7 @@ impl Transcription {
                     }
                 }
             }
+            HessElement::ComVelocity(_) => {}
             HessElement::Final => {
                 let n2 = 2 * self.ocp.nq();
                 let cols = &self.final_cols;

@@ -207,12 +207,14 @@ fn sizes_bounds_and_elements() {
     let tr = transcription(TranscriptionOptions::default());
     let (n, m) = (tr.num_variables(), tr.num_constraints());
     // Porsa et al.: 28 free nodes of 62 states and 24 excitations, plus t_f;
-    // 28·62 midpoint defects, 7 no-countermovement rows, one lift-off row.
+    // 28·62 midpoint defects, 7 no-countermovement rows, one lift-off row;
+    // then leap's 28 no-descent rows Ẏ_C(t_k) ≥ 0.
     assert_eq!(n, 2409);
     assert_eq!(tr.defect_rows(), 0..1736);
     assert_eq!(tr.no_countermovement_rows(), 1736..1743);
     assert_eq!(tr.liftoff_row(), 1743);
-    assert_eq!(m, 1744);
+    assert_eq!(tr.no_descent_rows(), 1744..1772);
+    assert_eq!(m, 1772);
     let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
     tr.variable_bounds(&mut lo, &mut hi);
     assert!(lo.iter().zip(&hi).all(|(a, b)| a <= b));
@@ -242,6 +244,8 @@ fn sizes_bounds_and_elements() {
             && cu[1736..1743].iter().all(|&v| v == 0.0)
     );
     assert_eq!((cl[1743], cu[1743]), (f64::NEG_INFINITY, 0.01));
+    assert!(cl[1744..].iter().all(|&v| v == 0.0) && cu[1744..].iter().all(|&v| v == f64::INFINITY));
+    assert_eq!(tr.jacobian_stats().nnz_no_descent, 28 * 14);
     // Jacobian pattern: no duplicates, in range, sizes as reported.
     let s = tr.jacobian_structure();
     let mut sorted = s.clone();
@@ -301,7 +305,17 @@ fn sizes_bounds_and_elements() {
     // Per interval, rows with the same node columns share an element: each
     // q̇ row (q_j, q̇_j), the q̈ rows together (q, q̇, l^M), each fibre-length
     // row, each activation row (a_i, u_i): 7 + 1 + 24 + 24 = 56 groups.
-    assert_eq!(el.len(), 56 * 28 + 7 + 1);
+    // Then one element per no-countermovement row, the objective with the
+    // lift-off row, and one per no-descent row (the node's q, q̇).
+    assert_eq!(el.len(), 56 * 28 + 7 + 1 + 28);
+    for (k, row) in (1..=28).zip(tr.no_descent_rows()) {
+        let e = &el[el.len() - 29 + k];
+        assert_eq!(e.constraints, vec![row]);
+        assert_eq!(
+            e.variables,
+            (0..14).map(|c| (k - 1) * 86 + c).collect::<Vec<_>>()
+        );
+    }
     assert_eq!(el.iter().filter(|e| e.objective).count(), 1);
     let mut owner = vec![0; m];
     for (e, x) in el.iter().enumerate() {
@@ -778,6 +792,25 @@ fn objective_and_path_rows_match_independent_computations() {
     let fy: f64 = ws.sphere_force.iter().map(|f| f[1]).sum();
     let weight = eq.model.total_mass() * g;
     assert!((c[1743] - fy / weight).abs() <= 1e-12 * (fy / weight).abs().max(1.0));
+    // No descent: row 1743 + k is Ẏ_C at node k, which must equal the rate
+    // of Y_C along q̇ (central difference of the COM height).
+    for k in 1..=big_n {
+        let xk = tr.node_state(&x, k);
+        let (q, qd) = (&xk[..n], &xk[n..2 * n]);
+        let eps = 1e-6;
+        let mut y_at = |s: f64| {
+            let qs: Vec<f64> = q.iter().zip(qd).map(|(a, b)| a + s * b).collect();
+            eq.multibody.set_state(&mut w, &qs, qd);
+            eq.multibody.com_position(&w)[1]
+        };
+        let (yp, ym) = (y_at(eps), y_at(-eps));
+        let want = (yp - ym) / (2.0 * eps);
+        assert!(
+            (c[1743 + k] - want).abs() <= 1e-7 * want.abs().max(1.0),
+            "node {k}: Ẏ_C {} vs dY_C/dt {want}",
+            c[1743 + k]
+        );
+    }
     // The defects of interval 3 (midpoint Euler) by hand.
     let h = tr.final_time(&x) / 28.0;
     let xm: Vec<f64> = tr
