@@ -86,7 +86,7 @@ enum Command {
         /// "bang-bang" or a .sto file with every state and control column.
         #[arg(long)]
         guess: Option<String>,
-        /// midpoint-euler (default), trapezoidal or hermite-simpson.
+        /// midpoint-euler (default), trapezoidal, hermite-simpson or backward-euler.
         #[arg(long)]
         scheme: Option<String>,
         /// exact (default: exact element Hessians, negative eigenvalues

@@ -39,10 +39,11 @@ use std::path::{Path, PathBuf};
 pub const METHODS: [&str; 2] = ["collocation", "shooting"];
 
 /// Collocation schemes by name (Moco's spelling where it has one).
-pub const SCHEMES: [(&str, Scheme); 3] = [
+pub const SCHEMES: [(&str, Scheme); 4] = [
     ("midpoint-euler", Scheme::MidpointEuler),
     ("trapezoidal", Scheme::Trapezoidal),
     ("hermite-simpson", Scheme::HermiteSimpson),
+    ("backward-euler", Scheme::BackwardEuler),
 ];
 
 /// The model when a study names none (relative to the working directory,
@@ -117,8 +118,8 @@ pub struct MeshSpec {
     /// Signed so that a negative count is reported as such.
     #[serde(default)]
     pub num_mesh_intervals: Option<i64>,
-    /// "midpoint-euler" (default, Porsa et al. eq. 7), "trapezoidal" or
-    /// "hermite-simpson".
+    /// "midpoint-euler" (default, Porsa et al. eq. 7), "trapezoidal",
+    /// "hermite-simpson" or "backward-euler".
     #[serde(default, alias = "transcription_scheme")]
     pub scheme: Option<String>,
 }

@@ -82,6 +82,11 @@ pub enum Scheme {
     /// x_k − x_{k−1} − (h/6)·(f_{k−1} + 4 f_c + f_k), f_c = f(x_c, u_c),
     /// x_c = (x_{k−1} + x_k)/2 + (h/8)·(f_{k−1} − f_k), u_c = (u_{k−1} + u_k)/2.
     HermiteSimpson,
+    /// x_k − x_{k−1} − h·f(x_k, u_k) (implicit Euler; Ackermann & van den
+    /// Bogert 2010). First order, but L-stable: the stiff foot contact
+    /// cannot ring from node to node, and the dynamics, ground force and
+    /// lift-off condition all hold at the nodes that are reported.
+    BackwardEuler,
 }
 
 /// Settings of the transcription.
@@ -587,11 +592,13 @@ enum Point {
 /// How one Jacobian entry is computed from the point evaluations.
 #[derive(Debug, Clone, Copy)]
 enum Src {
-    /// diag − (h/2)·J_point[entry] (defect w.r.t. a node variable).
+    /// diag − weight·h·J_point[entry] (defect w.r.t. a node variable;
+    /// weight ½, backward Euler's node k 1).
     Dyn {
         point: usize,
         entry: Option<usize>,
         diag: f64,
+        weight: f64,
     },
     /// −(f_row at `a` + f_row at `b`)·`scale` (defect w.r.t. t_f).
     Tf {
@@ -776,7 +783,7 @@ impl Transcription {
                     }
                 }
             }
-            Scheme::Trapezoidal => {
+            Scheme::Trapezoidal | Scheme::BackwardEuler => {
                 for k in 1..=big_n {
                     node_point[k] = Some(points.len());
                     points.push(Point::Node(k));
@@ -849,7 +856,7 @@ impl Transcription {
             let row0 = (k - 1) * nx;
             let (pa, pb) = match options.scheme {
                 Scheme::MidpointEuler => (interval_point[k - 1], interval_point[k - 1]),
-                Scheme::Trapezoidal | Scheme::HermiteSimpson => (
+                Scheme::Trapezoidal | Scheme::HermiteSimpson | Scheme::BackwardEuler => (
                     node_point[k - 1].unwrap_or(usize::MAX),
                     node_point[k].unwrap_or(usize::MAX),
                 ),
@@ -860,7 +867,17 @@ impl Transcription {
                 } else {
                     &blk[r]
                 };
-                if k >= 2 {
+                let be = options.scheme == Scheme::BackwardEuler;
+                if k >= 2 && be {
+                    // Backward Euler: the previous node only through −x_{k−1}.
+                    structure.push((row0 + r, var(k - 1, r)));
+                    sources.push(Src::Dyn {
+                        point: pa,
+                        entry: None,
+                        diag: -1.0,
+                        weight: 0.0,
+                    });
+                } else if k >= 2 {
                     for &(c, e, d) in cols {
                         structure.push((row0 + r, var(k - 1, c)));
                         sources.push(if options.scheme == Scheme::HermiteSimpson {
@@ -870,6 +887,7 @@ impl Transcription {
                                 point: pa,
                                 entry: e,
                                 diag: -d,
+                                weight: 0.5,
                             }
                         });
                     }
@@ -883,12 +901,13 @@ impl Transcription {
                             point: pb,
                             entry: e,
                             diag: d,
+                            weight: if be { 1.0 } else { 0.5 },
                         }
                     });
                 }
                 structure.push((row0 + r, tf));
                 sources.push(match options.scheme {
-                    Scheme::MidpointEuler => Src::Tf {
+                    Scheme::MidpointEuler | Scheme::BackwardEuler => Src::Tf {
                         a: Term::None,
                         b: pb,
                         row: r,
@@ -1739,6 +1758,12 @@ impl Nlp for Transcription {
                         c[row0 + r] = xb[r] - xa[r] - h * f[r];
                     }
                 }
+                Scheme::BackwardEuler => {
+                    let pb = self.node_point[k];
+                    for r in 0..nx {
+                        c[row0 + r] = xb[r] - xa[r] - h * self.point_val(pb, r);
+                    }
+                }
                 Scheme::Trapezoidal => {
                     let (pa, pb) = (self.node_point[k - 1], self.node_point[k]);
                     for r in 0..nx {
@@ -1789,15 +1814,19 @@ impl Nlp for Transcription {
         let h = self.final_time(x) / self.num_intervals() as f64;
         let nout = self.nx + 2;
         let nnz = self.compiled.entries.len();
-        let half_h = 0.5 * h;
         if self.options.scheme == Scheme::HermiteSimpson {
             self.hermite_simpson_jacobian(h, &mut values[..self.block_offsets[1]]);
         }
         for (v, src) in values.iter_mut().zip(&self.sources) {
             *v = match *src {
                 Src::Hs | Src::ComVelocity => continue,
-                Src::Dyn { point, entry, diag } => match entry {
-                    Some(e) => diag - half_h * self.point_jac[point * nnz + e],
+                Src::Dyn {
+                    point,
+                    entry,
+                    diag,
+                    weight,
+                } => match entry {
+                    Some(e) => diag - weight * h * self.point_jac[point * nnz + e],
                     None => diag,
                 },
                 Src::Tf { a, b, row, scale } => {
@@ -2583,6 +2612,26 @@ impl Transcription {
                                 h[(bi * ks + a) * kk + t] = v;
                                 h[t * kk + bi * ks + a] = v;
                             }
+                        }
+                    }
+                    Scheme::BackwardEuler => {
+                        // Node k only (the last block; node k − 1 enters
+                        // linearly): −h·∇²f_r and −(1/N)·∇f_r with t_f.
+                        let o = (nodes.len() - 1) * ks;
+                        let Some(p) = self.node_point[k] else {
+                            return Err(EvalError::new(
+                                "hessian",
+                                format!("node {k} is not evaluated"),
+                            ));
+                        };
+                        Self::weighted_block(plan, data(p), &rows, cols, &mut hw, &mut gw);
+                        for a in 0..ks {
+                            for b in 0..ks {
+                                h[(o + a) * kk + o + b] = -hstep * hw[a * ks + b];
+                            }
+                            let v = -inv_n * gw[a];
+                            h[(o + a) * kk + t] = v;
+                            h[t * kk + o + a] = v;
                         }
                     }
                     Scheme::HermiteSimpson => {
