@@ -98,7 +98,7 @@ fn bad_command_line_values_name_the_option() {
 }
 
 /// The keys the `--json` object must have.
-const KEYS: [&str; 12] = [
+const KEYS: [&str; 13] = [
     "status",
     "iterations",
     "wall_time_s",
@@ -106,6 +106,7 @@ const KEYS: [&str; 12] = [
     "ground_contact_time_s",
     "liftoff_com_velocity_mps",
     "peak_vertical_grf_bw",
+    "peak_vertical_grf_nodes_bw",
     "max_constraint_violation",
     "forward_jump_height_m",
     "forward_check_difference_m",
