@@ -293,4 +293,32 @@ fn iteration_limit_returns_the_best_iterate_within_the_violation_limit() {
     }
     // Some of these short runs end on a worse or infeasible iterate.
     assert!(swapped > 0, "no run returned an earlier iterate");
+    // With the problem scaled (the log's inf_pr is then in the solver's
+    // scaling), the returned earlier iterate is within the limit in the
+    // problem's own units.
+    let mut swapped = 0;
+    for p in leap::testset::hock_schittkowski() {
+        for max_iterations in [2, 4, 6] {
+            let settings = SqpSettings {
+                max_iterations,
+                ..Default::default()
+            };
+            let mut nlp = AdNlp::new(p.clone());
+            let r = solve(&mut nlp, &settings);
+            if r.status == SqpStatus::IterationLimit && r.message.contains("returned iteration") {
+                swapped += 1;
+                let v = leap::nlp::constraint_violations(&mut nlp, &r.x)
+                    .unwrap()
+                    .into_iter()
+                    .fold(0.0, f64::max);
+                assert!(
+                    v <= settings.best_iterate_violation,
+                    "{} after {max_iterations}: violation {v:e}: {}",
+                    p.name,
+                    r.message
+                );
+            }
+        }
+    }
+    assert!(swapped > 0, "no scaled run returned an earlier iterate");
 }

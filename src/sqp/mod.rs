@@ -113,11 +113,12 @@ pub struct SqpSettings {
     /// (and at least this absolute).
     pub eigenvalue_floor: f64,
     /// Stop when |Δf| < 1e-6 (1 + |f|) with the constraints within 1e-3,
-    /// the criterion of Porsa et al. (2016).
+    /// the criterion of Porsa et al. (2016), both in the problem's units
+    /// (not the solver's scaling).
     pub paper_criterion: bool,
     /// At the iteration limit, return the iterate of lowest objective
-    /// among those with violation (largest row, scaled problem) at most
-    /// this, when the last iterate is worse or violates more (default
+    /// among those with violation (largest row, in the problem's units) at
+    /// most this, when the last iterate is worse or violates more (default
     /// 1e-3, the paper's constraint tolerance; 0 returns the last
     /// iterate, as IPOPT does). The last iterate of a solve that creeps
     /// along the constraints can be far off them (the jump: 0.36 after
@@ -362,6 +363,10 @@ struct Problem {
     /// Element of each constraint row.
     owner: Vec<usize>,
     objective_element: Option<usize>,
+    /// Factors back to the problem's units of each constraint row and of
+    /// the objective (1 unless the solver scaled the problem).
+    row_unscale: Vec<f64>,
+    objective_unscale: f64,
 }
 
 impl Problem {
@@ -441,6 +446,16 @@ impl Problem {
             elements,
             owner,
             objective_element,
+            row_unscale: vec![1.0; m],
+            objective_unscale: 1.0,
+        })
+    }
+
+    /// The largest constraint violation in the problem's units.
+    fn violation_in_units(&self, c: &[f64]) -> f64 {
+        (0..self.m).fold(0.0f64, |inf, i| {
+            let v = (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0);
+            inf.max(v * self.row_unscale[i])
         })
     }
 
@@ -484,6 +499,8 @@ fn model_curvature(elements: &[Element], blocks: &[Vec<f64>], d: &[f64]) -> f64 
 struct BestIterate {
     iter: usize,
     inf_du: f64,
+    /// Largest violation in the problem's units.
+    inf_units: f64,
     x: Vec<f64>,
     f: f64,
     c: Vec<f64>,
@@ -793,7 +810,11 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         settings.optim_convergence_tolerance,
     );
     let pb = match Problem::read(&scaled) {
-        Ok(pb) => pb,
+        Ok(mut pb) => {
+            pb.row_unscale = scaled.sc.iter().map(|s| 1.0 / s).collect();
+            pb.objective_unscale = 1.0 / scaled.sf;
+            pb
+        }
         Err(e) => {
             result.message = e;
             return result;
@@ -1293,20 +1314,25 @@ impl<'s> Solver<'s> {
                 && inf_pr <= st.optim_constraint_tolerance
                 && ms.inf_du <= st.optim_convergence_tolerance
                 && ms.compl <= st.optim_convergence_tolerance;
+            // The paper's criterion and the best iterate judge the
+            // constraints and the objective in the problem's units.
+            let inf_units = self.pb.violation_in_units(&p.c);
+            let f_units = p.f * self.pb.objective_unscale;
             let paper = st.paper_criterion
                 && iter > 0
-                && inf_pr <= 1e-3
-                && (p.f - last_f).abs() < 1e-6 * (1.0 + p.f.abs());
+                && inf_units <= 1e-3
+                && (f_units - last_f).abs() < 1e-6 * (1.0 + f_units.abs());
             let acceptable = iter > 0
                 && inf_pr <= st.acceptable_constraint_tolerance
                 && ms.inf_du <= st.acceptable_convergence_tolerance
                 && ms.compl <= st.acceptable_convergence_tolerance;
             acceptable_count = if acceptable { acceptable_count + 1 } else { 0 };
-            if inf_pr <= st.best_iterate_violation
+            if inf_units <= st.best_iterate_violation
                 && best.as_ref().is_none_or(|b: &BestIterate| p.f < b.f)
             {
                 best = Some(BestIterate {
                     iter,
+                    inf_units,
                     inf_du: ms.inf_du,
                     x: p.x.clone(),
                     f: p.f,
@@ -1315,7 +1341,7 @@ impl<'s> Solver<'s> {
                     zeta: zeta.clone(),
                 });
             }
-            last_f = p.f;
+            last_f = f_units;
             if solved || paper {
                 self.log(&rec, start, result);
                 let msg = if solved {
@@ -1372,10 +1398,14 @@ impl<'s> Solver<'s> {
                 self.log(&rec, start, result);
                 let mut msg = format!("{} iterations", st.max_iterations);
                 if let Some(b) = best.filter(|b| b.iter != iter) {
-                    if inf_pr > st.best_iterate_violation || b.f < p.f {
+                    if inf_units > st.best_iterate_violation || b.f < p.f {
                         msg += &format!(
-                            "; returned iteration {} (objective {:e}, largest violation ≤ {:e} in the solver's scaling) instead of the last (objective {:e}, violation {:e})",
-                            b.iter, b.f, st.best_iterate_violation, p.f, inf_pr
+                            "; returned iteration {} (objective {:e}, largest violation {:e}) instead of the last (objective {:e}, violation {:e})",
+                            b.iter,
+                            b.f * self.pb.objective_unscale,
+                            b.inf_units,
+                            f_units,
+                            inf_units
                         );
                         result.dual_infeasibility = b.inf_du;
                         p.x = b.x;
