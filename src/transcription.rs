@@ -1367,24 +1367,7 @@ impl Transcription {
     /// ∂²Ẏ_C/∂(q, q̇)² at node k (2n × 2n, row-major) into `h`.
     fn com_vertical_velocity_hessian(&self, v: &[f64], k: usize, h: &mut [f64]) {
         let n2 = 2 * self.ocp.nq();
-        let xk = &self.node_state(v, k)[..n2];
-        let mut ws = self.ocp.eq.multibody.workspace::<HyperDual64>();
-        let mut xd: Vec<HyperDual64> = xk.iter().map(|&x| HyperDual64::from(x)).collect();
-        for i in 0..n2 {
-            for j in i..n2 {
-                for (l, x) in xd.iter_mut().enumerate() {
-                    *x = HyperDual64::new(
-                        xk[l],
-                        if l == i { 1.0 } else { 0.0 },
-                        if l == j { 1.0 } else { 0.0 },
-                        0.0,
-                    );
-                }
-                let (_, yd, _) = self.ocp.jump_objective(&mut ws, &xd);
-                h[i * n2 + j] = yd.eps1eps2;
-                h[j * n2 + i] = yd.eps1eps2;
-            }
-        }
+        jump_objective_hessian(&self.ocp, &self.node_state(v, k)[..n2], 1, h);
     }
 
     /// The defect rows grouped by their node columns S_r = pattern(f_r) ∪
@@ -2456,24 +2439,8 @@ impl Transcription {
         // Hessian of J over the final node's q, q̇.
         let n2 = 2 * self.ocp.nq();
         let xn = self.node_state(v, self.num_intervals());
-        let mut ws = self.ocp.eq.multibody.workspace::<HyperDual64>();
-        let mut xd: Vec<HyperDual64> = xn[..n2].iter().map(|&v| HyperDual64::from(v)).collect();
         let mut obj = vec![0.0; n2 * n2];
-        for i in 0..n2 {
-            for j in i..n2 {
-                for (l, x) in xd.iter_mut().enumerate() {
-                    *x = HyperDual64::new(
-                        xn[l],
-                        if l == i { 1.0 } else { 0.0 },
-                        if l == j { 1.0 } else { 0.0 },
-                        0.0,
-                    );
-                }
-                let (_, _, jv) = self.ocp.jump_objective(&mut ws, &xd);
-                obj[i * n2 + j] = jv.eps1eps2;
-                obj[j * n2 + i] = jv.eps1eps2;
-            }
-        }
+        jump_objective_hessian(&self.ocp, &xn[..n2], 2, &mut obj);
         if let Some(i) = obj.iter().position(|v| !v.is_finite()) {
             return Err(EvalError::new(
                 "hessian",
@@ -2594,8 +2561,17 @@ impl Transcription {
                             }
                         }
                     }
-                    Scheme::Trapezoidal => {
+                    Scheme::Trapezoidal | Scheme::BackwardEuler => {
+                        // Trapezoidal: both nodes with weight ½; backward
+                        // Euler: node k with weight 1 (node k − 1 enters
+                        // linearly). Per node: −w·h·∇²f_r, and −(w/N)·∇f_r
+                        // with t_f.
+                        let be = self.options.scheme == Scheme::BackwardEuler;
+                        let w = if be { 1.0 } else { 0.5 };
                         for (bi, &node) in nodes.iter().enumerate() {
+                            if be && node != k {
+                                continue;
+                            }
                             let Some(p) = self.node_point[node] else {
                                 return Err(EvalError::new(
                                     "hessian",
@@ -2606,32 +2582,12 @@ impl Transcription {
                             for a in 0..ks {
                                 for b in 0..ks {
                                     h[(bi * ks + a) * kk + bi * ks + b] =
-                                        -0.5 * hstep * hw[a * ks + b];
+                                        -w * hstep * hw[a * ks + b];
                                 }
-                                let v = -0.5 * inv_n * gw[a];
+                                let v = -w * inv_n * gw[a];
                                 h[(bi * ks + a) * kk + t] = v;
                                 h[t * kk + bi * ks + a] = v;
                             }
-                        }
-                    }
-                    Scheme::BackwardEuler => {
-                        // Node k only (the last block; node k − 1 enters
-                        // linearly): −h·∇²f_r and −(1/N)·∇f_r with t_f.
-                        let o = (nodes.len() - 1) * ks;
-                        let Some(p) = self.node_point[k] else {
-                            return Err(EvalError::new(
-                                "hessian",
-                                format!("node {k} is not evaluated"),
-                            ));
-                        };
-                        Self::weighted_block(plan, data(p), &rows, cols, &mut hw, &mut gw);
-                        for a in 0..ks {
-                            for b in 0..ks {
-                                h[(o + a) * kk + o + b] = -hstep * hw[a * ks + b];
-                            }
-                            let v = -inv_n * gw[a];
-                            h[(o + a) * kk + t] = v;
-                            h[t * kk + o + a] = v;
                         }
                     }
                     Scheme::HermiteSimpson => {
@@ -2695,6 +2651,31 @@ impl Transcription {
         cache.hw = hw;
         cache.gw = gw;
         finite("hessian", h, |i| format!("element {e} entry {i}"))
+    }
+}
+
+/// The Hessian over (q, q̇) (2n × 2n, row-major, into `h`) of output
+/// `which` of [`JumpOcp::jump_objective`] (0 Y_C, 1 Ẏ_C, 2 J) at `xk`, by
+/// hyper-dual numbers.
+fn jump_objective_hessian(ocp: &JumpOcp, xk: &[f64], which: usize, h: &mut [f64]) {
+    let n2 = xk.len();
+    let mut ws = ocp.eq.multibody.workspace::<HyperDual64>();
+    let mut xd: Vec<HyperDual64> = xk.iter().map(|&x| HyperDual64::from(x)).collect();
+    for i in 0..n2 {
+        for j in i..n2 {
+            for (l, x) in xd.iter_mut().enumerate() {
+                *x = HyperDual64::new(
+                    xk[l],
+                    if l == i { 1.0 } else { 0.0 },
+                    if l == j { 1.0 } else { 0.0 },
+                    0.0,
+                );
+            }
+            let (y, yd, jv) = ocp.jump_objective(&mut ws, &xd);
+            let out = [y, yd, jv][which];
+            h[i * n2 + j] = out.eps1eps2;
+            h[j * n2 + i] = out.eps1eps2;
+        }
     }
 }
 
