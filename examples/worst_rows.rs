@@ -8,8 +8,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .nth(1)
         .ok_or("usage: worst_rows SOLUTION.sto")?;
     // MODEL=models/jumper_jmp_strength.json for another model.
-    let path = std::env::var("MODEL").unwrap_or_else(|_| "models/jumper.json".into());
-    let model = leap::model::Model::from_file(std::path::Path::new(&path))?;
+    let model_path = std::env::var("MODEL").unwrap_or_else(|_| "models/jumper.json".into());
+    let model = leap::model::Model::from_file(std::path::Path::new(&model_path))?;
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
     let mut tr = leap::transcription::Transcription::new(ocp, Default::default())?;
     let x = leap::solve::guess_from_file(&tr, std::path::Path::new(&path))?;
