@@ -1339,35 +1339,9 @@ impl Transcription {
         s..s + self.n_cv
     }
 
-    /// Ẏ_C at node k ≥ 1 (with `grad`, ∂Ẏ_C/∂(q, q̇) into it).
-    fn com_vertical_velocity(&self, v: &[f64], k: usize, grad: Option<&mut [f64]>) -> f64 {
-        let n2 = 2 * self.ocp.nq();
-        let xk = &self.node_state(v, k)[..n2];
-        match grad {
-            None => {
-                let mut ws = self.ocp.eq.multibody.workspace::<f64>();
-                self.ocp.jump_objective(&mut ws, xk).1
-            }
-            Some(g) => {
-                let mut ws = self.ocp.eq.multibody.workspace::<Dual64>();
-                let mut xd: Vec<Dual64> = xk.iter().map(|&x| Dual64::from(x)).collect();
-                let mut value = 0.0;
-                for i in 0..n2 {
-                    xd[i] = Dual64::from(xk[i]).derivative();
-                    let (_, yd, _) = self.ocp.jump_objective(&mut ws, &xd);
-                    xd[i] = Dual64::from(xk[i]);
-                    g[i] = yd.eps;
-                    value = yd.re;
-                }
-                value
-            }
-        }
-    }
-
-    /// ∂²Ẏ_C/∂(q, q̇)² at node k (2n × 2n, row-major) into `h`.
-    fn com_vertical_velocity_hessian(&self, v: &[f64], k: usize, h: &mut [f64]) {
-        let n2 = 2 * self.ocp.nq();
-        jump_objective_hessian(&self.ocp, &self.node_state(v, k)[..n2], 1, h);
+    /// (q, q̇) of node k: the columns of J and of the no-descent rows.
+    fn node_kinematic_state<'a>(&'a self, v: &'a [f64], k: usize) -> &'a [f64] {
+        &self.node_state(v, k)[..2 * self.ocp.nq()]
     }
 
     /// The defect rows grouped by their node columns S_r = pattern(f_r) ∪
@@ -1710,17 +1684,19 @@ impl Nlp for Transcription {
         check_len("gradient", "x", x.len(), self.num_variables())?;
         check_len("gradient", "g", g.len(), self.num_variables())?;
         g.iter_mut().for_each(|v| *v = 0.0);
-        let n = self.ocp.nq();
+        let n2 = 2 * self.ocp.nq();
         let big_n = self.num_intervals();
-        let xn = self.node_state(x, big_n);
+        let o = (big_n - 1) * self.node_size();
         let mut ws = self.ocp.eq.multibody.workspace::<Dual64>();
-        let mut xd: Vec<Dual64> = xn[..2 * n].iter().map(|&v| Dual64::from(v)).collect();
-        for i in 0..2 * n {
-            xd[i] = Dual64::from(xn[i]).derivative();
-            let (_, _, j) = self.ocp.jump_objective(&mut ws, &xd);
-            xd[i] = Dual64::from(xn[i]);
-            g[(big_n - 1) * self.node_size() + i] = -j.eps;
-        }
+        let mut xd = vec![Dual64::from(0.0); n2];
+        jump_objective_gradient(
+            &self.ocp,
+            (&mut ws, &mut xd),
+            self.node_kinematic_state(x, big_n),
+            2,
+            &mut g[o..o + n2],
+        );
+        g[o..o + n2].iter_mut().for_each(|v| *v = -*v);
         finite("gradient", g, |i| self.variable_name(i))
     }
 
@@ -1777,9 +1753,14 @@ impl Nlp for Transcription {
                 self.point_val(self.node_point[j], nx) - self.point_val(self.node_point[j + 1], nx);
         }
         c[self.liftoff_row()] = self.point_val(self.node_point[big_n], nx + 1);
-        let cv0 = self.liftoff_row() + 1;
-        for k in 1..=self.n_cv {
-            c[cv0 + k - 1] = self.com_vertical_velocity(x, k, None);
+        if self.n_cv > 0 {
+            let mut ws = self.ocp.eq.multibody.workspace::<f64>();
+            for (k, row) in (1..).zip(self.no_descent_rows()) {
+                c[row] = self
+                    .ocp
+                    .jump_objective(&mut ws, self.node_kinematic_state(x, k))
+                    .1;
+            }
         }
         self.counters.constraints += 1;
         self.counters.constraints_time += start.elapsed().as_secs_f64();
@@ -1827,11 +1808,15 @@ impl Nlp for Transcription {
                 } => scale * self.point_jac[point * nnz + entry],
             };
         }
-        let n2 = 2 * self.ocp.nq();
-        let off = self.block_offsets[3];
-        for k in 1..=self.n_cv {
-            let o = off + (k - 1) * n2;
-            self.com_vertical_velocity(x, k, Some(&mut values[o..o + n2]));
+        if self.n_cv > 0 {
+            let n2 = 2 * self.ocp.nq();
+            let rows = &mut values[self.block_offsets[3]..self.block_offsets[4]];
+            let mut ws = self.ocp.eq.multibody.workspace::<Dual64>();
+            let mut xd = vec![Dual64::from(0.0); n2];
+            for (k, g) in (1..).zip(rows.chunks_exact_mut(n2)) {
+                let xk = self.node_kinematic_state(x, k);
+                jump_objective_gradient(&self.ocp, (&mut ws, &mut xd), xk, 1, g);
+            }
         }
         self.counters.jacobians += 1;
         self.counters.jacobian_time += start.elapsed().as_secs_f64();
@@ -2438,9 +2423,13 @@ impl Transcription {
         })?;
         // Hessian of J over the final node's q, q̇.
         let n2 = 2 * self.ocp.nq();
-        let xn = self.node_state(v, self.num_intervals());
         let mut obj = vec![0.0; n2 * n2];
-        jump_objective_hessian(&self.ocp, &xn[..n2], 2, &mut obj);
+        jump_objective_hessian(
+            &self.ocp,
+            self.node_kinematic_state(v, self.num_intervals()),
+            2,
+            &mut obj,
+        );
         if let Some(i) = obj.iter().position(|v| !v.is_finite()) {
             return Err(EvalError::new(
                 "hessian",
@@ -2514,7 +2503,7 @@ impl Transcription {
             let n2 = 2 * self.ocp.nq();
             check_len("hessian", "h", h.len(), n2 * n2)?;
             let l = lambda[self.liftoff_row() + k];
-            self.com_vertical_velocity_hessian(x, k, h);
+            jump_objective_hessian(&self.ocp, self.node_kinematic_state(x, k), 1, h);
             h.iter_mut().for_each(|v| *v *= l);
             return finite("hessian", h, |i| format!("element {e} entry {i}"));
         }
@@ -2624,6 +2613,7 @@ impl Transcription {
                     }
                 }
             }
+            // Returned above, before the point data are needed.
             HessElement::ComVelocity(_) => {}
             HessElement::Final => {
                 let n2 = 2 * self.ocp.nq();
@@ -2651,6 +2641,27 @@ impl Transcription {
         cache.hw = hw;
         cache.gw = gw;
         finite("hessian", h, |i| format!("element {e} entry {i}"))
+    }
+}
+
+/// The gradient over (q, q̇) (into `g`) of output `which` of
+/// [`JumpOcp::jump_objective`] (0 Y_C, 1 Ẏ_C, 2 J) at `xk`, by dual numbers,
+/// in the caller's workspace `ws` and seed buffer `xd` (length of `xk`).
+fn jump_objective_gradient(
+    ocp: &JumpOcp,
+    (ws, xd): (&mut crate::multibody::Workspace<Dual64>, &mut [Dual64]),
+    xk: &[f64],
+    which: usize,
+    g: &mut [f64],
+) {
+    for (d, &x) in xd.iter_mut().zip(xk) {
+        *d = Dual64::from(x);
+    }
+    for i in 0..xk.len() {
+        xd[i] = Dual64::from(xk[i]).derivative();
+        let (y, yd, j) = ocp.jump_objective(ws, xd);
+        xd[i] = Dual64::from(xk[i]);
+        g[i] = [y, yd, j][which].eps;
     }
 }
 

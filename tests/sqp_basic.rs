@@ -293,9 +293,11 @@ fn iteration_limit_returns_the_best_iterate_within_the_violation_limit() {
     }
     // Some of these short runs end on a worse or infeasible iterate.
     assert!(swapped > 0, "no run returned an earlier iterate");
-    // With the problem scaled (the log's inf_pr is then in the solver's
-    // scaling), the returned earlier iterate is within the limit in the
-    // problem's own units.
+    // With the problem scaled, the returned earlier iterate is within the
+    // limit in the problem's own units. Each constraint is multiplied by
+    // 1e3, which gradient-based scaling (IPOPT's, max gradient 100) takes
+    // back out: in the solver's scaling a violation is then up to 1e3
+    // times smaller than in the problem's units.
     let mut swapped = 0;
     for p in leap::testset::hock_schittkowski() {
         for max_iterations in [2, 4, 6] {
@@ -303,7 +305,7 @@ fn iteration_limit_returns_the_best_iterate_within_the_violation_limit() {
                 max_iterations,
                 ..Default::default()
             };
-            let mut nlp = AdNlp::new(p.clone());
+            let mut nlp = AdNlp::new(Amplified(p.clone()));
             let r = solve(&mut nlp, &settings);
             if r.status == SqpStatus::IterationLimit && r.message.contains("returned iteration") {
                 swapped += 1;
@@ -321,4 +323,34 @@ fn iteration_limit_returns_the_best_iterate_within_the_violation_limit() {
         }
     }
     assert!(swapped > 0, "no scaled run returned an earlier iterate");
+}
+
+/// A problem with every constraint (and its bounds) multiplied by 1e3.
+struct Amplified(leap::testset::HsProblem);
+
+impl AdProblem for Amplified {
+    fn name(&self) -> String {
+        self.0.name()
+    }
+    fn num_variables(&self) -> usize {
+        self.0.num_variables()
+    }
+    fn num_constraints(&self) -> usize {
+        self.0.num_constraints()
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.variable_bounds(l, u)
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        self.0.constraint_bounds(l, u);
+        l.iter_mut().chain(u.iter_mut()).for_each(|v| *v *= 1e3);
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        self.0.initial_point(x)
+    }
+    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
+        let f = self.0.eval(x, c);
+        c.iter_mut().for_each(|v| *v = *v * 1e3);
+        f
+    }
 }

@@ -451,11 +451,15 @@ impl Problem {
         })
     }
 
+    /// How far c_i lies outside [c_l, c_u] (0 inside).
+    fn row_violation(&self, c: &[f64], i: usize) -> f64 {
+        (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0)
+    }
+
     /// The largest constraint violation in the problem's units.
     fn violation_in_units(&self, c: &[f64]) -> f64 {
         (0..self.m).fold(0.0f64, |inf, i| {
-            let v = (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0);
-            inf.max(v * self.row_unscale[i])
+            inf.max(self.row_violation(c, i) * self.row_unscale[i])
         })
     }
 
@@ -469,7 +473,7 @@ impl Problem {
     fn violation(&self, c: &[f64]) -> (f64, f64) {
         let (mut l1, mut inf) = (0.0f64, 0.0f64);
         for i in 0..self.m {
-            let v = (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0);
+            let v = self.row_violation(c, i);
             l1 += v;
             inf = inf.max(v);
         }
