@@ -1,7 +1,8 @@
 //! Re-solve a QP that the SQP wrote with `qp_dump_dir` (clarabel JSON):
 //! `cargo run --release --example qp_replay -- qp_iter12_failed.json [key=value ...]`
 //! where the optional settings override clarabel's (e.g. `tol_feas=1e-6`,
-//! `equilibrate_enable=false`, `direct_solve_method=faer`).
+//! `equilibrate_enable=false`, `direct_solve_method=faer`); with `TIMERS=1`
+//! clarabel's internal timers are printed too.
 use clarabel::solver::*;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -36,5 +37,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         s.solution.r_prim,
         s.solution.r_dual
     );
+    if std::env::var_os("TIMERS").is_some() {
+        if let Some(t) = &s.timers {
+            t.print();
+        }
+    }
     Ok(())
 }

@@ -53,6 +53,11 @@ pub struct Element {
     pub constraints: Vec<usize>,
     /// Whether the objective's Hessian belongs to this element.
     pub objective: bool,
+    /// Optional partition of the element's variables (local indices into
+    /// `variables`) for a block-diagonal Hessian approximation
+    /// ([`crate::sqp::SqpSettings::block_diagonal_elements`]): the QP then
+    /// keeps only the curvature inside each block. Empty: one block.
+    pub blocks: Vec<Vec<usize>>,
 }
 
 /// A nonlinear program with a sparse Jacobian of fixed pattern.
@@ -124,7 +129,21 @@ impl Element {
             variables: (0..n).collect(),
             constraints: (0..m).collect(),
             objective: true,
+            blocks: Vec::new(),
         }]
+    }
+
+    /// The block of each local variable (all 0 without blocks).
+    pub fn block_ids(&self) -> Vec<usize> {
+        let mut id = vec![0; self.variables.len()];
+        for (b, members) in self.blocks.iter().enumerate() {
+            for &a in members {
+                if let Some(slot) = id.get_mut(a) {
+                    *slot = b;
+                }
+            }
+        }
+        id
     }
 }
 
@@ -157,6 +176,23 @@ pub fn check_elements(elements: &[Element], n: usize, m: usize) -> Result<(), St
         }
         if let Some(&v) = el.variables.iter().find(|&&v| v >= n) {
             return Err(format!("element {e}: variable {v} out of range (n = {n})"));
+        }
+        if !el.blocks.is_empty() {
+            let k = el.variables.len();
+            let mut seen = vec![false; k];
+            for &a in el.blocks.iter().flatten() {
+                if a >= k {
+                    return Err(format!(
+                        "element {e}: block member {a} out of range ({k} variables)"
+                    ));
+                }
+                if std::mem::replace(&mut seen[a], true) {
+                    return Err(format!("element {e}: variable {a} is in two blocks"));
+                }
+            }
+            if let Some(a) = seen.iter().position(|&s| !s) {
+                return Err(format!("element {e}: variable {a} is in no block"));
+            }
         }
         for &i in &el.constraints {
             if i >= m {
@@ -204,12 +240,24 @@ pub struct AdNlp<P: AdProblem> {
     pub problem: P,
     n: usize,
     m: usize,
+    blocks: Vec<Vec<usize>>,
 }
 
 impl<P: AdProblem> AdNlp<P> {
     pub fn new(problem: P) -> Self {
         let (n, m) = (problem.num_variables(), problem.num_constraints());
-        AdNlp { problem, n, m }
+        AdNlp {
+            problem,
+            n,
+            m,
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Declare blocks of the one element ([`Element::blocks`]).
+    pub fn with_blocks(mut self, blocks: Vec<Vec<usize>>) -> Self {
+        self.blocks = blocks;
+        self
     }
 }
 
@@ -223,6 +271,11 @@ fn finite_check(what: &str, v: &[f64]) -> Result<(), EvalError> {
 impl<P: AdProblem> Nlp for AdNlp<P> {
     fn num_variables(&self) -> usize {
         self.n
+    }
+    fn elements(&self) -> Vec<Element> {
+        let mut e = Element::whole(self.n, self.m);
+        e[0].blocks = self.blocks.clone();
+        e
     }
     fn num_constraints(&self) -> usize {
         self.m

@@ -340,7 +340,7 @@ impl SolveStudy {
             settings.paper_criterion = p;
         }
         if let Some(h) = &self.hessian {
-            settings.hessian = parse_hessian(h).map_err(|r| err("hessian", r))?;
+            apply_hessian(&mut settings, h).map_err(|r| err("hessian", r))?;
         }
         if let Some(v) = self.hessian_eigenvalue_floor {
             if !(v.is_finite() && v > 0.0 && v < 1.0) {
@@ -435,7 +435,7 @@ impl SolveConfig {
             self.transcription.scheme = parse_scheme(s).map_err(|r| err("--scheme", r))?;
         }
         if let Some(h) = &o.hessian {
-            self.settings.hessian = parse_hessian(h).map_err(|r| err("--hessian", r))?;
+            apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
         if let Some(g) = &o.guess {
             self.guess = if g == "bang-bang" {
@@ -546,8 +546,20 @@ pub fn scheme_name(s: Scheme) -> &'static str {
         .unwrap_or("?")
 }
 
-fn parse_hessian(s: &str) -> Result<HessianMode, String> {
-    s.parse::<HessianMode>()
+/// A study's Hessian choice: "exact", "exact-block-diagonal" (exact, with
+/// the transcription's block-diagonal approximation,
+/// [`SqpSettings::block_diagonal_elements`]) or "bfgs".
+fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
+    if s == "exact-block-diagonal" {
+        settings.hessian = HessianMode::ExactConvexified;
+        settings.block_diagonal_elements = true;
+        return Ok(());
+    }
+    settings.hessian = s
+        .parse::<HessianMode>()
+        .map_err(|e| format!("{e}, or 'exact-block-diagonal'"))?;
+    settings.block_diagonal_elements = false;
+    Ok(())
 }
 
 #[cfg(test)]

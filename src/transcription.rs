@@ -1843,6 +1843,7 @@ impl Nlp for Transcription {
                     variables,
                     constraints: ((k - 1) * nx..k * nx).collect(),
                     objective: false,
+                    blocks: Vec::new(),
                 });
             }
         } else {
@@ -1854,20 +1855,49 @@ impl Nlp for Transcription {
             // spans; a_i with u_i). Small elements keep the stiff curvature
             // of contact and tendons out of the excitations' BFGS blocks
             // and the QP's Hessian sparse.
+            //
+            // Blocks for the block-diagonal approximation: in an element
+            // with several fibre lengths (the q̈ rows), each l^M_i (at both
+            // nodes) is a block of its own and the rest (q, q̇, t_f) one
+            // block. Dropping the l^M–q curvature keeps the QP's KKT factor
+            // a third as dense (`examples/qp_replay` on dumped QPs).
+            let (lm0, nm) = (2 * self.ocp.nq(), self.ocp.nm());
+            let is_lm = |c: usize| (lm0..lm0 + nm).contains(&c);
             for group in &self.groups {
                 let cols = &group.0;
+                let fibre_cols = cols.iter().filter(|&&c| is_lm(c)).count();
                 for k in 1..=big_n {
                     let mut variables = Vec::with_capacity(2 * cols.len() + 1);
+                    let mut local_cols = Vec::with_capacity(2 * cols.len());
                     for node in [k - 1, k] {
                         if node >= 1 {
                             variables.extend(cols.iter().map(|&c| (node - 1) * nv + c));
+                            local_cols.extend(cols.iter().copied());
                         }
                     }
                     variables.push(tf);
+                    let blocks = if fibre_cols >= 2 {
+                        let mut head = Vec::new();
+                        let mut leaves: Vec<Vec<usize>> = vec![Vec::new(); nm];
+                        for (a, &c) in local_cols.iter().enumerate() {
+                            if is_lm(c) {
+                                leaves[c - lm0].push(a);
+                            } else {
+                                head.push(a);
+                            }
+                        }
+                        head.push(local_cols.len());
+                        leaves.retain(|l| !l.is_empty());
+                        leaves.insert(0, head);
+                        leaves
+                    } else {
+                        Vec::new()
+                    };
                     out.push(Element {
                         variables,
                         constraints: group.1.iter().map(|&r| (k - 1) * nx + r).collect(),
                         objective: false,
+                        blocks,
                     });
                 }
             }
@@ -1883,6 +1913,7 @@ impl Nlp for Transcription {
                 variables,
                 constraints: vec![big_n * nx + j],
                 objective: false,
+                blocks: Vec::new(),
             });
         }
         out.push(Element {
@@ -1893,12 +1924,14 @@ impl Nlp for Transcription {
                 .collect(),
             constraints: vec![self.liftoff_row()],
             objective: true,
+            blocks: Vec::new(),
         });
         for (k, row) in (1..=self.n_cv).zip(self.no_descent_rows()) {
             out.push(Element {
                 variables: (0..2 * self.ocp.nq()).map(|c| (k - 1) * nv + c).collect(),
                 constraints: vec![row],
                 objective: false,
+                blocks: Vec::new(),
             });
         }
         out

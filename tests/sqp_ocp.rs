@@ -225,6 +225,7 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
                 variables: self.interval_vars(k),
                 constraints: (k * O::NX..(k + 1) * O::NX).collect(),
                 objective: false,
+                blocks: Vec::new(),
             })
             .collect();
         // The objective: all node variables (the running cost) and tf.
@@ -232,6 +233,7 @@ impl<O: Ocp> Nlp for Trapezoid<O> {
             variables: (0..self.num_variables()).collect(),
             constraints: vec![],
             objective: true,
+            blocks: Vec::new(),
         });
         els
     }

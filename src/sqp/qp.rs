@@ -220,9 +220,15 @@ impl Qp {
         let mut p_elem = Vec::with_capacity(elements.len());
         for el in elements {
             let k = el.variables.len();
+            let block = el.block_ids();
             let mut map = Vec::with_capacity(k * (k + 1) / 2);
             for a_ in 0..k {
                 for b_ in a_..k {
+                    if block[a_] != block[b_] {
+                        // Outside the element's blocks: no P entry.
+                        map.push(usize::MAX);
+                        continue;
+                    }
                     let key = (el.variables[a_], el.variables[b_]);
                     let next = p_entries.len();
                     let e = *lookup.entry(key).or_insert_with(|| {
@@ -237,7 +243,11 @@ impl Qp {
         let (p, pindex) = csc(nz, nz, &p_entries);
         let p_elem = p_elem
             .into_iter()
-            .map(|map| map.into_iter().map(|e| pindex[e]).collect())
+            .map(|map| {
+                map.into_iter()
+                    .map(|e| if e == usize::MAX { e } else { pindex[e] })
+                    .collect()
+            })
             .collect();
         let settings = DefaultSettingsBuilder::default()
             .verbose(false)
@@ -302,7 +312,9 @@ impl Qp {
             let mut t = 0;
             for a in 0..k {
                 for b in a..k {
-                    self.p.nzval[self.p_elem[e][t]] += blocks[e][a * k + b];
+                    if let Some(v) = self.p.nzval.get_mut(self.p_elem[e][t]) {
+                        *v += blocks[e][a * k + b];
+                    }
                     t += 1;
                 }
             }
