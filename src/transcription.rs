@@ -1859,8 +1859,10 @@ impl Nlp for Transcription {
             // Blocks for the block-diagonal approximation: in an element
             // with several fibre lengths (the q̈ rows), each l^M_i (at both
             // nodes) is a block of its own and the rest (q, q̇, t_f) one
-            // block. Dropping the l^M–q curvature keeps the QP's KKT factor
-            // a third as dense (`examples/qp_replay` on dumped QPs).
+            // block. Dropping the l^M–q curvature shrinks the QP's KKT
+            // factor from 363k to 149k non-zeros and a QP solve from 2.2 to
+            // 0.5 s (a QP of iteration 20, `examples/sqp_jump_dump` and
+            // `qp_replay`).
             let (lm0, nm) = (2 * self.ocp.nq(), self.ocp.nm());
             let is_lm = |c: usize| (lm0..lm0 + nm).contains(&c);
             for group in &self.groups {

@@ -332,6 +332,27 @@ fn sizes_bounds_and_elements() {
         el[owner[62 + 38]].variables,
         vec![38, 62, 86 + 38, 86 + 62, n - 1]
     );
+    // Blocks for the block-diagonal Hessian approximation: only the q̈
+    // elements declare them; one block of the coordinates' values and
+    // speeds at both nodes with t_f, then one per muscle, its fibre length
+    // at both nodes.
+    assert_eq!(el.iter().filter(|e| !e.blocks.is_empty()).count(), 28);
+    let name = |j: usize| tr.variable_name(j);
+    assert_eq!(qdd.blocks.len(), 1 + 24);
+    assert_eq!(qdd.blocks[0].len(), 2 * 14 + 1);
+    for &a in &qdd.blocks[0] {
+        let v = name(qdd.variables[a]);
+        assert!(
+            v == "t_f" || v.ends_with("/value") || v.ends_with("/speed"),
+            "{v}"
+        );
+    }
+    for leaf in &qdd.blocks[1..] {
+        let names: Vec<String> = leaf.iter().map(|&a| name(qdd.variables[a])).collect();
+        assert_eq!(names.len(), 2);
+        assert!(names[0].starts_with("node 1 ") && names[0].ends_with("/fiber_length"));
+        assert_eq!(names[0].replace("node 1 ", "node 2 "), names[1]);
+    }
     // Every Jacobian entry lies inside its row's element.
     for &(i, j) in &s {
         assert!(
