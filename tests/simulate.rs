@@ -1,8 +1,7 @@
 //! The forward-simulation pipeline (integration, lift-off, apex, output
 //! files) with simple closed-form laws; the OpenSim laws have their own tests.
 
-mod common;
-use common::TestLaws;
+use crate::common::TestLaws;
 use leap::io::StoTable;
 use leap::ode::StateEquation;
 use leap::path::PathSmoothing;

@@ -2,9 +2,8 @@
 //! system equals the full system with mirrored states, dual numbers agree
 //! with finite differences, and the layout follows OpenSim's names.
 
+use crate::common::TestLaws;
 use leap::model::Model;
-mod common;
-use common::TestLaws;
 use leap::ode::{SimbodyStateEquation, StateEquation};
 use leap::path::PathSmoothing;
 use leap::scalar::Dual64;

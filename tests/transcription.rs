@@ -904,7 +904,7 @@ fn bang_bang_guess_follows_the_forward_jump() {
 }
 
 /// Timings of the full 29-node problem (run with
-/// `cargo test --release --test transcription -- --ignored --nocapture timing`).
+/// `cargo test --release --test integration -- --ignored --nocapture transcription::timing`).
 #[test]
 #[ignore]
 fn timing() {
