@@ -1648,9 +1648,27 @@ impl<'s> Solver<'s> {
             // Merit penalty ν ≥ ‖λ‖∞ with a margin; lowered again when the
             // multipliers fall well below it, so one bad iterate does not
             // freeze the merit function on feasibility.
-            let needed = 1.1 * norm_inf(&lam_qp) + 1e-6;
+            //
+            // In elastic mode the multipliers of the linearised constraints
+            // are the elastic weight ρ wherever a slack is active, and ρ is
+            // at least ν: a margin on them would raise ν by 1.65 at every
+            // elastic iteration, and ρ with it (the reduced jump at 24
+            // intervals: 3e3 to 2e10 in 20 iterations, until the QPs
+            // failed). The elastic step is a descent direction of the ℓ1
+            // merit function with weight ρ itself (Fletcher's Sℓ1QP), so ν
+            // only rises to ‖λ‖∞ there.
+            let lam_max = norm_inf(&lam_qp);
+            let needed = if elastic {
+                lam_max
+            } else {
+                1.1 * lam_max + 1e-6
+            };
             if nu < needed {
-                nu = (1.5 * needed).max(1.5 * nu);
+                nu = if elastic {
+                    needed
+                } else {
+                    (1.5 * needed).max(1.5 * nu)
+                };
             } else if nu > 10.0 * needed {
                 nu = (nu / 10.0).max(1.5 * needed);
             }
