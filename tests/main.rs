@@ -10,6 +10,7 @@ mod common;
 mod dynamics;
 mod integrator;
 mod io;
+mod jump_solve;
 mod laws;
 mod laws_opensim;
 mod model_files;

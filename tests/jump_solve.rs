@@ -1,0 +1,87 @@
+//! The jump solved end to end (issue 5, point 9). CI solves a reduced
+//! instance: the same problem and transcription on the 10-muscle-per-side
+//! `models/jumper_reduced.json` (`models/jump_reduced.json`). The full
+//! problem, `leap solve`'s default study, is an ignored test that
+//! `scripts/full_solve.sh` runs; it asserts issue 5's "done when".
+
+use leap::solve::SolveReport;
+use leap::sqp::SqpStatus;
+use leap::study::{Overrides, SolveConfig};
+use std::path::Path;
+
+fn solve(study: &str, tag: &str) -> SolveReport {
+    let out = std::env::temp_dir().join(format!("leap_jump_solve_{}_{tag}", std::process::id()));
+    let mut config = SolveConfig::load(Some(Path::new(study))).unwrap();
+    config
+        .apply(&Overrides {
+            output_directory: Some(out.clone()),
+            ..Default::default()
+        })
+        .unwrap();
+    let verbose = std::env::var_os("LEAP_SQP_VERBOSE").is_some();
+    let report = leap::solve::run(&config, verbose, &mut |_| {}).unwrap();
+    eprintln!(
+        "{study}: {:?} after {} iterations, {:.1} s; jump {:.2} cm, forward check {:+.2} cm, violation {:.1e}",
+        report.status,
+        report.iterations,
+        report.wall_time_s,
+        100.0 * report.jump_height_m,
+        100.0 * report.forward_check_difference_m.unwrap_or(f64::NAN),
+        report.max_constraint_violation
+    );
+    let _ = std::fs::remove_dir_all(&out);
+    report
+}
+
+/// The paper's 29 nodes on the reduced model: solved, the constraints
+/// within the paper's 1e-3, and the optimal excitations, integrated by
+/// Simbody's variable-step integrator with OpenSim's own activation
+/// switch, jumping as high as predicted within issue 5's 1 cm.
+#[test]
+fn reduced_jump_is_solved_and_agrees_with_its_forward_simulation() {
+    let r = solve("models/jump_reduced.json", "reduced");
+    assert_eq!(r.status, SqpStatus::Solved, "{}", r.message);
+    assert!(r.max_constraint_violation <= 1e-3);
+    let diff = r.forward_check_difference_m.expect("forward check ran");
+    assert!(diff.abs() <= 0.01, "forward check differs by {diff} m");
+    // A jump, not a stumble: lift-off upwards after a push-off.
+    assert!(r.liftoff_com_velocity_mps > 0.5 && r.ground_contact_time_s > 0.1);
+}
+
+/// Issue 5's "done when" on the default study: solved, violation ≤ 1e-3,
+/// Table 2's metrics inside the experimental ranges, forward check within
+/// 1 cm.
+#[test]
+#[ignore = "the full 29-node solve takes about 15 minutes; scripts/full_solve.sh"]
+fn full_jump_meets_the_papers_ranges() {
+    let r = solve("models/jump_collocation.json", "full");
+    let mut failed = Vec::new();
+    let mut check = |ok: bool, what: String| {
+        if !ok {
+            failed.push(what);
+        }
+    };
+    check(
+        r.status == SqpStatus::Solved,
+        format!("status {:?}", r.status),
+    );
+    let v = r.max_constraint_violation;
+    check(v <= 1e-3, format!("violation {v:e}"));
+    let h = r.jump_height_m;
+    check((0.33..=0.41).contains(&h), format!("jump height {h} m"));
+    let vel = r.liftoff_com_velocity_mps;
+    check(
+        (2.0..=2.5).contains(&vel),
+        format!("lift-off velocity {vel} m/s"),
+    );
+    let t = r.ground_contact_time_s;
+    check((0.25..=0.39).contains(&t), format!("contact time {t} s"));
+    let f = r.peak_vertical_grf_bw;
+    check(
+        (2.5..=3.5).contains(&f),
+        format!("peak vertical GRF {f} BW"),
+    );
+    let d = r.forward_check_difference_m.unwrap_or(f64::NAN);
+    check(d.abs() <= 0.01, format!("forward check {d} m"));
+    assert!(failed.is_empty(), "outside issue 5's targets: {failed:?}");
+}
