@@ -90,7 +90,7 @@ enum Command {
         #[arg(long)]
         scheme: Option<String>,
         /// exact (default: exact element Hessians, negative eigenvalues
-        /// clipped) or bfgs.
+        /// clipped), exact-block-diagonal or bfgs.
         #[arg(long)]
         hessian: Option<String>,
         /// Skip the forward simulation of the optimal excitations.

@@ -96,7 +96,8 @@ pub struct SolveStudy {
     #[serde(default)]
     pub tolerances: TolerancesSpec,
     /// "exact" (exact element Hessians with negative eigenvalues clipped,
-    /// default) or "bfgs" (partitioned damped BFGS).
+    /// default), "exact-block-diagonal" (the same, block-diagonal over the
+    /// transcription's blocks) or "bfgs" (partitioned damped BFGS).
     #[serde(default)]
     pub hessian: Option<String>,
     /// Smallest eigenvalue of an exact element Hessian, relative to the
@@ -606,8 +607,16 @@ mod tests {
         assert_eq!(f, "tolerances.optim_constraint_tolerance");
         let (f, _) = field_error(r#"{"tolerances": {"optim_convergence_tolerance": 0}}"#);
         assert_eq!(f, "tolerances.optim_convergence_tolerance");
-        let (f, _) = field_error(r#"{"hessian": "newton"}"#);
+        let (f, r) = field_error(r#"{"hessian": "newton"}"#);
         assert_eq!(f, "hessian");
+        assert!(r.contains("exact-block-diagonal"), "{r}");
+        for (h, block) in [("exact-block-diagonal", true), ("exact", false)] {
+            let c = SolveStudy::from_json_str(&format!(r#"{{"hessian": "{h}"}}"#), "s.json")
+                .and_then(|s| s.resolve(None))
+                .unwrap();
+            assert_eq!(c.settings.hessian, HessianMode::ExactConvexified);
+            assert_eq!(c.settings.block_diagonal_elements, block);
+        }
         for bad in ["0", "-1e-4", "1.5"] {
             let (f, r) = field_error(&format!(r#"{{"hessian_eigenvalue_floor": {bad}}}"#));
             assert_eq!(f, "hessian_eigenvalue_floor");
