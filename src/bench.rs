@@ -649,3 +649,105 @@ impl SqpJumpReport {
         format!("jump collocation: {} variables, {} constraints, nnz(J) {}, Hessian {:?}, QP equilibration {}\n{t}", self.variables, self.constraints, self.jacobian_nnz, self.hessian, self.qp_equilibrate)
     }
 }
+
+/// One whole `leap solve` (without the forward check), per repeat.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveBenchRun {
+    pub status: crate::sqp::SqpStatus,
+    pub iterations: usize,
+    pub wall_time_s: f64,
+    pub split: crate::sqp::TimeSplit,
+    pub jump_height_m: f64,
+}
+
+/// The whole solve of a study: iterations, wall time and its split
+/// (derivatives, Hessian, QP, line search, other), per repeat and the
+/// median.
+#[derive(Debug, Clone, Serialize)]
+pub struct SolveBenchReport {
+    pub study: String,
+    pub variables: usize,
+    pub constraints: usize,
+    pub runs: Vec<SolveBenchRun>,
+    pub median_wall_time_s: f64,
+}
+
+/// Solve `config` `repeats` times (output into a temporary directory,
+/// removed after; no forward check).
+pub fn solve(
+    config: &crate::study::SolveConfig,
+    study: &str,
+    repeats: usize,
+) -> Result<SolveBenchReport, String> {
+    let mut config = config.clone();
+    let out = std::env::temp_dir().join(format!("leap_bench_solve_{}", std::process::id()));
+    config
+        .apply(&crate::study::Overrides {
+            output_directory: Some(out.clone()),
+            no_forward_check: true,
+            ..Default::default()
+        })
+        .map_err(|e| e.to_string())?;
+    let mut runs = Vec::new();
+    let (mut variables, mut constraints) = (0, 0);
+    for _ in 0..repeats.max(1) {
+        let r = crate::solve::run(&config, false, &mut |_| {}).map_err(|e| e.to_string())?;
+        (variables, constraints) = (r.variables, r.constraints);
+        runs.push(SolveBenchRun {
+            status: r.status,
+            iterations: r.iterations,
+            wall_time_s: r.wall_time_s,
+            split: r.time_split,
+            jump_height_m: r.jump_height_m,
+        });
+    }
+    let _ = std::fs::remove_dir_all(&out);
+    let mut times: Vec<f64> = runs.iter().map(|r| r.wall_time_s).collect();
+    times.sort_by(f64::total_cmp);
+    Ok(SolveBenchReport {
+        study: study.into(),
+        variables,
+        constraints,
+        runs,
+        median_wall_time_s: times[times.len() / 2],
+    })
+}
+
+impl SolveBenchReport {
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        t.set_header(vec![
+            "run",
+            "status",
+            "iterations",
+            "wall time (s)",
+            "per iteration (s)",
+            "derivatives (s)",
+            "Hessian (s)",
+            "QP (s)",
+            "line search (s)",
+            "other (s)",
+            "jump height (cm)",
+        ]);
+        for (k, r) in self.runs.iter().enumerate() {
+            let s = &r.split;
+            t.add_row(vec![
+                (k + 1).to_string(),
+                format!("{:?}", r.status),
+                r.iterations.to_string(),
+                format!("{:.1}", r.wall_time_s),
+                format!("{:.3}", r.wall_time_s / r.iterations.max(1) as f64),
+                format!("{:.1}", s.derivatives_s),
+                format!("{:.1}", s.hessian_s),
+                format!("{:.1}", s.qp_s),
+                format!("{:.2}", s.line_search_s),
+                format!("{:.2}", s.other_s),
+                format!("{:.2}", 100.0 * r.jump_height_m),
+            ]);
+        }
+        format!(
+            "{}: {} variables, {} constraints; median wall time {:.1} s\n{t}",
+            self.study, self.variables, self.constraints, self.median_wall_time_s
+        )
+    }
+}

@@ -193,6 +193,18 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// A whole `leap solve` of a study (default: the built-in jump study),
+    /// without the forward check: status, iterations, wall time and its
+    /// split into derivatives, Hessian, QP, line search and other.
+    Solve {
+        /// Study file (as `leap solve`).
+        study: Option<PathBuf>,
+        /// Solves (the median wall time is reported).
+        #[arg(long, default_value_t = 1)]
+        repeats: usize,
+        #[arg(long)]
+        json: bool,
+    },
     /// One forward jump per integrator and accuracy: steps, rejected steps,
     /// f evaluations, wall time.
     Integrators {
@@ -478,6 +490,25 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
             let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate)
                 .map_err(|e| anyhow::anyhow!(e))?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                println!("{}", report.table());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Solve {
+                    study,
+                    repeats,
+                    json,
+                },
+        } => {
+            let config = leap::study::SolveConfig::load(study.as_deref())?;
+            let name = study.map_or("built-in jump study".into(), |p| p.display().to_string());
+            let report =
+                leap::bench::solve(&config, &name, repeats).map_err(|e| anyhow::anyhow!(e))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {

@@ -339,3 +339,42 @@ fn example_study_parses() {
     assert_eq!(c.transcription.num_mesh_intervals, 28);
     assert_eq!(c.model, Path::new("models/jumper.json"));
 }
+
+/// `leap bench solve STUDY`: the small study solved twice; each run's time
+/// split adds up to no more than its wall time, the iteration count is the
+/// study's limit, and nothing is left in the working directory.
+#[test]
+fn bench_solve_reports_iterations_and_time_split() {
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "bench",
+            "solve",
+            "tests/data/studies/small.json",
+            "--repeats",
+            "2",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let runs = v["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    for r in runs {
+        assert_eq!(r["iterations"].as_u64(), Some(3));
+        let s = &r["split"];
+        let parts: f64 = ["derivatives_s", "hessian_s", "qp_s", "line_search_s"]
+            .iter()
+            .map(|k| s[k].as_f64().unwrap())
+            .sum();
+        let wall = r["wall_time_s"].as_f64().unwrap();
+        assert!(
+            parts > 0.0 && parts <= wall * 1.01 + 1e-3,
+            "{parts} of {wall}"
+        );
+    }
+    assert_eq!(v["variables"].as_u64(), Some(4 * 86 + 1));
+    assert!(!Path::new("results").join("small_solution.sto").exists());
+}
