@@ -23,7 +23,7 @@
 use crate::io::{Controls, StoError, StoTable};
 use crate::model::{Model, ModelError};
 use crate::nlp::Nlp;
-use crate::ocp::{JumpOcp, OcpError, OcpOptions};
+use crate::ocp::{JumpOcp, LiftOff, OcpError, OcpOptions};
 use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
@@ -92,9 +92,14 @@ pub struct SolveReport {
     pub jump_height_m: f64,
     pub apex_com_height_m: f64,
     pub standing_com_height_m: f64,
-    /// t_f (s).
+    /// Lift-off (s): where the vertical ground force at the points where
+    /// the dynamics hold (interval midpoints for midpoint Euler, nodes
+    /// otherwise) last falls through the lift-off row's level (1% of body
+    /// weight), interpolated linearly; t_f if it is still above at t_f.
     pub ground_contact_time_s: f64,
-    /// Ẏ_C(t_f) (m/s) and Y_C(t_f) (m).
+    /// t_f (s), at or after lift-off (J is constant in flight).
+    pub final_time_s: f64,
+    /// Ẏ_C (m/s) and Y_C (m) at lift-off, interpolated between the nodes.
     pub liftoff_com_velocity_mps: f64,
     pub liftoff_com_height_m: f64,
     /// Peak total vertical ground force / body weight where the dynamics
@@ -250,26 +255,65 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
     let (y, ydot, j) = tr.jump_objective(x);
     let tf = tr.final_time(x);
     let mesh = tr.unpack(x);
-    let peak_of = |m: &MeshTrajectory| {
+    let forces_of = |m: &MeshTrajectory| -> Vec<f64> {
         node_grf(&ocp, m)
             .iter()
             .map(|g| (g[1] + g[7]) / ocp.body_weight)
-            .fold(f64::NAN, f64::max)
+            .collect()
     };
-    let peak_nodes = peak_of(&mesh);
-    let peak = if tr.options().scheme == Scheme::MidpointEuler {
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    let peak_nodes = max(&forces_of(&mesh));
+    // The dynamics hold at the interval midpoints for midpoint Euler (mean
+    // state and excitation), at the nodes otherwise.
+    let points = if tr.options().scheme == Scheme::MidpointEuler {
         let mean = |a: &[Vec<f64>]| -> Vec<Vec<f64>> {
             a.windows(2)
                 .map(|w| w[0].iter().zip(&w[1]).map(|(p, q)| 0.5 * (p + q)).collect())
                 .collect()
         };
-        peak_of(&MeshTrajectory {
+        MeshTrajectory {
             time: mesh.time.windows(2).map(|w| 0.5 * (w[0] + w[1])).collect(),
             states: mean(&mesh.states),
             controls: mean(&mesh.controls),
-        })
+        }
     } else {
-        peak_nodes
+        mesh.clone()
+    };
+    let forces = forces_of(&points);
+    let peak = max(&forces);
+    // Lift-off: J is constant in flight, so t_f may lie after it (the
+    // lift-off row only bounds the force at t_f). The ground contact ends
+    // where the vertical force at the points where the dynamics hold last
+    // falls through the lift-off row's level, interpolated linearly; the
+    // lift-off COM height and velocity are taken there.
+    let level = match ocp.options.liftoff {
+        LiftOff::ForceAtMost { fraction } | LiftOff::ForceEquals { fraction } => fraction,
+    };
+    let t_liftoff = match forces.iter().rposition(|&f| f > level) {
+        Some(i) if i + 1 < forces.len() => {
+            let (t0, t1) = (points.time[i], points.time[i + 1]);
+            let (f0, f1) = (forces[i], forces[i + 1]);
+            t0 + (t1 - t0) * (f0 - level) / (f0 - f1)
+        }
+        _ => tf,
+    };
+    let mut ws = ocp.eq.multibody.workspace::<f64>();
+    let com: Vec<(f64, f64)> = mesh
+        .states
+        .iter()
+        .map(|x| {
+            let (y, v, _) = ocp.jump_objective(&mut ws, x);
+            (y, v)
+        })
+        .collect();
+    let (y, ydot) = match mesh.time.iter().position(|&t| t >= t_liftoff) {
+        Some(k) if k > 0 => {
+            let (t0, t1) = (mesh.time[k - 1], mesh.time[k]);
+            let w = ((t_liftoff - t0) / (t1 - t0)).clamp(0.0, 1.0);
+            let lerp = |a: f64, b: f64| a + w * (b - a);
+            (lerp(com[k - 1].0, com[k].0), lerp(com[k - 1].1, com[k].1))
+        }
+        _ => (y, ydot),
     };
     let violation = match crate::nlp::constraint_violations(tr, x) {
         Ok(v) => v.into_iter().fold(0.0, f64::max),
@@ -287,7 +331,8 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         jump_height_m: j - ocp.standing_com_height,
         apex_com_height_m: j,
         standing_com_height_m: ocp.standing_com_height,
-        ground_contact_time_s: tf,
+        ground_contact_time_s: t_liftoff,
+        final_time_s: tf,
         liftoff_com_velocity_mps: ydot,
         liftoff_com_height_m: y,
         peak_vertical_grf_bw: peak,

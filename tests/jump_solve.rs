@@ -46,6 +46,18 @@ fn reduced_jump_is_solved_and_agrees_with_its_forward_simulation() {
     assert!(diff.abs() <= 0.01, "forward check differs by {diff} m");
     // A jump, not a stumble: lift-off upwards after a push-off.
     assert!(r.liftoff_com_velocity_mps > 0.5 && r.ground_contact_time_s > 0.1);
+    // The predicted lift-off (where the ground force at the midpoints
+    // falls through 1% of body weight, t_f possibly later) within one mesh
+    // interval of the forward simulation's.
+    let forward = r.forward_check.as_ref().unwrap().summary.as_ref().unwrap();
+    let forward_liftoff = forward.liftoff_time_s.expect("the forward jump lifts off");
+    let h = r.final_time_s / r.num_mesh_intervals as f64;
+    assert!(r.ground_contact_time_s <= r.final_time_s);
+    assert!(
+        (r.ground_contact_time_s - forward_liftoff).abs() <= h,
+        "lift-off {} s, forward {forward_liftoff} s",
+        r.ground_contact_time_s
+    );
 }
 
 /// Issue 5's "done when" on the default study: solved, violation ≤ 1e-3,
