@@ -1,6 +1,9 @@
 //! Muscle paths of the jumper against model-data.md's length and moment-arm
 //! check table, moment arms against finite differences of the length, and
 //! the smooth switching option.
+// 0.785398 below is where gait2392's conditional path points switch, as the
+// model file writes it, not π/4.
+#![allow(clippy::approx_constant)]
 
 use leap::model::Model;
 use leap::multibody::{GeneralizedForces, ModelView, Multibody};
