@@ -252,7 +252,6 @@ pub fn run(
 fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
     let ocp = tr.ocp.clone();
     let x = &r.x;
-    let (y, ydot, j) = tr.jump_objective(x);
     let tf = tr.final_time(x);
     let mesh = tr.unpack(x);
     let forces_of = |m: &MeshTrajectory| -> Vec<f64> {
@@ -297,15 +296,17 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         }
         _ => tf,
     };
+    // Y_C, Ẏ_C and J at every node; J at the last is the objective.
     let mut ws = ocp.eq.multibody.workspace::<f64>();
-    let com: Vec<(f64, f64)> = mesh
+    let com: Vec<(f64, f64, f64)> = mesh
         .states
         .iter()
-        .map(|x| {
-            let (y, v, _) = ocp.jump_objective(&mut ws, x);
-            (y, v)
-        })
+        .map(|x| ocp.jump_objective(&mut ws, x))
         .collect();
+    let (y_f, ydot_f, j) = com
+        .last()
+        .copied()
+        .unwrap_or((f64::NAN, f64::NAN, f64::NAN));
     let (y, ydot) = match mesh.time.iter().position(|&t| t >= t_liftoff) {
         Some(k) if k > 0 => {
             let (t0, t1) = (mesh.time[k - 1], mesh.time[k]);
@@ -313,7 +314,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
             let lerp = |a: f64, b: f64| a + w * (b - a);
             (lerp(com[k - 1].0, com[k].0), lerp(com[k - 1].1, com[k].1))
         }
-        _ => (y, ydot),
+        _ => (y_f, ydot_f),
     };
     let violation = match crate::nlp::constraint_violations(tr, x) {
         Ok(v) => v.into_iter().fold(0.0, f64::max),
