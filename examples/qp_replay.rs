@@ -2,7 +2,8 @@
 //! `cargo run --release --example qp_replay -- qp_iter12_failed.json [key=value ...]`
 //! where the optional settings override clarabel's (e.g. `tol_feas=1e-6`,
 //! `equilibrate_enable=false`, `direct_solve_method=faer`); with `TIMERS=1`
-//! clarabel's internal timers are printed too.
+//! clarabel's internal timers are printed too; with `IPM=1` leap's own
+//! interior-point solver (`leap::sqp::ipm`) solves it too, for comparison.
 use clarabel::solver::*;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -16,6 +17,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let value: serde_json::Value =
             serde_json::from_str(v).unwrap_or(serde_json::Value::String(v.into()));
         json["settings"][k] = value;
+    }
+    if std::env::var_os("IPM").is_some() {
+        ipm(&json)?;
     }
     let tmp = std::env::temp_dir().join(format!("qp_replay_{}.json", std::process::id()));
     std::fs::write(&tmp, serde_json::to_string(&json)?)?;
@@ -42,5 +46,52 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             t.print();
         }
     }
+    Ok(())
+}
+
+fn csc(
+    v: &serde_json::Value,
+) -> Result<clarabel::algebra::CscMatrix<f64>, Box<dyn std::error::Error>> {
+    let us = |k: &str| -> Result<Vec<usize>, Box<dyn std::error::Error>> {
+        Ok(serde_json::from_value(v[k].clone())?)
+    };
+    Ok(clarabel::algebra::CscMatrix::new(
+        serde_json::from_value(v["m"].clone())?,
+        serde_json::from_value(v["n"].clone())?,
+        us("colptr")?,
+        us("rowval")?,
+        serde_json::from_value(v["nzval"].clone())?,
+    ))
+}
+
+/// Solve the QP with leap's interior-point method and print the outcome.
+fn ipm(json: &serde_json::Value) -> Result<(), Box<dyn std::error::Error>> {
+    let (p, a) = (csc(&json["P"])?, csc(&json["A"])?);
+    let q: Vec<f64> = serde_json::from_value(json["q"].clone())?;
+    let b: Vec<f64> = serde_json::from_value(json["b"].clone())?;
+    let num_eq = json["cones"][0]["ZeroConeT"].as_u64().unwrap_or(0) as usize;
+    let t = std::time::Instant::now();
+    let mut s = leap::sqp::ipm::Ipm::new(&p, &a, num_eq)?;
+    let setup = t.elapsed().as_secs_f64();
+    let t = std::time::Instant::now();
+    let status = s.solve(&p, &a, &q, &b, 1e-10);
+    let solve = t.elapsed().as_secs_f64();
+    let (kkt, factor) = s.size();
+    let mut px = vec![0.0; q.len()];
+    for j in 0..p.n {
+        for k in p.colptr[j]..p.colptr[j + 1] {
+            let (i, v) = (p.rowval[k], p.nzval[k]);
+            px[i] += v * s.x[j];
+            if i != j {
+                px[j] += v * s.x[i];
+            }
+        }
+    }
+    let obj: f64 = s.x.iter().zip(&px).map(|(x, y)| 0.5 * x * y).sum::<f64>()
+        + s.x.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
+    println!(
+        "leap ipm: KKT non-zeros {kkt}, factor values {factor}; {status:?}: {} iterations, setup {setup:.3} s, solve {solve:.3} s, objective {obj:e}",
+        s.iterations
+    );
     Ok(())
 }

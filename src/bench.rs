@@ -658,6 +658,8 @@ pub struct SolveBenchRun {
     pub wall_time_s: f64,
     pub split: crate::sqp::TimeSplit,
     pub jump_height_m: f64,
+    /// QPs handed from leap's interior-point solver to clarabel.
+    pub qp_fallbacks: usize,
 }
 
 /// The whole solve of a study: iterations, wall time and its split
@@ -699,6 +701,7 @@ pub fn solve(
             wall_time_s: r.wall_time_s,
             split: r.time_split,
             jump_height_m: r.jump_height_m,
+            qp_fallbacks: r.qp_fallbacks,
         });
     }
     let _ = std::fs::remove_dir_all(&out);
@@ -727,6 +730,7 @@ impl SolveBenchReport {
             "QP (s)",
             "line search (s)",
             "other (s)",
+            "QP fallbacks",
             "jump height (cm)",
         ]);
         for (k, r) in self.runs.iter().enumerate() {
@@ -742,6 +746,7 @@ impl SolveBenchReport {
                 format!("{:.1}", s.qp_s),
                 format!("{:.2}", s.line_search_s),
                 format!("{:.2}", s.other_s),
+                r.qp_fallbacks.to_string(),
                 format!("{:.2}", 100.0 * r.jump_height_m),
             ]);
         }

@@ -129,6 +129,8 @@ pub struct SolveReport {
     pub variables: usize,
     pub constraints: usize,
     pub time_split: crate::sqp::TimeSplit,
+    /// QPs that leap's interior-point solver handed to clarabel.
+    pub qp_fallbacks: usize,
     pub study: Option<String>,
     pub model: String,
     pub output_files: Vec<String>,
@@ -351,6 +353,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         variables: tr.num_variables(),
         constraints: tr.num_constraints(),
         time_split: r.time,
+        qp_fallbacks: r.qp_fallbacks,
         study: None,
         model: String::new(),
         output_files: Vec::new(),
@@ -598,6 +601,12 @@ impl SolveReport {
             "  time split: derivatives {:.2} s, Hessian {:.2} s, QP {:.2} s, line search {:.2} s, other {:.2} s\n",
             t.derivatives_s, t.hessian_s, t.qp_s, t.line_search_s, t.other_s
         ));
+        if self.qp_fallbacks > 0 {
+            s.push_str(&format!(
+                "  {} QPs solved by clarabel after leap's interior-point solver failed on them\n",
+                self.qp_fallbacks
+            ));
+        }
         if let Some(fc) = &self.forward_check {
             match (&fc.summary, self.forward_check_difference_m) {
                 (Some(sm), Some(d)) => s.push_str(&format!(

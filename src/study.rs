@@ -14,6 +14,7 @@
 //!   "tolerances": {"optim_convergence_tolerance": 1e-6,
 //!                  "optim_constraint_tolerance": 1e-8, "max_iterations": 3000},
 //!   "hessian": "exact",
+//!   "qp_solver": "interior-point",
 //!   "output_directory": "../results"
 //! }
 //! ```
@@ -30,7 +31,7 @@ use crate::simbody::SimbodyIntegrator;
 /// (see [`SolveStudy::resolve`]'s settings).
 pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
 use crate::simulate::{parse_integrator, IntegratorChoice};
-use crate::sqp::{HessianMode, SqpSettings};
+use crate::sqp::{HessianMode, QpSolver, SqpSettings};
 use crate::transcription::{Scheme, TranscriptionOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -104,6 +105,10 @@ pub struct SolveStudy {
     /// element's largest (default 1e-4).
     #[serde(default)]
     pub hessian_eigenvalue_floor: Option<f64>,
+    /// QP subproblem solver: "interior-point" (leap's own, with clarabel
+    /// where it fails; default) or "clarabel".
+    #[serde(default)]
+    pub qp_solver: Option<String>,
     /// Results directory (default `results/`).
     #[serde(default, alias = "results_directory")]
     pub output_directory: Option<String>,
@@ -351,6 +356,19 @@ impl SolveStudy {
                 ));
             }
             settings.eigenvalue_floor = v;
+        }
+        if let Some(q) = &self.qp_solver {
+            settings.qp_solver =
+                match q.as_str() {
+                    "interior-point" => QpSolver::InteriorPoint,
+                    "clarabel" => QpSolver::Clarabel,
+                    other => return Err(err(
+                        "qp_solver",
+                        format!(
+                            "unknown QP solver '{other}' (expected 'interior-point' or 'clarabel')"
+                        ),
+                    )),
+                };
         }
 
         let output_directory = match &self.output_directory {
@@ -621,6 +639,18 @@ mod tests {
             let (f, r) = field_error(&format!(r#"{{"hessian_eigenvalue_floor": {bad}}}"#));
             assert_eq!(f, "hessian_eigenvalue_floor");
             assert!(r.contains("(0, 1)"), "{r}");
+        }
+        let (f, r) = field_error(r#"{"qp_solver": "osqp"}"#);
+        assert_eq!(f, "qp_solver");
+        assert!(r.contains("'interior-point' or 'clarabel'"), "{r}");
+        for (name, want) in [
+            ("clarabel", QpSolver::Clarabel),
+            ("interior-point", QpSolver::InteriorPoint),
+        ] {
+            let c = SolveStudy::from_json_str(&format!(r#"{{"qp_solver": "{name}"}}"#), "s.json")
+                .and_then(|s| s.resolve(None))
+                .unwrap();
+            assert_eq!(c.settings.qp_solver, want);
         }
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");

@@ -4,7 +4,7 @@
 //! unbounded problems must be reported as such.
 
 use leap::nlp::AdNlp;
-use leap::sqp::{solve, HessianMode, SqpSettings, SqpStatus};
+use leap::sqp::{solve, HessianMode, QpSolver, SqpSettings, SqpStatus};
 use leap::testset::{hock_schittkowski, infeasible_problems, unbounded_problems};
 
 fn settings(mode: HessianMode) -> SqpSettings {
@@ -38,9 +38,10 @@ fn known_failure(name: &str, mode: HessianMode) -> bool {
         .any(|&(n, m, _)| n == name && m.is_none_or(|m| m == mode))
 }
 
-fn run_all(mode: HessianMode) {
+fn run_all(mode: HessianMode, qp_solver: QpSolver) {
     let mut failures = Vec::new();
     let mut iterations = 0;
+    let mut fallbacks = 0;
     let mut solved = 0;
     let problems = hock_schittkowski();
     for p in problems.iter().cloned() {
@@ -56,8 +57,15 @@ fn run_all(mode: HessianMode) {
             }
         }
         solved += 1;
-        let r = solve(&mut AdNlp::new(p), &settings(mode));
+        let st = SqpSettings {
+            qp_solver,
+            ..settings(mode)
+        };
+        let r = solve(&mut AdNlp::new(p), &st);
         iterations += r.iterations;
+        if !known_failure(name, mode) {
+            fallbacks += r.qp_fallbacks;
+        }
         let err = (r.objective - f_star).abs() / f_star.abs().max(1.0);
         if r.status != SqpStatus::Solved
             || err.is_nan()
@@ -68,10 +76,16 @@ fn run_all(mode: HessianMode) {
         }
     }
     eprintln!(
-        "{mode:?}: {solved} of {} problems, {iterations} iterations",
+        "{mode:?}, {qp_solver:?}: {solved} of {} problems, {iterations} iterations, {fallbacks} QPs handed to clarabel",
         problems.len()
     );
     assert!(solved >= 25 || std::env::var("LEAP_ONLY").is_ok());
+    // Leap's interior-point solver must solve every QP of the test set
+    // itself (clarabel is only its fallback).
+    assert!(
+        qp_solver == QpSolver::Clarabel || fallbacks == 0,
+        "{fallbacks} QPs handed to clarabel"
+    );
     assert!(
         failures.is_empty(),
         "{mode:?}: {} of {} failed:\n{}",
@@ -83,12 +97,23 @@ fn run_all(mode: HessianMode) {
 
 #[test]
 fn hock_schittkowski_exact_hessian() {
-    run_all(HessianMode::ExactConvexified);
+    run_all(HessianMode::ExactConvexified, QpSolver::InteriorPoint);
 }
 
 #[test]
 fn hock_schittkowski_partitioned_bfgs() {
-    run_all(HessianMode::PartitionedBfgs);
+    run_all(HessianMode::PartitionedBfgs, QpSolver::InteriorPoint);
+}
+
+/// The same with clarabel alone solving the QPs.
+#[test]
+fn hock_schittkowski_exact_hessian_clarabel() {
+    run_all(HessianMode::ExactConvexified, QpSolver::Clarabel);
+}
+
+#[test]
+fn hock_schittkowski_partitioned_bfgs_clarabel() {
+    run_all(HessianMode::PartitionedBfgs, QpSolver::Clarabel);
 }
 
 #[test]

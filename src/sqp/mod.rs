@@ -33,6 +33,7 @@
 //!   of the objective below 1e-6 with constraints within 1e-3 (Porsa et al.
 //!   2016).
 
+pub mod ipm;
 pub mod qp;
 
 use crate::nlp::{check_elements, Element, EvalError, Nlp, INFINITE_BOUND};
@@ -67,6 +68,19 @@ pub enum Convexification {
     /// curvature becomes positive curvature of the same size, which keeps
     /// steps short where the Lagrangian bends down.
     Absolute,
+}
+
+/// Which solver solves the QP subproblems.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QpSolver {
+    /// Clarabel alone.
+    Clarabel,
+    /// Leap's interior-point method ([`ipm`]): single-entry rows (bounds)
+    /// folded into the KKT diagonal, faer's supernodal LDLᵀ with the
+    /// ordering kept for the whole solve; clarabel solves any QP it fails
+    /// on.
+    InteriorPoint,
 }
 
 /// How a step is accepted.
@@ -146,6 +160,8 @@ pub struct SqpSettings {
     /// Clarabel's Ruiz equilibration of each QP (computed from the first
     /// QP and kept through the in-place updates).
     pub qp_equilibrate: bool,
+    /// Which solver solves the QPs first ([`QpSolver`]).
+    pub qp_solver: QpSolver,
     /// Second-order correction of rejected full steps.
     pub second_order_correction: bool,
     /// Print the iteration log to standard error.
@@ -201,6 +217,7 @@ impl Default for SqpSettings {
             unbounded_objective: -1e20,
             qp_tolerance: 1e-10,
             qp_equilibrate: true,
+            qp_solver: QpSolver::InteriorPoint,
             second_order_correction: true,
             verbose: false,
             qp_dump_dir: None,
@@ -309,6 +326,9 @@ pub struct SqpResult {
     pub dual_infeasibility: f64,
     pub iterations: usize,
     pub qp_iterations: u64,
+    /// QPs that leap's interior-point solver could not solve and handed
+    /// to clarabel ([`QpSolver::InteriorPoint`]).
+    pub qp_fallbacks: usize,
     pub hessian: HessianMode,
     pub time: TimeSplit,
     pub history: Vec<IterationRecord>,
@@ -809,6 +829,7 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         dual_infeasibility: f64::NAN,
         iterations: 0,
         qp_iterations: 0,
+        qp_fallbacks: 0,
         hessian,
         time: TimeSplit::default(),
         history: Vec::new(),
@@ -1148,6 +1169,7 @@ impl<'s> Solver<'s> {
                 elastic,
                 settings.qp_tolerance,
                 settings.qp_equilibrate,
+                settings.qp_solver == QpSolver::InteriorPoint,
             );
             if settings.verbose {
                 let (nv, rows, nnz_p, nnz_a) = qp.size();
@@ -1644,6 +1666,8 @@ impl<'s> Solver<'s> {
             }
             rec.qp_iterations = qp_its;
             result.qp_iterations += qp_its as u64;
+            result.qp_fallbacks = self.qp.as_ref().map_or(0, |q| q.fallbacks)
+                + self.qp_elastic.as_ref().map_or(0, |q| q.fallbacks);
             let qp = if elastic {
                 self.qp_elastic.as_ref()
             } else {

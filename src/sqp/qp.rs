@@ -13,6 +13,7 @@
 //! calls clarabel's in-place updates (presolve off, structural zeros kept),
 //! so the solver object is created once per solve.
 
+use super::ipm::{Ipm, IpmStatus};
 use crate::nlp::{Element, INFINITE_BOUND};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -68,6 +69,7 @@ pub(crate) struct Qp {
     b_is_bound: Vec<bool>,
     solver: Option<DefaultSolver<f64>>,
     settings: DefaultSettings<f64>,
+    tolerance: f64,
     /// Solution: d (length n), multipliers of the constraints (λ, length m)
     /// and of the bounds (ζ, length n), slacks p − n per constraint.
     pub d: Vec<f64>,
@@ -75,6 +77,12 @@ pub(crate) struct Qp {
     pub zeta: Vec<f64>,
     pub slack_sum: f64,
     pub iterations: u32,
+    /// Leap's interior-point solver ([`Ipm`]), tried first when set; the
+    /// clarabel solver remains the fallback where it fails.
+    use_ipm: bool,
+    ipm: Option<Ipm>,
+    /// QPs the interior-point solver handed to clarabel.
+    pub fallbacks: usize,
 }
 
 /// Sparse matrix from entries (row, col), returning the nz index of each.
@@ -111,6 +119,7 @@ impl Qp {
         elastic: bool,
         tolerance: f64,
         equilibrate: bool,
+        use_ipm: bool,
     ) -> Qp {
         let (n, m) = (x_lower.len(), c_lower.len());
         let finite = |v: f64| v.abs() < INFINITE_BOUND;
@@ -286,11 +295,15 @@ impl Qp {
             b_is_bound: vec![true; nrows],
             solver: None,
             settings,
+            tolerance,
             d: vec![0.0; n],
             lambda: vec![0.0; m],
             zeta: vec![0.0; n],
             slack_sum: 0.0,
             iterations: 0,
+            use_ipm,
+            ipm: None,
+            fallbacks: 0,
         }
     }
 
@@ -386,6 +399,32 @@ impl Qp {
     }
 
     fn solve_once(&mut self) -> Result<QpOutcome, String> {
+        if self.use_ipm {
+            if self.ipm.is_none() {
+                self.ipm = Some(Ipm::new(&self.p, &self.a, self.num_eq)?);
+            }
+            let ipm = self.ipm.as_mut().expect("created above");
+            let status = ipm.solve(&self.p, &self.a, &self.q, &self.b, self.tolerance);
+            match status {
+                IpmStatus::Solved => {
+                    self.iterations = ipm.iterations;
+                    let (x, z, s) = (
+                        std::mem::take(&mut ipm.x),
+                        std::mem::take(&mut ipm.z),
+                        std::mem::take(&mut ipm.s),
+                    );
+                    self.extract(&x, &z, &s);
+                    let ipm = self.ipm.as_mut().expect("created above");
+                    (ipm.x, ipm.z, ipm.s) = (x, z, s);
+                    return Ok(QpOutcome::Solved);
+                }
+                IpmStatus::PrimalInfeasible => {
+                    self.iterations = ipm.iterations;
+                    return Ok(QpOutcome::Infeasible);
+                }
+                IpmStatus::Failed => self.fallbacks += 1,
+            }
+        }
         match &mut self.solver {
             Some(s) => {
                 s.update_P(&self.p.nzval).map_err(|e| e.to_string())?;
@@ -421,7 +460,20 @@ impl Qp {
             }
             other => return Ok(QpOutcome::Failed(other)),
         }
-        let (x, z, sl) = (&s.solution.x, &s.solution.z, &s.solution.s);
+        let (x, z, sl) = (
+            std::mem::take(&mut s.solution.x),
+            std::mem::take(&mut s.solution.z),
+            std::mem::take(&mut s.solution.s),
+        );
+        self.extract(&x, &z, &sl);
+        let s = self.solver.as_mut().expect("created above");
+        (s.solution.x, s.solution.z, s.solution.s) = (x, z, sl);
+        Ok(QpOutcome::Solved)
+    }
+
+    /// Read the step, multipliers and slack sum from a solution in
+    /// clarabel's form (x, row duals z, row slacks s).
+    fn extract(&mut self, x: &[f64], z: &[f64], sl: &[f64]) {
         self.d.copy_from_slice(&x[..self.n]);
         // An interior-point solution stops just inside active bounds; put
         // the step exactly on a bound whose multiplier dominates its slack
@@ -450,7 +502,6 @@ impl Qp {
             }
         }
         self.slack_sum = x[self.n..].iter().map(|v| v.max(0.0)).sum();
-        Ok(QpOutcome::Solved)
     }
 
     /// Write the QP with its current values as clarabel JSON.
