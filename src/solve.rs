@@ -129,8 +129,10 @@ pub struct SolveReport {
     pub variables: usize,
     pub constraints: usize,
     pub time_split: crate::sqp::TimeSplit,
-    /// QPs that leap's interior-point solver handed to clarabel.
+    /// QPs that leap's interior-point solver handed to clarabel, and how
+    /// many of them clarabel found infeasible.
     pub qp_fallbacks: usize,
+    pub qp_fallbacks_infeasible: usize,
     pub study: Option<String>,
     pub model: String,
     pub output_files: Vec<String>,
@@ -354,6 +356,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         constraints: tr.num_constraints(),
         time_split: r.time,
         qp_fallbacks: r.qp_fallbacks,
+        qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
         study: None,
         model: String::new(),
         output_files: Vec::new(),
@@ -603,8 +606,8 @@ impl SolveReport {
         ));
         if self.qp_fallbacks > 0 {
             s.push_str(&format!(
-                "  {} QPs solved by clarabel after leap's interior-point solver failed on them\n",
-                self.qp_fallbacks
+                "  {} QPs handed by leap's interior-point solver to clarabel ({} of them infeasible)\n",
+                self.qp_fallbacks, self.qp_fallbacks_infeasible
             ));
         }
         if let Some(fc) = &self.forward_check {

@@ -358,17 +358,18 @@ impl SolveStudy {
             settings.eigenvalue_floor = v;
         }
         if let Some(q) = &self.qp_solver {
-            settings.qp_solver =
-                match q.as_str() {
-                    "interior-point" => QpSolver::InteriorPoint,
-                    "clarabel" => QpSolver::Clarabel,
-                    other => return Err(err(
+            settings.qp_solver = match q.as_str() {
+                "interior-point" => QpSolver::InteriorPoint,
+                "clarabel" => QpSolver::Clarabel,
+                other => {
+                    return Err(err(
                         "qp_solver",
                         format!(
                             "unknown QP solver '{other}' (expected 'interior-point' or 'clarabel')"
                         ),
-                    )),
-                };
+                    ))
+                }
+            };
         }
 
         let output_directory = match &self.output_directory {

@@ -329,6 +329,9 @@ pub struct SqpResult {
     /// QPs that leap's interior-point solver could not solve and handed
     /// to clarabel ([`QpSolver::InteriorPoint`]).
     pub qp_fallbacks: usize,
+    /// Of those, the ones clarabel found infeasible (the interior-point
+    /// solver hands over a QP whose primal residual stops falling).
+    pub qp_fallbacks_infeasible: usize,
     pub hessian: HessianMode,
     pub time: TimeSplit,
     pub history: Vec<IterationRecord>,
@@ -830,6 +833,7 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         iterations: 0,
         qp_iterations: 0,
         qp_fallbacks: 0,
+        qp_fallbacks_infeasible: 0,
         hessian,
         time: TimeSplit::default(),
         history: Vec::new(),
@@ -1668,6 +1672,11 @@ impl<'s> Solver<'s> {
             result.qp_iterations += qp_its as u64;
             result.qp_fallbacks = self.qp.as_ref().map_or(0, |q| q.fallbacks)
                 + self.qp_elastic.as_ref().map_or(0, |q| q.fallbacks);
+            result.qp_fallbacks_infeasible = self.qp.as_ref().map_or(0, |q| q.fallbacks_infeasible)
+                + self
+                    .qp_elastic
+                    .as_ref()
+                    .map_or(0, |q| q.fallbacks_infeasible);
             let qp = if elastic {
                 self.qp_elastic.as_ref()
             } else {

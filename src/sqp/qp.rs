@@ -81,8 +81,10 @@ pub(crate) struct Qp {
     /// clarabel solver remains the fallback where it fails.
     use_ipm: bool,
     ipm: Option<Ipm>,
-    /// QPs the interior-point solver handed to clarabel.
+    /// QPs the interior-point solver handed to clarabel, and how many of
+    /// them clarabel found infeasible.
     pub fallbacks: usize,
+    pub fallbacks_infeasible: usize,
 }
 
 /// Sparse matrix from entries (row, col), returning the nz index of each.
@@ -304,6 +306,7 @@ impl Qp {
             use_ipm,
             ipm: None,
             fallbacks: 0,
+            fallbacks_infeasible: 0,
         }
     }
 
@@ -456,7 +459,10 @@ impl Qp {
         match status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-                return Ok(QpOutcome::Infeasible)
+                if self.use_ipm {
+                    self.fallbacks_infeasible += 1;
+                }
+                return Ok(QpOutcome::Infeasible);
             }
             other => return Ok(QpOutcome::Failed(other)),
         }
