@@ -664,6 +664,122 @@ mod tests {
         assert!(ipm.z[1].abs() < 1e-7 && ipm.z[3].abs() < 1e-7);
     }
 
+    /// Random feasible convex QPs with equality rows, general inequality
+    /// rows and bound rows (single entries), against clarabel's solution
+    /// of the same QP.
+    #[test]
+    fn random_qps_match_clarabel() {
+        use clarabel::solver::{
+            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+            ZeroConeT,
+        };
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for case in 0..20 {
+            let n = rng.random_range(3..30);
+            let (ne, ng) = (rng.random_range(0..n / 2 + 1), rng.random_range(0..n));
+            // P = B Bᵀ with B n×(n/2): PSD and singular.
+            let k = (n / 2).max(1);
+            let bm: Vec<f64> = (0..n * k).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut entries = Vec::new();
+            for j in 0..n {
+                for i in 0..=j {
+                    let v: f64 = (0..k).map(|t| bm[i * k + t] * bm[j * k + t]).sum();
+                    entries.push((i, j, v));
+                }
+            }
+            let p = dense_csc(n, n, &entries);
+            // Rows: equalities, general inequalities, then x ≥ −1, x ≤ 1.
+            let x0: Vec<f64> = (0..n).map(|_| rng.random_range(-0.5..0.5)).collect();
+            let mut rows = Vec::new();
+            let mut b = Vec::new();
+            for r in 0..ne + ng {
+                let mut row = Vec::new();
+                for j in 0..n {
+                    if rng.random_bool(0.4) {
+                        row.push((r, j, rng.random_range(-1.0..1.0)));
+                    }
+                }
+                let ax: f64 = row.iter().map(|&(_, j, v)| v * x0[j]).sum();
+                b.push(if r < ne {
+                    ax
+                } else {
+                    ax + rng.random_range(0.0..0.3)
+                });
+                rows.extend(row);
+            }
+            let m0 = ne + ng;
+            for j in 0..n {
+                rows.push((m0 + 2 * j, j, -1.0));
+                b.push(1.0);
+                rows.push((m0 + 2 * j + 1, j, 1.0));
+                b.push(1.0);
+            }
+            let m = m0 + 2 * n;
+            let a = dense_csc(m, n, &rows);
+            let q: Vec<f64> = (0..n).map(|_| rng.random_range(-3.0..3.0)).collect();
+            let mut ipm = Ipm::new(&p, &a, ne).unwrap();
+            assert_eq!(
+                ipm.solve(&p, &a, &q, &b, 1e-10),
+                IpmStatus::Solved,
+                "case {case}"
+            );
+            let settings = DefaultSettingsBuilder::default()
+                .verbose(false)
+                .presolve_enable(false)
+                .build()
+                .unwrap();
+            let cones = [ZeroConeT(ne), NonnegativeConeT(m - ne)];
+            let mut cl = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
+            cl.solve();
+            assert_eq!(cl.solution.status, SolverStatus::Solved, "case {case}");
+            let obj = |x: &[f64]| {
+                let mut px = vec![0.0; n];
+                Ipm::p_mul(&p, x, &mut px);
+                (0..n)
+                    .map(|j| 0.5 * x[j] * px[j] + q[j] * x[j])
+                    .sum::<f64>()
+            };
+            let (f, f_cl) = (obj(&ipm.x), obj(&cl.solution.x));
+            assert!(
+                (f - f_cl).abs() <= 1e-7 * (1.0 + f_cl.abs()),
+                "case {case}: objective {f} against clarabel's {f_cl}"
+            );
+            // Feasibility and dual sign of leap's own answer.
+            for r in 0..m {
+                let ax: f64 = rows
+                    .iter()
+                    .filter(|e| e.0 == r)
+                    .map(|e| e.2 * ipm.x[e.1])
+                    .sum();
+                if r < ne {
+                    assert!((ax - b[r]).abs() < 1e-8, "case {case} row {r}");
+                } else {
+                    assert!(ax <= b[r] + 1e-8 && ipm.z[r] >= 0.0, "case {case} row {r}");
+                }
+            }
+        }
+    }
+
+    fn dense_csc(m: usize, n: usize, entries: &[(usize, usize, f64)]) -> CscMatrix<f64> {
+        let mut sorted = entries.to_vec();
+        sorted.sort_by_key(|e| (e.1, e.0));
+        let mut colptr = vec![0usize; n + 1];
+        for e in &sorted {
+            colptr[e.1 + 1] += 1;
+        }
+        for j in 0..n {
+            colptr[j + 1] += colptr[j];
+        }
+        CscMatrix::new(
+            m,
+            n,
+            colptr,
+            sorted.iter().map(|e| e.0).collect(),
+            sorted.iter().map(|e| e.2).collect(),
+        )
+    }
+
     #[test]
     fn infeasible_qp_is_recognised() {
         // x ≤ −1 and −x ≤ −1 (x ≥ 1): no x.
