@@ -14,7 +14,7 @@
 //!   "tolerances": {"optim_convergence_tolerance": 1e-6,
 //!                  "optim_constraint_tolerance": 1e-8, "max_iterations": 3000},
 //!   "hessian": "exact",
-//!   "qp_solver": "interior-point",
+//!   "qp_solver": "clarabel",
 //!   "output_directory": "../results"
 //! }
 //! ```
@@ -105,8 +105,9 @@ pub struct SolveStudy {
     /// element's largest (default 1e-4).
     #[serde(default)]
     pub hessian_eigenvalue_floor: Option<f64>,
-    /// QP subproblem solver: "interior-point" (leap's own, with clarabel
-    /// where it fails; default) or "clarabel".
+    /// QP subproblem solver: "clarabel" (default) or "interior-point"
+    /// (leap's own, with clarabel where it fails; faster, see
+    /// [`QpSolver::InteriorPoint`]).
     #[serde(default)]
     pub qp_solver: Option<String>,
     /// Results directory (default `results/`).

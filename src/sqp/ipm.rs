@@ -123,6 +123,8 @@ fn norm_inf(v: &[f64]) -> f64 {
     v.iter().fold(0.0f64, |a, &b| a.max(b.abs()))
 }
 
+// `!(a > b)` is meant: it is true for NaN as well.
+#[allow(clippy::neg_cmp_op_on_partial_ord)]
 impl Ipm {
     /// Lay out the KKT system of the QP with these patterns (P: upper
     /// triangle, n×n; A: m×n, the first `num_eq` rows equalities).
