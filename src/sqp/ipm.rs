@@ -419,6 +419,72 @@ impl Ipm {
         b: &[f64],
         tol: f64,
     ) -> IpmStatus {
+        // Ruiz equilibration of [P, Aᵀ; A, 0] (10 passes, factors within
+        // [1e-4, 1e4], as clarabel does, but for every QP): x = D x̂, rows
+        // scaled by E; the tolerances apply to the scaled QP. Without it
+        // the SQP on the reduced jump took another path in its first
+        // iterations and ended at 12.3 cm (418 iterations); with it, 28.9 cm
+        // (172 iterations; clarabel: 28.45 cm, 150).
+        let (n, m) = (self.n, self.m);
+        let (mut dv, mut ev) = (vec![1.0f64; n], vec![1.0f64; m]);
+        let (mut ps, mut as_) = (p.clone(), a.clone());
+        for _ in 0..10 {
+            let (mut cn, mut rn) = (vec![0.0f64; n], vec![0.0f64; m]);
+            for j in 0..n {
+                for k in ps.colptr[j]..ps.colptr[j + 1] {
+                    let (i, v) = (ps.rowval[k], ps.nzval[k].abs());
+                    cn[j] = cn[j].max(v);
+                    cn[i] = cn[i].max(v);
+                }
+                for k in as_.colptr[j]..as_.colptr[j + 1] {
+                    let (r, v) = (as_.rowval[k], as_.nzval[k].abs());
+                    cn[j] = cn[j].max(v);
+                    rn[r] = rn[r].max(v);
+                }
+            }
+            let f = |v: f64| {
+                if v > 0.0 {
+                    (1.0 / v.sqrt()).clamp(1e-4, 1e4)
+                } else {
+                    1.0
+                }
+            };
+            let cs: Vec<f64> = cn.iter().map(|&v| f(v)).collect();
+            let rs: Vec<f64> = rn.iter().map(|&v| f(v)).collect();
+            for j in 0..n {
+                for k in ps.colptr[j]..ps.colptr[j + 1] {
+                    ps.nzval[k] *= cs[ps.rowval[k]] * cs[j];
+                }
+                for k in as_.colptr[j]..as_.colptr[j + 1] {
+                    as_.nzval[k] *= rs[as_.rowval[k]] * cs[j];
+                }
+                dv[j] *= cs[j];
+            }
+            for r in 0..m {
+                ev[r] *= rs[r];
+            }
+        }
+        let qs: Vec<f64> = q.iter().zip(&dv).map(|(q, d)| q * d).collect();
+        let bs: Vec<f64> = b.iter().zip(&ev).map(|(b, e)| b * e).collect();
+        let status = self.solve_scaled(&ps, &as_, &qs, &bs, tol);
+        for j in 0..n {
+            self.x[j] *= dv[j];
+        }
+        for r in 0..m {
+            self.z[r] *= ev[r];
+            self.s[r] /= ev[r];
+        }
+        status
+    }
+
+    fn solve_scaled(
+        &mut self,
+        p: &CscMatrix<f64>,
+        a: &CscMatrix<f64>,
+        q: &[f64],
+        b: &[f64],
+        tol: f64,
+    ) -> IpmStatus {
         let (n, m, ne) = (self.n, self.m, self.num_eq);
         let m_in = (m - ne).max(1) as f64;
         self.iterations = 0;

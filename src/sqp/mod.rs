@@ -79,11 +79,14 @@ pub enum QpSolver {
     /// Leap's interior-point method ([`ipm`]): single-entry rows (bounds)
     /// folded into the KKT diagonal, faer's supernodal LDLᵀ with the
     /// ordering kept for the whole solve; clarabel solves any QP it fails
-    /// on. On the default jump it reaches clarabel's solution (28.31 cm,
-    /// 357 iterations) in 202 s instead of 535 s (`leap bench solve`); on
-    /// the reduced jump its slightly different QP answers lead the SQP to
-    /// a poorer local optimum (12.3 cm after 418 iterations, clarabel
-    /// 28.45 cm after 150), so it is not the default yet.
+    /// on. Without equilibration it reached the default jump's solution
+    /// (28.31 cm, 357 iterations) in 202 s instead of clarabel's 535 s
+    /// but led the reduced jump to a poor local optimum (12.3 cm). With
+    /// Ruiz equilibration of every QP: reduced jump 28.90 cm in 172
+    /// iterations, 32.9 s (clarabel 28.45 cm, 150, 43.0 s); default jump
+    /// solved at a higher optimum, 30.53 cm, but after 816 iterations,
+    /// 377 s (`leap bench solve`, partly sharing the cores). Not the
+    /// default until its paths are understood.
     InteriorPoint,
 }
 
