@@ -78,15 +78,7 @@ fn ipm(json: &serde_json::Value) -> Result<(), Box<dyn std::error::Error>> {
     let solve = t.elapsed().as_secs_f64();
     let (kkt, factor) = s.size();
     let mut px = vec![0.0; q.len()];
-    for j in 0..p.n {
-        for k in p.colptr[j]..p.colptr[j + 1] {
-            let (i, v) = (p.rowval[k], p.nzval[k]);
-            px[i] += v * s.x[j];
-            if i != j {
-                px[j] += v * s.x[i];
-            }
-        }
-    }
+    leap::sqp::ipm::Ipm::p_mul(&p, &s.x, &mut px);
     let obj: f64 = s.x.iter().zip(&px).map(|(x, y)| 0.5 * x * y).sum::<f64>()
         + s.x.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
     println!(

@@ -234,7 +234,7 @@ impl Ipm {
     }
 
     /// y += P x for P given by its upper triangle.
-    fn p_mul(p: &CscMatrix<f64>, x: &[f64], y: &mut [f64]) {
+    pub fn p_mul(p: &CscMatrix<f64>, x: &[f64], y: &mut [f64]) {
         for j in 0..p.n {
             for k in p.colptr[j]..p.colptr[j + 1] {
                 let (i, v) = (p.rowval[k], p.nzval[k]);

@@ -411,14 +411,9 @@ impl Qp {
             match status {
                 IpmStatus::Solved => {
                     self.iterations = ipm.iterations;
-                    let (x, z, s) = (
-                        std::mem::take(&mut ipm.x),
-                        std::mem::take(&mut ipm.z),
-                        std::mem::take(&mut ipm.s),
-                    );
-                    self.extract(&x, &z, &s);
-                    let ipm = self.ipm.as_mut().expect("created above");
-                    (ipm.x, ipm.z, ipm.s) = (x, z, s);
+                    let ipm = self.ipm.take().expect("created above");
+                    self.extract(&ipm.x, &ipm.z, &ipm.s);
+                    self.ipm = Some(ipm);
                     return Ok(QpOutcome::Solved);
                 }
                 IpmStatus::PrimalInfeasible => {
@@ -466,14 +461,9 @@ impl Qp {
             }
             other => return Ok(QpOutcome::Failed(other)),
         }
-        let (x, z, sl) = (
-            std::mem::take(&mut s.solution.x),
-            std::mem::take(&mut s.solution.z),
-            std::mem::take(&mut s.solution.s),
-        );
-        self.extract(&x, &z, &sl);
-        let s = self.solver.as_mut().expect("created above");
-        (s.solution.x, s.solution.z, s.solution.s) = (x, z, sl);
+        let s = self.solver.take().expect("created above");
+        self.extract(&s.solution.x, &s.solution.z, &s.solution.s);
+        self.solver = Some(s);
         Ok(QpOutcome::Solved)
     }
 
