@@ -90,7 +90,9 @@ enum Command {
         #[arg(long)]
         scheme: Option<String>,
         /// exact (default: exact element Hessians, negative eigenvalues
-        /// clipped), exact-block-diagonal or bfgs.
+        /// clipped), exact-block-diagonal, exact-inertia-corrected (exact
+        /// element Hessians unmodified, the interior-point QP solver's
+        /// inertia correction) or bfgs.
         #[arg(long)]
         hessian: Option<String>,
         /// Skip the forward simulation of the optimal excitations.

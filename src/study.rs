@@ -31,7 +31,7 @@ use crate::simbody::SimbodyIntegrator;
 /// (see [`SolveStudy::resolve`]'s settings).
 pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
 use crate::simulate::{parse_integrator, IntegratorChoice};
-use crate::sqp::{HessianMode, QpSolver, SqpSettings};
+use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
 use crate::transcription::{Scheme, TranscriptionOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -361,6 +361,12 @@ impl SolveStudy {
         if let Some(q) = &self.qp_solver {
             settings.qp_solver = match q.as_str() {
                 "interior-point" => QpSolver::InteriorPoint,
+                "clarabel" if settings.convexification == Convexification::InertiaCorrection => {
+                    return Err(err(
+                        "qp_solver",
+                        "clarabel needs convex QPs; hessian 'exact-inertia-corrected' needs 'interior-point'".into(),
+                    ))
+                }
                 "clarabel" => QpSolver::Clarabel,
                 other => {
                     return Err(err(
@@ -569,17 +575,28 @@ pub fn scheme_name(s: Scheme) -> &'static str {
 
 /// A study's Hessian choice: "exact", "exact-block-diagonal" (exact, with
 /// the transcription's block-diagonal approximation,
-/// [`SqpSettings::block_diagonal_elements`]) or "bfgs".
+/// [`SqpSettings::block_diagonal_elements`]), "exact-inertia-corrected"
+/// (the element Hessians unmodified, [`Convexification::InertiaCorrection`];
+/// it brings the interior-point QP solver with it) or "bfgs".
 fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
-    if s == "exact-block-diagonal" {
-        settings.hessian = HessianMode::ExactConvexified;
-        settings.block_diagonal_elements = true;
-        return Ok(());
-    }
-    settings.hessian = s
-        .parse::<HessianMode>()
-        .map_err(|e| format!("{e}, or 'exact-block-diagonal'"))?;
     settings.block_diagonal_elements = false;
+    settings.convexification = Convexification::Clip;
+    match s {
+        "exact-block-diagonal" => {
+            settings.hessian = HessianMode::ExactConvexified;
+            settings.block_diagonal_elements = true;
+        }
+        "exact-inertia-corrected" => {
+            settings.hessian = HessianMode::ExactConvexified;
+            settings.convexification = Convexification::InertiaCorrection;
+            settings.qp_solver = QpSolver::InteriorPoint;
+        }
+        _ => {
+            settings.hessian = s
+                .parse::<HessianMode>()
+                .map_err(|e| format!("{e}, 'exact-block-diagonal' or 'exact-inertia-corrected'"))?;
+        }
+    }
     Ok(())
 }
 
@@ -654,6 +671,20 @@ mod tests {
                 .unwrap();
             assert_eq!(c.settings.qp_solver, want);
         }
+        // The inertia-corrected exact Hessian brings the interior-point
+        // solver; clarabel cannot take its indefinite QPs.
+        let c = SolveStudy::from_json_str(r#"{"hessian": "exact-inertia-corrected"}"#, "s.json")
+            .and_then(|s| s.resolve(None))
+            .unwrap();
+        assert_eq!(
+            c.settings.convexification,
+            Convexification::InertiaCorrection
+        );
+        assert_eq!(c.settings.qp_solver, QpSolver::InteriorPoint);
+        let (f, r) =
+            field_error(r#"{"hessian": "exact-inertia-corrected", "qp_solver": "clarabel"}"#);
+        assert_eq!(f, "qp_solver");
+        assert!(r.contains("interior-point"), "{r}");
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");
     }

@@ -21,6 +21,7 @@ mod simbody_bridge;
 mod simbody_callback;
 mod simulate;
 mod sqp_basic;
+mod sqp_inertia;
 mod sqp_ocp;
 mod sqp_testset;
 mod squat;

@@ -80,6 +80,13 @@ pub(crate) struct Qp {
     /// Leap's interior-point solver ([`Ipm`]), tried first when set; the
     /// clarabel solver remains the fallback where it fails.
     use_ipm: bool,
+    /// P may be indefinite: the interior-point solver adds τ I until the
+    /// QP is convex on its equality constraints ([`Ipm::inertia_correction`]);
+    /// a fallback to clarabel gets P with the last τ on its diagonal.
+    inertia_correction: bool,
+    /// ½ dᵀ (τ-part) d of the last answer: the curvature the correction
+    /// added to the QP's model along its step.
+    pub shift_curvature: f64,
     ipm: Option<Ipm>,
     /// QPs the interior-point solver handed to clarabel, and how many of
     /// them clarabel found infeasible.
@@ -122,6 +129,7 @@ impl Qp {
         tolerance: f64,
         equilibrate: bool,
         use_ipm: bool,
+        inertia_correction: bool,
     ) -> Qp {
         let (n, m) = (x_lower.len(), c_lower.len());
         let finite = |v: f64| v.abs() < INFINITE_BOUND;
@@ -304,6 +312,8 @@ impl Qp {
             slack_sum: 0.0,
             iterations: 0,
             use_ipm,
+            inertia_correction,
+            shift_curvature: 0.0,
             ipm: None,
             fallbacks: 0,
             fallbacks_infeasible: 0,
@@ -404,13 +414,16 @@ impl Qp {
     fn solve_once(&mut self) -> Result<QpOutcome, String> {
         if self.use_ipm {
             if self.ipm.is_none() {
-                self.ipm = Some(Ipm::new(&self.p, &self.a, self.num_eq)?);
+                let mut ipm = Ipm::new(&self.p, &self.a, self.num_eq)?;
+                ipm.inertia_correction = self.inertia_correction;
+                self.ipm = Some(ipm);
             }
             let ipm = self.ipm.as_mut().expect("created above");
             let status = ipm.solve(&self.p, &self.a, &self.q, &self.b, self.tolerance);
             match status {
                 IpmStatus::Solved => {
                     self.iterations = ipm.iterations;
+                    self.shift_curvature = ipm.shift_curvature;
                     let ipm = self.ipm.take().expect("created above");
                     self.extract(&ipm.x, &ipm.z, &ipm.s);
                     self.ipm = Some(ipm);
@@ -423,9 +436,32 @@ impl Qp {
                 IpmStatus::Failed => self.fallbacks += 1,
             }
         }
+        // With the inertia correction, clarabel gets P + the interior
+        // point's last τ on the diagonal (P alone may be indefinite).
+        let shift: Option<Vec<f64>> = if self.inertia_correction {
+            self.ipm.as_ref().map(|i| i.shift_diag.clone())
+        } else {
+            None
+        };
+        let p_shifted;
+        let p = match &shift {
+            Some(sd) => {
+                let mut p_shifted_ = self.p.clone();
+                for j in 0..self.p.n {
+                    for k in p_shifted_.colptr[j]..p_shifted_.colptr[j + 1] {
+                        if p_shifted_.rowval[k] == j {
+                            p_shifted_.nzval[k] += sd[j];
+                        }
+                    }
+                }
+                p_shifted = p_shifted_;
+                &p_shifted
+            }
+            None => &self.p,
+        };
         match &mut self.solver {
             Some(s) => {
-                s.update_P(&self.p.nzval).map_err(|e| e.to_string())?;
+                s.update_P(&p.nzval).map_err(|e| e.to_string())?;
                 s.update_A(&self.a.nzval).map_err(|e| e.to_string())?;
                 s.update_q(&self.q).map_err(|e| e.to_string())?;
                 s.update_b(&self.b).map_err(|e| e.to_string())?;
@@ -435,15 +471,9 @@ impl Qp {
                     ZeroConeT(self.num_eq),
                     NonnegativeConeT(self.rows.len() - self.num_eq),
                 ];
-                let s = DefaultSolver::new(
-                    &self.p,
-                    &self.q,
-                    &self.a,
-                    &self.b,
-                    &cones,
-                    self.settings.clone(),
-                )
-                .map_err(|e| e.to_string())?;
+                let s =
+                    DefaultSolver::new(p, &self.q, &self.a, &self.b, &cones, self.settings.clone())
+                        .map_err(|e| e.to_string())?;
                 self.solver = Some(s);
             }
         }
@@ -463,6 +493,13 @@ impl Qp {
         }
         let s = self.solver.take().expect("created above");
         self.extract(&s.solution.x, &s.solution.z, &s.solution.s);
+        self.shift_curvature = shift.map_or(0.0, |sd| {
+            0.5 * sd
+                .iter()
+                .zip(&s.solution.x)
+                .map(|(t, x)| t * x * x)
+                .sum::<f64>()
+        });
         self.solver = Some(s);
         Ok(QpOutcome::Solved)
     }

@@ -1,0 +1,90 @@
+//! The exact Hessian without eigenvalue modification, made convex on the
+//! constraints by the interior-point QP solver's inertia correction
+//! ([`Convexification::InertiaCorrection`]), on the published test set:
+//! every Hock–Schittkowski problem that the convexified exact Hessian
+//! solves must be solved to the book's optimum within 1e-6 relative here
+//! too, and the setting must be refused with clarabel as the QP solver.
+
+use leap::nlp::AdNlp;
+use leap::sqp::{solve, Convexification, HessianMode, QpSolver, SqpSettings, SqpStatus};
+use leap::testset::hock_schittkowski;
+
+/// Problems that the eigenvalue clip solves and the inertia correction
+/// does not, with what happens (both flagged as having local minima in
+/// src/testset.rs): the unmodified Hessian lets the SQP stop at other
+/// KKT points of these nonconvex problems.
+const KNOWN_DIFFERENCES: &[(&str, &str)] = &[
+    ("hs033", "ends 'acceptable' after 252 iterations at x = (2.0025, 0, 2.0025), f = 2.0, on the cone x3² = x1² + x2², creeping"),
+    ("hs044", "nonconvex bilinear objective: ends at the KKT point x = (0, 0.5, 3, 2), f = −3 (f* = −15)"),
+];
+
+fn settings() -> SqpSettings {
+    SqpSettings {
+        hessian: HessianMode::ExactConvexified,
+        convexification: Convexification::InertiaCorrection,
+        qp_solver: QpSolver::InteriorPoint,
+        verbose: std::env::var("LEAP_SQP_VERBOSE").is_ok(),
+        ..Default::default()
+    }
+}
+
+#[test]
+fn hock_schittkowski_with_inertia_correction() {
+    let mut failures = Vec::new();
+    let mut report = Vec::new();
+    let (mut its_ic, mut its_clip) = (0, 0);
+    for p in hock_schittkowski() {
+        let (name, f_star) = (p.name, p.reference_optimum());
+        let err = |f: f64| (f - f_star).abs() / f_star.abs().max(1.0);
+        // The reference run: the default convexification (eigenvalue clip).
+        let clip = SqpSettings {
+            convexification: Convexification::Clip,
+            ..settings()
+        };
+        let r0 = solve(&mut AdNlp::new(p.clone()), &clip);
+        let r = solve(&mut AdNlp::new(p), &settings());
+        let ok = |r: &leap::sqp::SqpResult| {
+            r.status == SqpStatus::Solved
+                && err(r.objective) <= 1e-6
+                && r.constraint_violation <= 1e-6
+        };
+        its_ic += r.iterations;
+        its_clip += r0.iterations;
+        report.push(format!("{name}: {} / {}", r.iterations, r0.iterations));
+        if name == "hs106" {
+            // Badly scaled (x up to 1e4): the clip ends 'acceptable' after
+            // about 200 iterations; the exact curvature solves it.
+            assert!(
+                ok(&r),
+                "hs106: {:?} after {} iterations: {}",
+                r.status,
+                r.iterations,
+                r.message
+            );
+        }
+        let known = KNOWN_DIFFERENCES.iter().any(|&(n, _)| n == name);
+        if ok(&r0) && !ok(&r) && !known {
+            failures.push(format!(
+                "{name}: {:?} f {} (f* {f_star}) viol {:.1e} after {} iterations: {} at x = {:?}",
+                r.status, r.objective, r.constraint_violation, r.iterations, r.message, r.x
+            ));
+        }
+    }
+    eprintln!(
+        "iterations, inertia correction / clip: {its_ic} / {its_clip}\n{}",
+        report.join(", ")
+    );
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn inertia_correction_needs_the_interior_point_solver() {
+    let p = hock_schittkowski().into_iter().next().expect("hs001");
+    let st = SqpSettings {
+        qp_solver: QpSolver::Clarabel,
+        ..settings()
+    };
+    let r = solve(&mut AdNlp::new(p), &st);
+    assert_eq!(r.status, SqpStatus::InvalidProblem);
+    assert!(r.message.contains("interior-point"), "{}", r.message);
+}
