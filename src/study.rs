@@ -581,6 +581,7 @@ pub fn scheme_name(s: Scheme) -> &'static str {
 fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
     settings.block_diagonal_elements = false;
     settings.convexification = Convexification::Clip;
+    settings.trust_region_ratio = true;
     match s {
         "exact-block-diagonal" => {
             settings.hessian = HessianMode::ExactConvexified;
@@ -590,6 +591,10 @@ fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
             settings.hessian = HessianMode::ExactConvexified;
             settings.convexification = Convexification::InertiaCorrection;
             settings.qp_solver = QpSolver::InteriorPoint;
+            // With the ratio test the reduced jump's step bound collapsed
+            // and its elastic QP failed at iteration 49; without it the
+            // solve ends (README).
+            settings.trust_region_ratio = false;
         }
         _ => {
             settings.hessian = s
