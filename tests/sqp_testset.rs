@@ -29,7 +29,6 @@ const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
     ("hs020", None, "nonconvex: ends at the local minimum f = 40.199 (−0.5, √3/2); the CasADi test suite (hs020.py: 'starts closer to local minimum') expects IPOPT there, and the SIF's SOLTN is 40.199"),
     ("hs055", None, "rank-deficient: the feasible set is the segment x(t), t ∈ [0, 1]; the point of it nearest x0 (ℓ1 and ℓ2, SNOPT's proximal-point start) is t = 1, the local minimum f = 20/3, where the SQP ends; the SIF's SOLTN is 6.6666667"),
     ("hs061", Some(HessianMode::PartitionedBfgs), "nonconvex: the quasi-Newton path ends at the local minimum f = −81.919 (the exact Hessian reaches −143.646); no published run to compare with"),
-    ("hs106", Some(HessianMode::ExactConvexified), "badly scaled (x up to 1e4): acceptable only (f within 5e-10, violation 1.2e-6)"),
 ];
 
 fn known_failure(name: &str, mode: HessianMode) -> bool {

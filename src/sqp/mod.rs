@@ -184,7 +184,13 @@ pub struct SqpSettings {
     pub nlp_scaling: bool,
     /// Solve in variables scaled by the widths of their bounds
     /// ([`crate::nlp::ScaledVariables`]; Moco's name). Results are
-    /// returned in the problem's own variables.
+    /// returned in the problem's own variables. Default on: on hs106
+    /// (x from 10 to 1e4) the unscaled exact-Hessian SQP zigzagged
+    /// against the step bound, converged linearly and stopped as
+    /// acceptable after 197 iterations at a violation of 1.7e-6; scaled,
+    /// it is solved in 37, and the whole test set takes fewer iterations
+    /// in every mode but one (PartitionedBfgs with clarabel, 3860 → 3866,
+    /// all in hs013's iteration limit). The jump sets it itself.
     pub scale_variables_using_bounds: bool,
     /// Step acceptance (default: the filter, see `leap bench sqp`).
     pub line_search: LineSearch,
@@ -231,7 +237,7 @@ impl Default for SqpSettings {
             qp_dump_dir: None,
             qp_dump_every: false,
             nlp_scaling: true,
-            scale_variables_using_bounds: false,
+            scale_variables_using_bounds: true,
             verbose_line_search: false,
             line_search: LineSearch::Filter,
             max_violation_growth: 100.0,
