@@ -28,7 +28,6 @@ const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
     ("hs016", None, "the book's x0 = (−2, 1) violates x1 ≥ −0.5; its projection (−0.5, 1) lies next to the local minimum f = 23.1447 at (−0.5, 1/√2) (bound and x1 + x2² ≥ 0 active, positive multipliers), where the SQP ends, also from (−0.49, 1), where IPOPT's bound_push would start; no published run found"),
     ("hs020", None, "nonconvex: ends at the local minimum f = 40.199 (−0.5, √3/2); the CasADi test suite (hs020.py: 'starts closer to local minimum') expects IPOPT there, and the SIF's SOLTN is 40.199"),
     ("hs055", None, "rank-deficient: the feasible set is the segment x(t), t ∈ [0, 1]; the point of it nearest x0 (ℓ1 and ℓ2, SNOPT's proximal-point start) is t = 1, the local minimum f = 20/3, where the SQP ends; the SIF's SOLTN is 6.6666667"),
-    ("hs061", Some(HessianMode::PartitionedBfgs), "nonconvex: the quasi-Newton path ends at the local minimum f = −81.919 (the exact Hessian reaches −143.646); no published run to compare with"),
 ];
 
 fn known_failure(name: &str, mode: HessianMode) -> bool {

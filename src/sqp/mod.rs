@@ -1984,7 +1984,15 @@ impl<'s> Solver<'s> {
                     jv: vec![0.0; self.pb.jac.len()],
                 },
             );
-            prev = Some((old, grads));
+            // No quasi-Newton update from an elastic step: its QP
+            // multipliers are the elastic weight ρ on every row whose slack
+            // is active, not estimates of the NLP's multipliers, and the
+            // update would build the curvature of ρ·c into B (hs061's first
+            // elastic steps: λ = (340, −247) against (−0.89, −1.74) at the
+            // solution, B₂₂ = 1660 from −4λ₁, which held x₂ on the wrong
+            // branch of 3x₁ − 2x₂² = 7 and ended at the local minimum
+            // −81.919; without these updates the path reaches −143.646).
+            prev = if elastic { None } else { Some((old, grads)) };
         }
     }
 
