@@ -1643,7 +1643,12 @@ impl<'s> Solver<'s> {
                     _ => f64::NAN,
                 };
                 let possible = viol1 - least;
-                if possible <= 1e-9 * viol1.max(1.0) {
+                // Relative to the violation itself: against max(viol, 1)
+                // a small violation passed as stationary whenever the QP
+                // reduced it by less than 1e-9 absolute (hs013 at x =
+                // (1.0074, 0): 5e-11 of a violation of 4e-7, a feasible
+                // problem called infeasible after 1573 iterations).
+                if possible <= 1e-9 * viol1 {
                     time.qp_s += t.elapsed().as_secs_f64();
                     self.log(&rec, start, result);
                     finish(result, SqpStatus::Infeasible, format!("converged to a point of locally minimal constraint violation {inf_pr:e} (largest row)"), &p, &lambda, &zeta, &mut time, &self.pb);
