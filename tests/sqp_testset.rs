@@ -16,20 +16,21 @@ fn settings(mode: HessianMode) -> SqpSettings {
 }
 
 /// Problems the SQP does not solve to the book's optimum from the book's
-/// starting point, with the reason and the evidence that a good solver
-/// ends there too; the note of each landing lists them. `None` = both
-/// Hessian modes.
+/// starting point, with the reason and the published runs from the same
+/// start, those that end where leap does and those that do not
+/// (Schittkowski's own test frame with NLPQLP 4.04: PROB.FOR, TEST.DAT and
+/// RESULT.DAT, vendored in github.com/jkitchin/ripopt at commit 3f2125c,
+/// benchmarks/hs; IPOPT's runs on the same Fortran problems there). The
+/// note of each landing lists them. `None` = both Hessian modes.
 ///
 /// Checked: moving the projected start inside the bounds by IPOPT's
 /// bound_push (0.01) does not change hs002 (exact), hs016, hs020 or hs055.
 const KNOWN_FAILURES: &[(&str, Option<HessianMode>, &str)] = &[
-    ("hs002", Some(HessianMode::ExactConvexified), "nonconvex: ends at the other local minimum f = 4.9412 (-1.2210, 1.5); the CasADi test suite (test/python/hock_schittkowski/hs002.py) expects IPOPT to end there from the book's x0"),
-    ("hs013", None, "degenerate: no KKT multipliers exist at x* (MFCQ fails), the SQP converges linearly with diverging multipliers; since the dual scaling s_d is capped it is no longer called solved at f = 1.00007 and ends at the iteration limit. IPOPT reports 'optimal' at f = 0.9946, x = (1.003, 0) (github.com/jkitchin/ripopt/issues/19; OPTI's fmin 0.9945785)"),
-    ("hs016", None, "the book's x0 = (−2, 1) violates x1 ≥ −0.5; its projection (−0.5, 1) lies next to the local minimum f = 23.1447 at (−0.5, 1/√2) (bound and x1 + x2² ≥ 0 active, positive multipliers), where the SQP ends, also from (−0.49, 1), where IPOPT's bound_push would start; no published run found"),
-    ("hs020", None, "nonconvex: ends at the local minimum f = 40.199 (−0.5, √3/2); the CasADi test suite (hs020.py: 'starts closer to local minimum') expects IPOPT there, and the SIF's SOLTN is 40.199"),
-    ("hs055", None, "rank-deficient: the feasible set is the segment x(t), t ∈ [0, 1]; the point of it nearest x0 (ℓ1 and ℓ2, SNOPT's proximal-point start) is t = 1, the local minimum f = 20/3, where the SQP ends; the SIF's SOLTN is 6.6666667"),
-    ("hs061", Some(HessianMode::PartitionedBfgs), "nonconvex: the quasi-Newton path ends at the local minimum f = −81.919 (the exact Hessian reaches −143.646); no published run to compare with"),
-    ("hs106", Some(HessianMode::ExactConvexified), "badly scaled (x up to 1e4): acceptable only (f within 5e-10, violation 1.2e-6)"),
+    ("hs002", Some(HessianMode::ExactConvexified), "nonconvex: ends at the other local minimum f = 4.9412 (-1.2210, 1.5), as IPOPT does from the book's x0 (ripopt's native IPOPT run, benchmarks/hs/hs_ipopt_native_results.json at jkitchin/ripopt 3f2125c: 4.9412293 in 10 iterations; the CasADi test suite's hs002.py expects it too); NLPQLP, a BFGS SQP, reaches 0.050426 (Schittkowski's test frame, TEST.DAT in the same directory), as leap's BFGS mode does"),
+    ("hs013", None, "degenerate, not reachable to 1e-6 with these QP solvers: along x2 = 0, x1 = 1 + ε violates by ε³ with f = 1 - 2ε + ε², and the feasible side has f ≈ 1 + 2ε, so f within 1e-6 needs |ε| ≤ 5e-7, where the KKT-like multipliers are 2/(3ε²) ≈ 2.7e12 and the linearised row's d1 coefficient 3ε² ≤ 7.5e-13 must resolve a change of ε³ ≤ 1.25e-19. The QP solvers accept row residuals of about 1e-10·(1 + ‖b‖) ≥ 1.1e-9 (b holds the step bound 10), so below ε ≈ (1.1e-9)^(1/3) ≈ 1e-3 the QP no longer determines d1 (exact + IPM, iteration 18 at ε = 4.5e-4: d1 = 10, the bound, instead of ≤ 1.5e-4, the row violated by 6.1e-6 and accepted as almost solved). The runs stop at that scale: BFGS + IPM 'solved' at x1 = 1.00107 (violation 1.2e-9 = ε³, f = 0.99785), BFGS + clarabel at the iteration limit with f = 0.99896; exact + IPM cycles at x1 = 1.0074 (violation 4e-7, f = 0.9853, merit penalty 3.6e4) until its line search fails after 1573 iterations (restoration failed; it used to be called infeasible there: its feasibility QP, which keeps ½dᵀBd with B11 ≈ 500 against the row gradient 1.6e-4, reduced the violation 4e-7 by 5e-11, below the absolute 1e-9 of the old stationarity test); exact + clarabel at the iteration limit. Published runs do not reach 1e-6 either: NLPQLP 1.0000017 (rel. err 1.7e-6, Schittkowski's TEST.DAT, jkitchin/ripopt 3f2125c benchmarks/hs), IPOPT 0.99458 at (1.0027, 0) (github.com/jkitchin/ripopt/issues/19)"),
+    ("hs016", None, "the book's x0 = (−2, 1) violates x1 ≥ −0.5; its projection (−0.5, 1) lies next to the local minimum f = 23.1447 at (−0.5, 1/√2) (bound and x1 + x2² ≥ 0 active, positive multipliers), where the SQP ends, also from IPOPT's pushed start (−0.495, 0.99). Schittkowski's own test frame ends there with NLPQLP (23.144661, listed under 'Local solution: TP 16' in RESULT.DAT; jkitchin/ripopt 3f2125c benchmarks/hs); IPOPT, an interior-point method, reaches 0.25 from the same x0 (hs_ipopt_native_results.json there)"),
+    ("hs020", None, "nonconvex: from the book's x0 = (−2, 1) (the SIF's; projected to (−0.5, 1)) ends at the local minimum f = 40.199 (−0.5, √3/2); the SIF's SOLTN is 40.199 and the CasADi test suite (hs020.py: 'starts closer to local minimum') expects IPOPT there. Schittkowski's later Fortran version (PROB.FOR, TP20) starts at (0.1, 1), from which NLPQLP (38.198730, TEST.DAT) and IPOPT (38.19873) reach f*, and so does leap in all four modes (checked with solve_from)"),
+    ("hs055", None, "rank-deficient: the feasible set is the segment x(t), t ∈ [0, 1]; the point of it nearest x0 (ℓ1 and ℓ2, SNOPT's proximal-point start) is t = 1, the local minimum f = 20/3, where the SQP ends; the SIF's SOLTN is 6.6666667, and NLPQLP ends there too (6.6666667, listed under 'Local solution: TP 55' in Schittkowski's RESULT.DAT, jkitchin/ripopt 3f2125c benchmarks/hs)"),
 ];
 
 fn known_failure(name: &str, mode: HessianMode) -> bool {
