@@ -356,9 +356,13 @@ impl Ipm {
         negative == self.kept.len()
     }
 
-    /// Factorise with the inertia corrected: raise τ (IPOPT's rule) until
-    /// the factor's inertia is right. False when no τ up to SHIFT_MAX does.
-    fn factor_corrected(&mut self, p: &CscMatrix<f64>, a: &CscMatrix<f64>, d: &[f64]) -> bool {
+    /// [`Ipm::factor`], with the inertia corrected where asked: raise τ
+    /// (IPOPT's rule) until the factor's inertia is right. False when the
+    /// factorisation fails, or no τ up to SHIFT_MAX corrects the inertia.
+    fn factorise(&mut self, p: &CscMatrix<f64>, a: &CscMatrix<f64>, d: &[f64]) -> bool {
+        if !self.inertia_correction {
+            return self.factor(p, a, d);
+        }
         loop {
             if self.factor(p, a, d) && self.inertia_is_right() {
                 return true;
@@ -576,7 +580,7 @@ impl Ipm {
                     INACTIVE_WEIGHT
                 };
             }
-            if !self.factor_corrected(&ps, &as_, &w) {
+            if !self.factorise(&ps, &as_, &w) {
                 self.iterations = 0;
                 return IpmStatus::Failed;
             }
@@ -619,12 +623,7 @@ impl Ipm {
         for r in ne..m {
             d[r] = 1.0;
         }
-        let factored = if self.inertia_correction {
-            self.factor_corrected(p, a, &d)
-        } else {
-            self.factor(p, a, &d)
-        };
-        if !factored {
+        if !self.factorise(p, a, &d) {
             return IpmStatus::Failed;
         }
         let mq: Vec<f64> = q.iter().map(|v| -v).collect();
@@ -736,12 +735,7 @@ impl Ipm {
             for r in ne..m {
                 d[r] = s[r] / z[r];
             }
-            let factored = if self.inertia_correction {
-                self.factor_corrected(p, a, &d)
-            } else {
-                self.factor(p, a, &d)
-            };
-            if !factored {
+            if !self.factorise(p, a, &d) {
                 break;
             }
             // Predictor (σ = 0): r_c = s∘z.

@@ -1992,7 +1992,8 @@ impl<'s> Solver<'s> {
             lambda.copy_from_slice(&lam_qp);
             zeta.copy_from_slice(&zeta_qp);
             // Element gradients at the old point with the new λ, for BFGS.
-            let grads = if self.mode == HessianMode::PartitionedBfgs {
+            // (None after an elastic step: no update from it, see below.)
+            let grads = if self.mode == HessianMode::PartitionedBfgs && !elastic {
                 let mut g: Vec<Vec<f64>> = self
                     .pb
                     .elements

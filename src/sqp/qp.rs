@@ -443,22 +443,18 @@ impl Qp {
         } else {
             None
         };
-        let p_shifted;
-        let p = match &shift {
-            Some(sd) => {
-                let mut p_shifted_ = self.p.clone();
-                for j in 0..self.p.n {
-                    for k in p_shifted_.colptr[j]..p_shifted_.colptr[j + 1] {
-                        if p_shifted_.rowval[k] == j {
-                            p_shifted_.nzval[k] += sd[j];
-                        }
+        let p_shifted = shift.as_ref().map(|sd| {
+            let mut p = self.p.clone();
+            for (j, t) in sd.iter().enumerate() {
+                for k in p.colptr[j]..p.colptr[j + 1] {
+                    if p.rowval[k] == j {
+                        p.nzval[k] += t;
                     }
                 }
-                p_shifted = p_shifted_;
-                &p_shifted
             }
-            None => &self.p,
-        };
+            p
+        });
+        let p = p_shifted.as_ref().unwrap_or(&self.p);
         match &mut self.solver {
             Some(s) => {
                 s.update_P(&p.nzval).map_err(|e| e.to_string())?;
