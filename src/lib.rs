@@ -10,6 +10,7 @@
 // Index loops mirror the equations they implement.
 #![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
 
+pub mod analyze;
 pub mod bench;
 pub mod crosscheck;
 pub mod eval;

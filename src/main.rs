@@ -125,6 +125,26 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// What drives and limits a jump: per muscle over the push-off its peak
+    /// activation, time at full activation, peak force and shortening speed
+    /// against its maximum, and work; the energy budget of the push-off.
+    /// From a states file (`_solution.sto`, or the forward check's finer
+    /// `_forward_states.sto`).
+    Analyze {
+        /// States over time (OpenSim .sto with the model's state names).
+        states: PathBuf,
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        /// Analyse from START to END (s) instead of the push-off.
+        #[arg(long, num_args = 2, value_names = ["START", "END"])]
+        window: Option<Vec<f64>>,
+        /// The full 10-coordinate system instead of the symmetric one.
+        #[arg(long)]
+        full: bool,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
     /// Print the state and control names `leap eval` expects, and the static
     /// squat as a ready-made input.
     Squat {
@@ -288,6 +308,31 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 no_forward_check,
             };
             solve(study, overrides, json, quiet, verbose)
+        }
+        Command::Analyze {
+            states,
+            model,
+            window,
+            full,
+            json,
+        } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let laws = leap::laws::OpenSimLaws::new(&m)?;
+            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let (time, xs) = leap::analyze::read_states(&eq, &states)?;
+            let window = match window.as_deref() {
+                Some(&[a, b]) if a < b => Some((a, b)),
+                Some(w) => anyhow::bail!("--window: START must be below END, got {w:?}"),
+                None => None,
+            };
+            let a = leap::analyze::analyze(&eq, &laws, &time, &xs, window)
+                .with_context(|| format!("{}", states.display()))?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&a)?);
+            } else {
+                print!("{}", a.to_text());
+            }
+            Ok(ExitCode::SUCCESS)
         }
         Command::Eval {
             model,

@@ -3,6 +3,7 @@
 //! CI run. Run one file's tests with a filter, e.g.
 //! `cargo test --release --test integration transcription::`.
 
+mod analyze;
 mod cli;
 mod cli_simulate;
 mod cli_solve;

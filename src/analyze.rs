@@ -1,0 +1,369 @@
+//! `leap analyze`: what drives and what limits a jump, from its states over
+//! time (a solution's `_solution.sto` or, at finer resolution, its forward
+//! check's `_forward_states.sto`).
+//!
+//! Over the push-off (t = 0 to lift-off, where the vertical ground force
+//! falls below 1% of body weight) each muscle-tendon unit is reported with
+//! its peak activation, the share of the push-off it spends at activation
+//! ≥ 0.95 (saturated: more force needs more strength, not more drive), its
+//! peak tendon force over its maximum isometric force, its peak fibre
+//! shortening speed over its maximum (v_max · l_opt; near 1 the
+//! force-velocity curve leaves it no force), and its work
+//! W = ∫ F_T · (−dL_MT/dt) dt, positive and net, counted for both sides
+//! where the symmetric system applies one muscle's tension twice.
+//!
+//! The energy budget of the window: the change of the system's kinetic plus
+//! gravitational potential energy equals the work of the muscles, of the
+//! passive joint torques and of the ground contact; the contact's share is
+//! what the first leaves after the other two (with the integration error of
+//! the trapezoidal rule on the file's rows).
+
+use crate::ode::StateEquation;
+use serde::Serialize;
+use std::path::Path;
+
+/// Activation at or above which a muscle counts as saturated.
+pub const SATURATED_ACTIVATION: f64 = 0.95;
+/// Vertical ground force below which the feet have left the ground, as a
+/// fraction of body weight (the solve report's lift-off rule).
+pub const LIFTOFF_FRACTION: f64 = 0.01;
+
+/// One muscle-tendon unit over the window.
+#[derive(Debug, Clone, Serialize)]
+pub struct MuscleWork {
+    pub name: String,
+    pub max_isometric_force_n: f64,
+    pub peak_activation: f64,
+    /// Share of the window with activation ≥ [`SATURATED_ACTIVATION`].
+    pub saturated_fraction: f64,
+    /// Peak tendon force / maximum isometric force.
+    pub peak_force_ratio: f64,
+    /// Peak fibre shortening speed / (v_max · l_opt).
+    pub peak_shortening_ratio: f64,
+    /// ∫ max(0, P) dt and ∫ P dt with P = F_T · (−dL_MT/dt), both sides (J).
+    pub positive_work_j: f64,
+    pub net_work_j: f64,
+}
+
+/// Work and energy over the window (J).
+#[derive(Debug, Clone, Serialize)]
+pub struct EnergyBudget {
+    pub start_s: f64,
+    pub end_s: f64,
+    /// Kinetic plus gravitational potential energy, end minus start.
+    pub energy_change_j: f64,
+    pub muscle_work_j: f64,
+    pub passive_torque_work_j: f64,
+    /// What the energy change leaves after the muscles and passive
+    /// torques: the ground contact's work plus the integration error.
+    pub contact_work_j: f64,
+}
+
+/// The analysis of a jump's push-off (or of a given window).
+#[derive(Debug, Clone, Serialize)]
+pub struct JumpAnalysis {
+    /// Whether the feet left the ground inside the file (else the window
+    /// runs to its end).
+    pub liftoff: bool,
+    pub budget: EnergyBudget,
+    /// ∫ (F_y − m g) dt over the window and m · ΔẎ_C: equal by Newton's
+    /// second law (N·s).
+    pub vertical_impulse_ns: f64,
+    pub com_momentum_change_ns: f64,
+    /// COM height above standing and vertical velocity at the window's end,
+    /// and the jump height they give (height + Ẏ²/2g).
+    pub end_com_height_above_standing_m: f64,
+    pub end_com_vertical_velocity_mps: f64,
+    pub jump_height_m: f64,
+    pub body_weight_n: f64,
+    pub peak_vertical_grf_bw: f64,
+    /// By net work, largest first.
+    pub muscles: Vec<MuscleWork>,
+}
+
+/// Bad input to [`analyze`] or [`read_states`]: names the file and the
+/// column or row.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {place}: {reason}")]
+pub struct AnalyzeError {
+    pub file: String,
+    pub place: String,
+    pub reason: String,
+}
+
+/// The states of `eq` over time from an OpenSim storage file: its columns
+/// named as [`StateEquation::state_names`] (other columns are ignored).
+pub fn read_states(
+    eq: &StateEquation,
+    path: &Path,
+) -> Result<(Vec<f64>, Vec<Vec<f64>>), AnalyzeError> {
+    let file = path.display().to_string();
+    let err = |place: String, reason: String| AnalyzeError {
+        file: file.clone(),
+        place,
+        reason,
+    };
+    let table = crate::io::StoTable::read(path).map_err(|e| err("(file)".into(), e.to_string()))?;
+    let names = eq.state_names();
+    let cols: Vec<usize> = names
+        .iter()
+        .map(|n| {
+            table.labels.iter().position(|l| l == n).ok_or_else(|| {
+                err(
+                    format!("column '{n}'"),
+                    "missing (a states file of this model's symmetric system is needed; `--full` for the full one)".into(),
+                )
+            })
+        })
+        .collect::<Result<_, _>>()?;
+    if table.time.len() < 2 {
+        return Err(err(
+            "rows".into(),
+            format!("{} rows; at least 2 are needed", table.time.len()),
+        ));
+    }
+    let mut states = Vec::with_capacity(table.rows.len());
+    for (r, row) in table.rows.iter().enumerate() {
+        let x: Vec<f64> = cols.iter().map(|&c| row[c]).collect();
+        if let Some(k) = x.iter().position(|v| !v.is_finite()) {
+            return Err(err(
+                format!(
+                    "row {} (t = {}), column '{}'",
+                    r + 1,
+                    table.time[r],
+                    names[k]
+                ),
+                "not a finite number".into(),
+            ));
+        }
+        states.push(x);
+    }
+    if let Some(r) = table.time.windows(2).position(|w| !(w[1] > w[0])) {
+        return Err(err(
+            format!("row {}", r + 2),
+            format!(
+                "time {} does not follow {}",
+                table.time[r + 1],
+                table.time[r]
+            ),
+        ));
+    }
+    Ok((table.time, states))
+}
+
+/// [`analyze`] could not evaluate the states, or found no rows to analyse.
+#[derive(Debug, thiserror::Error)]
+pub enum AnalysisError {
+    #[error(transparent)]
+    Ode(#[from] crate::ode::OdeError),
+    #[error("no rows between {0} s and {1} s")]
+    EmptyWindow(f64, f64),
+}
+
+/// Per row: what the analysis integrates.
+struct Sample {
+    t: f64,
+    activation: Vec<f64>,
+    tendon_force: Vec<f64>,
+    /// −dL_MT/dt (shortening positive).
+    shortening_speed: Vec<f64>,
+    fiber_velocity: Vec<f64>,
+    passive_power: f64,
+    vertical_grf: f64,
+    energy: f64,
+    com_height: f64,
+    com_vertical_velocity: f64,
+}
+
+fn sample(
+    eq: &StateEquation,
+    laws: &crate::laws::OpenSimLaws,
+    ws: &mut crate::ode::StateWorkspace<f64>,
+    t: f64,
+    x: &[f64],
+) -> Result<Sample, crate::ode::OdeError> {
+    let (n, nm) = (eq.nq(), eq.nm());
+    // Excitation = activation: only the activation rate depends on it,
+    // which the analysis does not use.
+    let u: Vec<f64> = x[2 * n + nm..].to_vec();
+    let mut xdot = vec![0.0; eq.nx()];
+    eq.rhs(laws, ws, x, &u, &mut xdot)?;
+    let passive_power = eq
+        .model
+        .ligaments
+        .iter()
+        .zip(&ws.ligament_torque)
+        .map(|(l, tq)| tq * x[n + eq.system.q_of_model_coordinate[l.coordinate]])
+        .sum();
+    let com = eq.multibody.com_position(&ws.mb);
+    let vcom = eq.multibody.com_velocity(&ws.mb);
+    Ok(Sample {
+        t,
+        activation: u,
+        tendon_force: ws.tendon_force.clone(),
+        shortening_speed: ws.mtu_speed.iter().map(|v| -v).collect(),
+        fiber_velocity: xdot[2 * n..2 * n + nm].to_vec(),
+        passive_power,
+        vertical_grf: ws.sphere_force.iter().map(|f| f[1]).sum(),
+        energy: eq.multibody.energy(&ws.mb),
+        com_height: com[1],
+        com_vertical_velocity: vcom[1],
+    })
+}
+
+/// Analyse the states `states` at times `time` over `window` (start, end),
+/// or over the push-off: from the first row to lift-off.
+pub fn analyze(
+    eq: &StateEquation,
+    laws: &crate::laws::OpenSimLaws,
+    time: &[f64],
+    states: &[Vec<f64>],
+    window: Option<(f64, f64)>,
+) -> Result<JumpAnalysis, AnalysisError> {
+    let nm = eq.nm();
+    let mut ws = eq.workspace::<f64>();
+    let weight = eq.model.total_mass() * eq.model.gravity[1].abs();
+    let (t0, t1) = window.unwrap_or((time[0], f64::INFINITY));
+    let mut samples = Vec::new();
+    let mut liftoff = false;
+    let mut in_contact = false;
+    for (t, x) in time.iter().zip(states) {
+        if *t < t0 {
+            continue;
+        }
+        if *t > t1 {
+            break;
+        }
+        let s = sample(eq, laws, &mut ws, *t, x)?;
+        let fy = s.vertical_grf;
+        samples.push(s);
+        if window.is_none() {
+            if fy >= LIFTOFF_FRACTION * weight {
+                in_contact = true;
+            } else if in_contact {
+                liftoff = true;
+                break;
+            }
+        }
+    }
+    let (first, last) = match (samples.first(), samples.last()) {
+        (Some(f), Some(l)) => (f, l),
+        _ => return Err(AnalysisError::EmptyWindow(t0, t1)),
+    };
+    let trapezoid = |f: &dyn Fn(&Sample) -> f64| -> f64 {
+        samples
+            .windows(2)
+            .map(|w| 0.5 * (w[1].t - w[0].t) * (f(&w[0]) + f(&w[1])))
+            .sum()
+    };
+    let duration = last.t - first.t;
+    let mut muscles = Vec::with_capacity(nm);
+    let mut muscle_work = 0.0;
+    for (k, &mi) in eq.muscles.iter().enumerate() {
+        let spec = &eq.model.muscles[mi].spec;
+        let twice = eq.multiplicity[k];
+        let power = |s: &Sample| twice * s.tendon_force[k] * s.shortening_speed[k];
+        let net = trapezoid(&power);
+        let positive = trapezoid(&|s: &Sample| power(s).max(0.0));
+        // Time at saturation: the trapezoidal rule on the indicator.
+        let saturated =
+            trapezoid(&|s: &Sample| f64::from(u8::from(s.activation[k] >= SATURATED_ACTIVATION)));
+        let vmax = spec.max_contraction_velocity * spec.optimal_fiber_length;
+        let peak = |f: &dyn Fn(&Sample) -> f64| samples.iter().map(f).fold(f64::MIN, f64::max);
+        muscle_work += net;
+        muscles.push(MuscleWork {
+            name: spec.name.clone(),
+            max_isometric_force_n: spec.max_isometric_force,
+            peak_activation: peak(&|s| s.activation[k]),
+            saturated_fraction: if duration > 0.0 {
+                saturated / duration
+            } else {
+                0.0
+            },
+            peak_force_ratio: peak(&|s| s.tendon_force[k]) / spec.max_isometric_force,
+            peak_shortening_ratio: peak(&|s| -s.fiber_velocity[k]) / vmax,
+            positive_work_j: positive,
+            net_work_j: net,
+        });
+    }
+    muscles.sort_by(|a, b| b.net_work_j.total_cmp(&a.net_work_j));
+    let passive = trapezoid(&|s| s.passive_power);
+    let energy_change = last.energy - first.energy;
+    let g = eq.model.gravity[1].abs();
+    let standing = crate::simulate::standing_com_height(eq);
+    let v = last.com_vertical_velocity;
+    Ok(JumpAnalysis {
+        liftoff,
+        budget: EnergyBudget {
+            start_s: first.t,
+            end_s: last.t,
+            energy_change_j: energy_change,
+            muscle_work_j: muscle_work,
+            passive_torque_work_j: passive,
+            contact_work_j: energy_change - muscle_work - passive,
+        },
+        vertical_impulse_ns: trapezoid(&|s| s.vertical_grf - weight),
+        com_momentum_change_ns: eq.model.total_mass()
+            * (last.com_vertical_velocity - first.com_vertical_velocity),
+        end_com_height_above_standing_m: last.com_height - standing,
+        end_com_vertical_velocity_mps: v,
+        jump_height_m: last.com_height - standing + v.max(0.0) * v.max(0.0) / (2.0 * g),
+        body_weight_n: weight,
+        peak_vertical_grf_bw: samples
+            .iter()
+            .map(|s| s.vertical_grf)
+            .fold(f64::MIN, f64::max)
+            / weight,
+        muscles,
+    })
+}
+
+impl JumpAnalysis {
+    /// The report as text: the muscle table and the energy budget.
+    pub fn to_text(&self) -> String {
+        let b = &self.budget;
+        let mut s = format!(
+            "{} from {:.3} s to {:.3} s: jump height {:.2} cm (COM {:+.2} cm from standing, rising at {:.3} m/s), peak vertical ground force {:.2} BW\n",
+            if self.liftoff { "push-off" } else { "window (no lift-off in the file)" },
+            b.start_s,
+            b.end_s,
+            100.0 * self.jump_height_m,
+            100.0 * self.end_com_height_above_standing_m,
+            self.end_com_vertical_velocity_mps,
+            self.peak_vertical_grf_bw
+        );
+        s.push_str(&format!(
+            "{:<14} {:>8} {:>7} {:>10} {:>8} {:>9} {:>10} {:>9} {:>7}\n",
+            "muscle", "F0 (N)", "peak a", "a≥0.95 %", "F/F0", "v/vmax", "W+ (J)", "W (J)", "W %"
+        ));
+        let total = self.budget.muscle_work_j;
+        for m in &self.muscles {
+            s.push_str(&format!(
+                "{:<14} {:>8.0} {:>7.2} {:>10.0} {:>8.2} {:>9.2} {:>10.1} {:>9.1} {:>7.1}\n",
+                m.name,
+                m.max_isometric_force_n,
+                m.peak_activation,
+                100.0 * m.saturated_fraction,
+                m.peak_force_ratio,
+                m.peak_shortening_ratio,
+                m.positive_work_j,
+                m.net_work_j,
+                if total != 0.0 {
+                    100.0 * m.net_work_j / total
+                } else {
+                    0.0
+                }
+            ));
+        }
+        s.push_str(&format!(
+            "energy budget (J): kinetic + potential energy {:+.1} = muscles {:+.1} + passive joint torques {:+.1} + ground contact {:+.1}\n",
+            b.energy_change_j, b.muscle_work_j, b.passive_torque_work_j, b.contact_work_j
+        ));
+        s.push_str(&format!(
+            "vertical impulse ∫(Fy − mg) dt {:.2} N·s, COM momentum change {:.2} N·s\n",
+            self.vertical_impulse_ns, self.com_momentum_change_ns
+        ));
+        s.push_str("work of the muscles on both sides; W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt\n");
+        s
+    }
+}
