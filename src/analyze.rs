@@ -138,7 +138,12 @@ pub fn read_states(
         }
         states.push(x);
     }
-    if let Some(r) = table.time.windows(2).position(|w| !(w[1] > w[0])) {
+    // Not increasing, or NaN.
+    if let Some(r) = table
+        .time
+        .windows(2)
+        .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
+    {
         return Err(err(
             format!("row {}", r + 2),
             format!(
