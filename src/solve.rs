@@ -70,6 +70,9 @@ pub struct ForwardCheckReport {
     pub summary: Option<JumpSummary>,
     /// The Rust-native Dormand–Prince 5(4) jump at accuracy 1e-6.
     pub rust_summary: Option<JumpSummary>,
+    /// [`crate::analyze`] on Simbody's trajectory: what drove and limited
+    /// its push-off (`leap analyze <name>_forward_states.sto` prints it).
+    pub push_off: Option<crate::analyze::JumpAnalysis>,
     /// Why an integration failed.
     pub errors: Vec<String>,
 }
@@ -483,6 +486,7 @@ fn forward_check(
         accuracy: fc.accuracy,
         summary: None,
         rust_summary: None,
+        push_off: None,
         errors: Vec::new(),
     };
     let tf = mesh.time.last().copied().unwrap_or(f64::NAN);
@@ -522,6 +526,10 @@ fn forward_check(
     let files = match simbody {
         Ok((summary, traj)) => {
             report.summary = Some(summary);
+            match crate::analyze::analyze(&eq, &laws, &traj.time, &traj.states, None) {
+                Ok(a) => report.push_off = Some(a),
+                Err(e) => report.errors.push(format!("push-off analysis: {e}")),
+            }
             write_trajectory(&ocp.eq, &traj, dir, &prefix)?
         }
         Err(f) => {
@@ -628,6 +636,35 @@ impl SolveReport {
                 s.push_str(&format!(
                     "  forward check (Dormand-Prince, Rust): jump height {:.2} cm\n",
                     100.0 * r.jump_height_m
+                ));
+            }
+            if let Some(a) = &fc.push_off {
+                let fastest = a
+                    .muscles
+                    .iter()
+                    .max_by(|x, y| x.peak_shortening_ratio.total_cmp(&y.peak_shortening_ratio));
+                let full = a
+                    .muscles
+                    .iter()
+                    .filter(|m| m.saturated_fraction >= 0.4)
+                    .count();
+                s.push_str(&format!(
+                    "  push-off (forward check): muscles {:+.0} J, body {:+.0} J; {} of {} muscles at activation ≥ 0.95 for 40% of it or more{}; `leap analyze {} --model {}` for the table\n",
+                    a.budget.muscle_work_j,
+                    a.budget.energy_change_j,
+                    full,
+                    a.muscles.len(),
+                    fastest
+                        .map(|m| format!(
+                            "; fastest fibres {} at {:.2} of v_max",
+                            m.name, m.peak_shortening_ratio
+                        ))
+                        .unwrap_or_default(),
+                    self.output_files
+                        .iter()
+                        .find(|f| f.ends_with("_forward_states.sto"))
+                        .map_or("<out>/<name>_forward_states.sto", |f| f.as_str()),
+                    self.model
                 ));
             }
             for e in &fc.errors {

@@ -58,6 +58,30 @@ fn reduced_jump_is_solved_and_agrees_with_its_forward_simulation() {
         "lift-off {} s, forward {forward_liftoff} s",
         r.ground_contact_time_s
     );
+    // The push-off analysis of Simbody's trajectory: Newton's second law
+    // for the whole body (ground impulse less the weight's = COM momentum
+    // change) and the same jump as the forward check's.
+    let a = r
+        .forward_check
+        .as_ref()
+        .unwrap()
+        .push_off
+        .as_ref()
+        .expect("analysed");
+    assert!(a.liftoff);
+    assert!(
+        (a.vertical_impulse_ns - a.com_momentum_change_ns).abs()
+            <= 1e-2 * a.com_momentum_change_ns.abs(),
+        "impulse {} N·s, momentum change {} N·s",
+        a.vertical_impulse_ns,
+        a.com_momentum_change_ns
+    );
+    assert!(
+        (a.jump_height_m - forward.jump_height_m).abs() <= 5e-3,
+        "analysis {} m, forward check {} m",
+        a.jump_height_m,
+        forward.jump_height_m
+    );
 }
 
 /// Issue 5's "done when" on the default study: solved, violation ≤ 1e-3,
