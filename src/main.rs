@@ -237,6 +237,18 @@ enum BenchCommand {
     },
 }
 
+/// A model's OpenSim laws and the state equation of its symmetric (or
+/// full) system with OpenSim's exact muscle paths.
+fn opensim_system(
+    model: &std::path::Path,
+    full: bool,
+) -> anyhow::Result<(leap::laws::OpenSimLaws, leap::ode::StateEquation)> {
+    let m = leap::model::Model::from_file(model)?;
+    let laws = leap::laws::OpenSimLaws::new(&m)?;
+    let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+    Ok((laws, eq))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
@@ -316,9 +328,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
-            let m = leap::model::Model::from_file(&model)?;
-            let laws = leap::laws::OpenSimLaws::new(&m)?;
-            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let (laws, eq) = opensim_system(&model, full)?;
             let (time, xs) = leap::analyze::read_states(&eq, &states)?;
             let window = match window.as_deref() {
                 Some(&[a, b]) if a < b => Some((a, b)),
@@ -340,9 +350,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
-            let m = leap::model::Model::from_file(&model)?;
-            let laws = leap::laws::OpenSimLaws::new(&m)?;
-            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let (laws, eq) = opensim_system(&model, full)?;
             let inputs = leap::eval::read_inputs(&eq, &input)?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {

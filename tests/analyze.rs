@@ -5,30 +5,13 @@
 //! change of COM momentum (Newton's second law), on trajectories integrated
 //! by the Rust-native Dormand-Prince with OpenSim's laws.
 
+use crate::common::{extensor_bang_bang, FixedExcitation};
 use leap::analyze::analyze;
-use leap::integrator::{Dopri5, Dopri5Options, OdeSystem};
+use leap::integrator::{Dopri5, Dopri5Options};
 use leap::laws::OpenSimLaws;
-use leap::ode::{StateEquation, StateWorkspace};
+use leap::ode::StateEquation;
 use leap::path::PathSmoothing;
-use leap::simulate::{extensor_moments, simulate_rust, standing_com_height, BangBang};
-
-struct Constant<'a> {
-    eq: &'a StateEquation,
-    laws: &'a OpenSimLaws,
-    ws: StateWorkspace<f64>,
-    u: Vec<f64>,
-}
-
-impl OdeSystem for Constant<'_> {
-    fn dim(&self) -> usize {
-        self.eq.nx()
-    }
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
-        self.eq
-            .rhs(self.laws, &mut self.ws, x, &self.u, dx)
-            .map_err(|e| e.to_string())
-    }
-}
+use leap::simulate::{simulate_rust, standing_com_height};
 
 fn jumper() -> (leap::model::Model, StateEquation, OpenSimLaws, Vec<f64>) {
     let model = leap::model::Model::from_file("models/jumper.json").unwrap();
@@ -46,7 +29,7 @@ fn muscle_and_passive_work_equal_the_energy_change_in_the_air() {
     // clear of the ground.
     let ty = model.coordinate_index("pelvis_ty").unwrap();
     x0[eq.system.q_of_model_coordinate[ty]] += 0.6;
-    let mut sys = Constant {
+    let mut sys = FixedExcitation {
         eq: &eq,
         laws: &laws,
         ws: eq.workspace::<f64>(),
@@ -100,14 +83,7 @@ fn muscle_and_passive_work_equal_the_energy_change_in_the_air() {
 fn push_off_impulse_equals_the_momentum_change_and_the_jump_matches_the_simulation() {
     let (model, eq, laws, x0) = jumper();
     let squat = model.poses["squat"].clone();
-    let ext = extensor_moments(&eq, &squat);
-    let exc = BangBang {
-        intervals: ext
-            .iter()
-            .map(|&e| if e > 0.0 { Some((0.0, 10.0)) } else { None })
-            .collect(),
-        off_level: 0.01,
-    };
+    let exc = extensor_bang_bang(&eq, &squat);
     let standing = standing_com_height(&eq);
     let opts = leap::simulate::SimulateOptions {
         t_max: 1.0,

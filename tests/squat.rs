@@ -2,32 +2,15 @@
 //! of forward simulation with its excitations moves the pelvis < 1 mm, in
 //! both backends.
 
-use leap::integrator::{Dopri5, Dopri5Options, OdeSystem};
+use crate::common::FixedExcitation;
+use leap::integrator::{Dopri5, Dopri5Options};
 use leap::laws::OpenSimLaws;
 use leap::model::Model;
-use leap::ode::{Excitation, SimbodyStateEquation, StateEquation, StateWorkspace};
+use leap::ode::{Excitation, SimbodyStateEquation, StateEquation};
 use leap::path::PathSmoothing;
 use leap::simbody::SimbodyIntegrator;
 use leap::squat::static_squat;
 use std::sync::Arc;
-
-struct Fixed<'a> {
-    eq: &'a StateEquation,
-    laws: &'a OpenSimLaws,
-    ws: StateWorkspace<f64>,
-    u: Vec<f64>,
-}
-
-impl OdeSystem for Fixed<'_> {
-    fn dim(&self) -> usize {
-        self.eq.nx()
-    }
-    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
-        self.eq
-            .rhs(self.laws, &mut self.ws, x, &self.u, dx)
-            .map_err(|e| e.to_string())
-    }
-}
 
 fn pelvis_shift(eq: &StateEquation, x0: &[f64], x1: &[f64]) -> f64 {
     let m = &eq.model;
@@ -62,7 +45,7 @@ fn static_squat_holds_in_both_backends() {
     );
 
     // Rust-native, Dormand-Prince at 1e-6.
-    let mut sys = Fixed {
+    let mut sys = FixedExcitation {
         eq: &eq,
         laws: &laws,
         ws: eq.workspace(),

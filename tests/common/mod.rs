@@ -41,3 +41,34 @@ impl<S: Scalar> ForceLaws<S> for TestLaws {
         q * -3.0 - qd * 0.1
     }
 }
+
+/// ẋ = f(x, u) of a state equation with OpenSim's laws at fixed excitations.
+pub struct FixedExcitation<'a> {
+    pub eq: &'a leap::ode::StateEquation,
+    pub laws: &'a leap::laws::OpenSimLaws,
+    pub ws: leap::ode::StateWorkspace<f64>,
+    pub u: Vec<f64>,
+}
+
+impl leap::integrator::OdeSystem for FixedExcitation<'_> {
+    fn dim(&self) -> usize {
+        self.eq.nx()
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        self.eq
+            .rhs(self.laws, &mut self.ws, x, &self.u, dx)
+            .map_err(|e| e.to_string())
+    }
+}
+
+/// Full excitation from t = 0 for every muscle with an extensor moment at
+/// `pose` (the bang-bang jump), 0.01 for the others.
+pub fn extensor_bang_bang(eq: &leap::ode::StateEquation, pose: &[f64]) -> leap::simulate::BangBang {
+    leap::simulate::BangBang {
+        intervals: leap::simulate::extensor_moments(eq, pose)
+            .iter()
+            .map(|&e| if e > 0.0 { Some((0.0, 10.0)) } else { None })
+            .collect(),
+        off_level: 0.01,
+    }
+}
