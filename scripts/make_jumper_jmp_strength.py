@@ -15,14 +15,22 @@ parameters). What changes, per side:
     vasti keep their own fibre and tendon lengths and their forces are scaled
     by 5000 / 4530;
   * lat_gas, which the Jumper lacks, keeps its gait2392 values.
-Run from the repository root:  python3 scripts/make_jumper_jmp_strength.py
+With --forces-only it writes models/jumper_jmp_forces.json instead: the
+same max_isometric_force values, but every muscle keeps gait2392's
+optimal_fiber_length and tendon_slack_length, to separate strength from the
+Jumper's longer (hence faster: v_max = 10 l_opt/s) soleus and gastrocnemius
+fibres.
+Run from the repository root:  python3 scripts/make_jumper_jmp_strength.py [--forces-only]
 """
 import json
 import pathlib
+import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 SRC = ROOT / "models" / "jumper.json"
-DST = ROOT / "models" / "jumper_jmp_strength.json"
+FORCES_ONLY = "--forces-only" in sys.argv[1:]
+NAME = "jumper_jmp_forces" if FORCES_ONLY else "jumper_jmp_strength"
+DST = ROOT / "models" / f"{NAME}.json"
 
 # model-data.md §7.2, last column: Fmax (N) / l_opt (m) / l_ts (m).
 JUMPER = {
@@ -44,17 +52,23 @@ def main():
         for base, (fmax, lopt, lts) in JUMPER.items():
             m = by_name[f"{base}_{side}"]
             m["max_isometric_force"] = fmax
-            m["optimal_fiber_length"] = lopt
-            m["tendon_slack_length"] = lts
+            if not FORCES_ONLY:
+                m["optimal_fiber_length"] = lopt
+                m["tendon_slack_length"] = lts
         total = sum(by_name[f"{v}_{side}"]["max_isometric_force"] for v in VASTI)
         for v in VASTI:
             by_name[f"{v}_{side}"]["max_isometric_force"] *= VASTI_JUMPER / total
-    model["name"] = "jumper_jmp_strength"
+    model["name"] = NAME
+    taken = (
+        "max_isometric_force (gait2392's fibre and tendon lengths kept)"
+        if FORCES_ONLY
+        else "max_isometric_force, optimal_fiber_length and tendon_slack_length"
+    )
     model["credits"] = model["credits"] + [
-        "Variant for a sensitivity study, written by scripts/make_jumper_jmp_strength.py: "
+        f"Variant for a sensitivity study, written by scripts/make_jumper_jmp_strength.py"
+        f"{' --forces-only' if FORCES_ONLY else ''}: "
         "bifemlh, med_gas, soleus, tib_post and tib_ant take the OpenSim Jumper's "
-        "(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) "
-        "max_isometric_force, optimal_fiber_length and tendon_slack_length, and the three "
+        f"(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) {taken}, and the three "
         "vasti are scaled to the Jumper's lumped vas_int force of 5000 N "
         "(shared/reference/model-data.md §7.2). Not leap's default model."
     ]
