@@ -24,9 +24,6 @@ use std::path::Path;
 
 /// Activation at or above which a muscle counts as saturated.
 pub const SATURATED_ACTIVATION: f64 = 0.95;
-/// Vertical ground force below which the feet have left the ground, as a
-/// fraction of body weight (the solve report's lift-off rule).
-pub const LIFTOFF_FRACTION: f64 = 0.01;
 
 /// One muscle-tendon unit over the window.
 #[derive(Debug, Clone, Serialize)]
@@ -228,7 +225,10 @@ pub fn analyze(
     let nm = eq.nm();
     let mut ws = eq.workspace::<f64>();
     let weight = eq.model.total_mass() * eq.model.gravity[1].abs();
-    let (t0, t1) = window.unwrap_or((time[0], f64::INFINITY));
+    // Lift-off where the vertical ground force falls below the jump
+    // problem's lift-off level (1% of body weight), as the solve reports it.
+    let level = crate::ocp::LiftOff::default().fraction() * weight;
+    let (t0, t1) = window.unwrap_or((f64::NEG_INFINITY, f64::INFINITY));
     let mut samples = Vec::new();
     let mut liftoff = false;
     let mut in_contact = false;
@@ -243,7 +243,7 @@ pub fn analyze(
         let fy = s.vertical_grf;
         samples.push(s);
         if window.is_none() {
-            if fy >= LIFTOFF_FRACTION * weight {
+            if fy >= level {
                 in_contact = true;
             } else if in_contact {
                 liftoff = true;

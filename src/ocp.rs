@@ -75,6 +75,15 @@ impl Default for LiftOff {
     }
 }
 
+impl LiftOff {
+    /// The ground force level (fraction of body weight) that marks lift-off.
+    pub fn fraction(self) -> f64 {
+        match self {
+            LiftOff::ForceAtMost { fraction } | LiftOff::ForceEquals { fraction } => fraction,
+        }
+    }
+}
+
 /// Settings of the jump problem.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct OcpOptions {
@@ -233,9 +242,7 @@ impl JumpOcp {
                 "fiber_length_bounds: need 0 ≤ lower < upper, got [{f0}, {f1}]"
             )));
         }
-        let fraction = match options.liftoff {
-            LiftOff::ForceAtMost { fraction } | LiftOff::ForceEquals { fraction } => fraction,
-        };
+        let fraction = options.liftoff.fraction();
         if !(fraction.is_finite() && fraction >= 0.0) {
             return Err(OcpError::Invalid(format!(
                 "liftoff: the force fraction must be ≥ 0, got {fraction}"

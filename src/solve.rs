@@ -23,7 +23,7 @@
 use crate::io::{Controls, StoError, StoTable};
 use crate::model::{Model, ModelError};
 use crate::nlp::Nlp;
-use crate::ocp::{JumpOcp, LiftOff, OcpError, OcpOptions};
+use crate::ocp::{JumpOcp, OcpError, OcpOptions};
 use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
@@ -292,9 +292,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
     // where the vertical force at the points where the dynamics hold last
     // falls through the lift-off row's level, interpolated linearly; the
     // lift-off COM height and velocity are taken there.
-    let level = match ocp.options.liftoff {
-        LiftOff::ForceAtMost { fraction } | LiftOff::ForceEquals { fraction } => fraction,
-    };
+    let level = ocp.options.liftoff.fraction();
     let t_liftoff = match forces.iter().rposition(|&f| f > level) {
         Some(i) if i + 1 < forces.len() => {
             let (t0, t1) = (points.time[i], points.time[i + 1]);
