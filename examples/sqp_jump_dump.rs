@@ -1,7 +1,9 @@
 //! Write the QPs of the first SQP iterations on the jump collocation
 //! problem as clarabel JSON (exact element Hessians with the jump's
 //! eigenvalue floor 1e-4, as `leap solve`), for profiling the QP solver:
-//! `cargo run --release --example sqp_jump_dump -- DIR [ITERATIONS]`.
+//! `cargo run --release --example sqp_jump_dump -- DIR [ITERATIONS]`;
+//! with `INERTIA=1` the QPs of `--hessian exact-inertia-corrected` instead
+//! (element Hessians unmodified, for leap's interior-point solver).
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -18,6 +20,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         hessian: leap::sqp::HessianMode::ExactConvexified,
         eigenvalue_floor: 1e-4,
         ..Default::default()
+    };
+    let settings = if std::env::var_os("INERTIA").is_some() {
+        leap::sqp::SqpSettings {
+            convexification: leap::sqp::Convexification::InertiaCorrection,
+            qp_solver: leap::sqp::QpSolver::InteriorPoint,
+            ..settings
+        }
+    } else {
+        settings
     };
     let r = leap::sqp::solve_from(&mut tr, &guess, &settings);
     println!("{:?} after {} iterations", r.status, r.iterations);

@@ -136,6 +136,11 @@ pub struct SolveReport {
     /// many of them clarabel found infeasible.
     pub qp_fallbacks: usize,
     pub qp_fallbacks_infeasible: usize,
+    /// Wall time clarabel spent on them (part of the QP time).
+    pub qp_fallback_seconds: f64,
+    /// Plain QPs taken as infeasible where the interior-point solver's
+    /// primal residual stalled (no clarabel certificate asked for).
+    pub qp_stalls_taken_infeasible: usize,
     pub study: Option<String>,
     pub model: String,
     pub output_files: Vec<String>,
@@ -358,6 +363,8 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         time_split: r.time,
         qp_fallbacks: r.qp_fallbacks,
         qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
+        qp_fallback_seconds: r.qp_fallback_seconds,
+        qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
         study: None,
         model: String::new(),
         output_files: Vec::new(),
@@ -612,8 +619,14 @@ impl SolveReport {
         ));
         if self.qp_fallbacks > 0 {
             s.push_str(&format!(
-                "  {} QPs handed by leap's interior-point solver to clarabel ({} of them infeasible)\n",
-                self.qp_fallbacks, self.qp_fallbacks_infeasible
+                "  {} QPs handed by leap's interior-point solver to clarabel ({} of them infeasible), {:.1} s of the QP time\n",
+                self.qp_fallbacks, self.qp_fallbacks_infeasible, self.qp_fallback_seconds
+            ));
+        }
+        if self.qp_stalls_taken_infeasible > 0 {
+            s.push_str(&format!(
+                "  {} plain QPs taken as infeasible where the interior-point solver stalled (solved in elastic mode)\n",
+                self.qp_stalls_taken_infeasible
             ));
         }
         if let Some(fc) = &self.forward_check {

@@ -357,6 +357,11 @@ pub struct SqpResult {
     /// Of those, the ones clarabel found infeasible (the interior-point
     /// solver hands over a QP whose primal residual stops falling).
     pub qp_fallbacks_infeasible: usize,
+    /// Wall time clarabel spent on those QPs (part of the QP time).
+    pub qp_fallback_seconds: f64,
+    /// Plain QPs that the interior-point solver took as infeasible because
+    /// its primal residual stalled (the SQP went on with the elastic QP).
+    pub qp_stalls_taken_infeasible: usize,
     pub hessian: HessianMode,
     pub time: TimeSplit,
     pub history: Vec<IterationRecord>,
@@ -861,6 +866,8 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         qp_iterations: 0,
         qp_fallbacks: 0,
         qp_fallbacks_infeasible: 0,
+        qp_fallback_seconds: 0.0,
+        qp_stalls_taken_infeasible: 0,
         hessian,
         time: TimeSplit::default(),
         history: Vec::new(),
@@ -1720,6 +1727,10 @@ impl<'s> Solver<'s> {
                     .qp_elastic
                     .as_ref()
                     .map_or(0, |q| q.fallbacks_infeasible);
+            result.qp_fallback_seconds = self.qp.as_ref().map_or(0.0, |q| q.fallback_seconds)
+                + self.qp_elastic.as_ref().map_or(0.0, |q| q.fallback_seconds);
+            result.qp_stalls_taken_infeasible =
+                self.qp.as_ref().map_or(0, |q| q.stalls_taken_infeasible);
             let qp = if elastic {
                 self.qp_elastic.as_ref()
             } else {

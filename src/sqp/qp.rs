@@ -92,6 +92,11 @@ pub(crate) struct Qp {
     /// them clarabel found infeasible.
     pub fallbacks: usize,
     pub fallbacks_infeasible: usize,
+    /// Wall time clarabel spent on those QPs.
+    pub fallback_seconds: f64,
+    /// Plain QPs whose primal residual stalled in the interior-point
+    /// solver, taken as infeasible without asking clarabel.
+    pub stalls_taken_infeasible: usize,
 }
 
 /// Sparse matrix from entries (row, col), returning the nz index of each.
@@ -317,6 +322,8 @@ impl Qp {
             ipm: None,
             fallbacks: 0,
             fallbacks_infeasible: 0,
+            fallback_seconds: 0.0,
+            stalls_taken_infeasible: 0,
         }
     }
 
@@ -397,45 +404,61 @@ impl Qp {
 
     /// Solve with the current values (creating the solver on first use).
     pub fn solve(&mut self) -> Result<QpOutcome, String> {
+        if self.use_ipm {
+            if let Some(outcome) = self.solve_ipm()? {
+                return Ok(outcome);
+            }
+        }
         let reused = self.solver.is_some();
-        let mut outcome = self.solve_once()?;
+        let mut outcome = self.solve_clarabel()?;
         if reused && matches!(outcome, QpOutcome::Failed(_)) {
             // The equilibration kept from the first QP can be far off for
             // this one (exact Hessians change by orders of magnitude between
             // iterations): a fresh solver equilibrates this QP itself.
             let first = self.iterations;
             self.solver = None;
-            outcome = self.solve_once()?;
+            outcome = self.solve_clarabel()?;
             self.iterations += first;
         }
         Ok(outcome)
     }
 
-    fn solve_once(&mut self) -> Result<QpOutcome, String> {
-        if self.use_ipm {
-            if self.ipm.is_none() {
-                let mut ipm = Ipm::new(&self.p, &self.a, self.num_eq)?;
-                ipm.inertia_correction = self.inertia_correction;
+    /// Leap's interior-point solver on the current values: its outcome,
+    /// or None where clarabel is to solve the QP.
+    fn solve_ipm(&mut self) -> Result<Option<QpOutcome>, String> {
+        if self.ipm.is_none() {
+            let mut ipm = Ipm::new(&self.p, &self.a, self.num_eq)?;
+            ipm.inertia_correction = self.inertia_correction;
+            self.ipm = Some(ipm);
+        }
+        let ipm = self.ipm.as_mut().expect("created above");
+        let status = ipm.solve(&self.p, &self.a, &self.q, &self.b, self.tolerance);
+        self.iterations = ipm.iterations;
+        match status {
+            IpmStatus::Solved => {
+                self.shift_curvature = ipm.shift_curvature;
+                let ipm = self.ipm.take().expect("created above");
+                self.extract(&ipm.x, &ipm.z, &ipm.s);
                 self.ipm = Some(ipm);
+                Ok(Some(QpOutcome::Solved))
             }
-            let ipm = self.ipm.as_mut().expect("created above");
-            let status = ipm.solve(&self.p, &self.a, &self.q, &self.b, self.tolerance);
-            match status {
-                IpmStatus::Solved => {
-                    self.iterations = ipm.iterations;
-                    self.shift_curvature = ipm.shift_curvature;
-                    let ipm = self.ipm.take().expect("created above");
-                    self.extract(&ipm.x, &ipm.z, &ipm.s);
-                    self.ipm = Some(ipm);
-                    return Ok(QpOutcome::Solved);
-                }
-                IpmStatus::PrimalInfeasible => {
-                    self.iterations = ipm.iterations;
-                    return Ok(QpOutcome::Infeasible);
-                }
-                IpmStatus::Failed => self.fallbacks += 1,
+            IpmStatus::PrimalInfeasible => Ok(Some(QpOutcome::Infeasible)),
+            // A plain QP whose primal residual stalls is taken as
+            // infeasible, and the SQP turns to its elastic QP, which always
+            // has a solution; an elastic QP that stalls goes to clarabel.
+            IpmStatus::Stalled if self.nz == self.n => {
+                self.stalls_taken_infeasible += 1;
+                Ok(Some(QpOutcome::Infeasible))
+            }
+            IpmStatus::Stalled | IpmStatus::Failed => {
+                self.fallbacks += 1;
+                Ok(None)
             }
         }
+    }
+
+    /// Clarabel on the current values (creating its solver on first use).
+    fn solve_clarabel(&mut self) -> Result<QpOutcome, String> {
         // With the inertia correction, clarabel gets P + the interior
         // point's last τ on the diagonal (P alone may be indefinite).
         let shift: Option<Vec<f64>> = if self.inertia_correction {
@@ -474,7 +497,11 @@ impl Qp {
             }
         }
         let s = self.solver.as_mut().expect("created above");
+        let started = std::time::Instant::now();
         s.solve();
+        if self.use_ipm {
+            self.fallback_seconds += started.elapsed().as_secs_f64();
+        }
         self.iterations = s.solution.iterations;
         let status = s.solution.status;
         match status {

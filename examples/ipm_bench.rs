@@ -1,0 +1,68 @@
+//! Time leap's interior-point QP solver on QPs the SQP wrote
+//! (`sqp_jump_dump`, clarabel JSON): for each file, the median of
+//! `REPEATS` (default 3) solves, its iterations and objective.
+//! `cargo run --release --example ipm_bench -- DIR/*.json` (with
+//! `INERTIA=1` the solver's inertia correction is on, as in
+//! `--hessian exact-inertia-corrected`; `TOL` sets its tolerance, default
+//! 1e-10 as the SQP's).
+use leap::sqp::ipm::Ipm;
+
+fn csc(
+    v: &serde_json::Value,
+) -> Result<clarabel::algebra::CscMatrix<f64>, Box<dyn std::error::Error>> {
+    let us = |k: &str| -> Result<Vec<usize>, Box<dyn std::error::Error>> {
+        Ok(serde_json::from_value(v[k].clone())?)
+    };
+    Ok(clarabel::algebra::CscMatrix::new(
+        serde_json::from_value(v["m"].clone())?,
+        serde_json::from_value(v["n"].clone())?,
+        us("colptr")?,
+        us("rowval")?,
+        serde_json::from_value(v["nzval"].clone())?,
+    ))
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let repeats: usize = std::env::var("REPEATS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(3);
+    let inertia = std::env::var_os("INERTIA").is_some();
+    let tol: f64 = std::env::var("TOL")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(1e-10);
+    let (mut total, mut total_it) = (0.0, 0);
+    for path in std::env::args().skip(1) {
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)?;
+        let (p, a) = (csc(&json["P"])?, csc(&json["A"])?);
+        let q: Vec<f64> = serde_json::from_value(json["q"].clone())?;
+        let b: Vec<f64> = serde_json::from_value(json["b"].clone())?;
+        let num_eq = json["cones"][0]["ZeroConeT"].as_u64().unwrap_or(0) as usize;
+        let mut times = Vec::new();
+        let (mut status, mut iterations, mut obj) = (None, 0, 0.0);
+        for _ in 0..repeats {
+            let mut s = Ipm::new(&p, &a, num_eq)?;
+            s.inertia_correction = inertia;
+            let t = std::time::Instant::now();
+            status = Some(s.solve(&p, &a, &q, &b, tol));
+            times.push(t.elapsed().as_secs_f64());
+            iterations = s.iterations;
+            let mut px = vec![0.0; q.len()];
+            Ipm::p_mul(&p, &s.x, &mut px);
+            obj = s.x.iter().zip(&px).map(|(x, y)| 0.5 * x * y).sum::<f64>()
+                + s.x.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
+        }
+        times.sort_by(f64::total_cmp);
+        let median = times[times.len() / 2];
+        total += median;
+        total_it += iterations;
+        println!(
+            "{path}: {status:?}, {iterations} iterations, {:.1} ms ({:.2} ms/iteration), objective {obj:.10e}",
+            1e3 * median,
+            1e3 * median / iterations.max(1) as f64
+        );
+    }
+    println!("total {:.1} ms, {total_it} iterations", 1e3 * total);
+    Ok(())
+}
