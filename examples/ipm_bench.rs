@@ -5,22 +5,10 @@
 //! `INERTIA=1` the solver's inertia correction is on, as in
 //! `--hessian exact-inertia-corrected`; `TOL` sets its tolerance, default
 //! 1e-10 as the SQP's).
+#[path = "common/qp_json.rs"]
+mod qp_json;
 use leap::sqp::ipm::Ipm;
-
-fn csc(
-    v: &serde_json::Value,
-) -> Result<clarabel::algebra::CscMatrix<f64>, Box<dyn std::error::Error>> {
-    let us = |k: &str| -> Result<Vec<usize>, Box<dyn std::error::Error>> {
-        Ok(serde_json::from_value(v[k].clone())?)
-    };
-    Ok(clarabel::algebra::CscMatrix::new(
-        serde_json::from_value(v["m"].clone())?,
-        serde_json::from_value(v["n"].clone())?,
-        us("colptr")?,
-        us("rowval")?,
-        serde_json::from_value(v["nzval"].clone())?,
-    ))
-}
+use qp_json::csc;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats: usize = std::env::var("REPEATS")

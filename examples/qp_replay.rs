@@ -4,7 +4,10 @@
 //! `equilibrate_enable=false`, `direct_solve_method=faer`); with `TIMERS=1`
 //! clarabel's internal timers are printed too; with `IPM=1` leap's own
 //! interior-point solver (`leap::sqp::ipm`) solves it too, for comparison.
+#[path = "common/qp_json.rs"]
+mod qp_json;
 use clarabel::solver::*;
+use qp_json::csc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
     let path = args
@@ -47,21 +50,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     Ok(())
-}
-
-fn csc(
-    v: &serde_json::Value,
-) -> Result<clarabel::algebra::CscMatrix<f64>, Box<dyn std::error::Error>> {
-    let us = |k: &str| -> Result<Vec<usize>, Box<dyn std::error::Error>> {
-        Ok(serde_json::from_value(v[k].clone())?)
-    };
-    Ok(clarabel::algebra::CscMatrix::new(
-        serde_json::from_value(v["m"].clone())?,
-        serde_json::from_value(v["n"].clone())?,
-        us("colptr")?,
-        us("rowval")?,
-        serde_json::from_value(v["nzval"].clone())?,
-    ))
 }
 
 /// Solve the QP with leap's interior-point method and print the outcome.
