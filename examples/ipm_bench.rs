@@ -29,7 +29,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let num_eq = json["cones"][0]["ZeroConeT"].as_u64().unwrap_or(0) as usize;
         let mut times = Vec::new();
         let (mut status, mut iterations, mut obj) = (None, 0, 0.0);
-        for _ in 0..repeats {
+        for _ in 0..repeats.max(1) {
             let mut s = Ipm::new(&p, &a, num_eq)?;
             s.inertia_correction = inertia;
             let t = std::time::Instant::now();

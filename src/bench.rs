@@ -733,7 +733,7 @@ impl SolveBenchReport {
             "QP (s)",
             "line search (s)",
             "other (s)",
-            "QP fallbacks (s)",
+            "QP fallbacks (clarabel s)",
             "jump height (cm)",
         ]);
         for (k, r) in self.runs.iter().enumerate() {

@@ -139,7 +139,8 @@ pub struct SolveReport {
     /// Wall time clarabel spent on them (part of the QP time).
     pub qp_fallback_seconds: f64,
     /// Plain QPs taken as infeasible where the interior-point solver's
-    /// primal residual stalled (no clarabel certificate asked for).
+    /// primal residual stalled (no clarabel certificate asked for; the
+    /// elastic QP followed, or a second-order correction was dropped).
     pub qp_stalls_taken_infeasible: usize,
     pub study: Option<String>,
     pub model: String,
@@ -625,7 +626,7 @@ impl SolveReport {
         }
         if self.qp_stalls_taken_infeasible > 0 {
             s.push_str(&format!(
-                "  {} plain QPs taken as infeasible where the interior-point solver stalled (solved in elastic mode)\n",
+                "  {} plain QPs taken as infeasible where the interior-point solver stalled (the SQP went on with the elastic QP, or without a second-order correction)\n",
                 self.qp_stalls_taken_infeasible
             ));
         }

@@ -44,6 +44,7 @@ fn run_all(mode: HessianMode, qp_solver: QpSolver) {
     let mut iterations = 0;
     let mut fallbacks = 0;
     let mut fallback_names = Vec::new();
+    let mut stalls: Vec<(&str, usize)> = Vec::new();
     let mut solved = 0;
     let problems = hock_schittkowski();
     for p in problems.iter().cloned() {
@@ -72,6 +73,9 @@ fn run_all(mode: HessianMode, qp_solver: QpSolver) {
             fallbacks += handed;
             fallback_names.push(name);
         }
+        if r.qp_stalls_taken_infeasible > 0 {
+            stalls.push((name, r.qp_stalls_taken_infeasible));
+        }
         let err = (r.objective - f_star).abs() / f_star.abs().max(1.0);
         if r.status != SqpStatus::Solved
             || err.is_nan()
@@ -82,7 +86,7 @@ fn run_all(mode: HessianMode, qp_solver: QpSolver) {
         }
     }
     eprintln!(
-        "{mode:?}, {qp_solver:?}: {solved} of {} problems, {iterations} iterations, {fallbacks} feasible QPs handed to clarabel",
+        "{mode:?}, {qp_solver:?}: {solved} of {} problems, {iterations} iterations, {fallbacks} feasible QPs handed to clarabel, stalled plain QPs taken as infeasible {stalls:?}",
         problems.len()
     );
     assert!(solved >= 25 || std::env::var("LEAP_ONLY").is_ok());

@@ -360,7 +360,8 @@ pub struct SqpResult {
     /// Wall time clarabel spent on those QPs (part of the QP time).
     pub qp_fallback_seconds: f64,
     /// Plain QPs that the interior-point solver took as infeasible because
-    /// its primal residual stalled (the SQP went on with the elastic QP).
+    /// its primal residual stalled (the SQP went on with the elastic QP,
+    /// or dropped that second-order correction).
     pub qp_stalls_taken_infeasible: usize,
     pub hessian: HessianMode,
     pub time: TimeSplit,

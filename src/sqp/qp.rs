@@ -97,6 +97,9 @@ pub(crate) struct Qp {
     /// Plain QPs whose primal residual stalled in the interior-point
     /// solver, taken as infeasible without asking clarabel.
     pub stalls_taken_infeasible: usize,
+    /// Whether this is the elastic QP (slack columns), which always has a
+    /// solution.
+    elastic: bool,
 }
 
 /// Sparse matrix from entries (row, col), returning the nz index of each.
@@ -324,6 +327,7 @@ impl Qp {
             fallbacks_infeasible: 0,
             fallback_seconds: 0.0,
             stalls_taken_infeasible: 0,
+            elastic,
         }
     }
 
@@ -446,7 +450,7 @@ impl Qp {
             // A plain QP whose primal residual stalls is taken as
             // infeasible, and the SQP turns to its elastic QP, which always
             // has a solution; an elastic QP that stalls goes to clarabel.
-            IpmStatus::Stalled if self.nz == self.n => {
+            IpmStatus::Stalled if !self.elastic => {
                 self.stalls_taken_infeasible += 1;
                 Ok(Some(QpOutcome::Infeasible))
             }
@@ -477,6 +481,7 @@ impl Qp {
             }
             p
         });
+        let started = std::time::Instant::now();
         let p = p_shifted.as_ref().unwrap_or(&self.p);
         match &mut self.solver {
             Some(s) => {
@@ -497,7 +502,6 @@ impl Qp {
             }
         }
         let s = self.solver.as_mut().expect("created above");
-        let started = std::time::Instant::now();
         s.solve();
         if self.use_ipm {
             self.fallback_seconds += started.elapsed().as_secs_f64();
