@@ -21,7 +21,6 @@ fn main() {
             optim_convergence_tolerance: tol,
             ..if inertia {
                 SqpSettings {
-                    hessian: leap::sqp::HessianMode::ExactConvexified,
                     convexification: leap::sqp::Convexification::InertiaCorrection,
                     qp_solver: leap::sqp::QpSolver::InteriorPoint,
                     scale_variables_using_bounds: false,

@@ -72,3 +72,28 @@ pub fn extensor_bang_bang(eq: &leap::ode::StateEquation, pose: &[f64]) -> leap::
         off_level: 0.01,
     }
 }
+
+/// A push-off analysis checked against physics and against the jump it
+/// came from: Newton's second law for the whole body (the vertical ground
+/// impulse less the weight's equals the COM momentum change, within
+/// `impulse_rel`) and the jump height of the simulation that produced the
+/// trajectory (`reference_height_m`, named `reference`), within 5 mm.
+pub fn assert_push_off_consistent(
+    a: &leap::analyze::JumpAnalysis,
+    impulse_rel: f64,
+    reference_height_m: f64,
+    reference: &str,
+) {
+    assert!(
+        (a.vertical_impulse_ns - a.com_momentum_change_ns).abs()
+            <= impulse_rel * a.com_momentum_change_ns.abs(),
+        "impulse {} N·s, momentum change {} N·s",
+        a.vertical_impulse_ns,
+        a.com_momentum_change_ns
+    );
+    assert!(
+        (a.jump_height_m - reference_height_m).abs() <= 5e-3,
+        "analysis {} m, {reference} {reference_height_m} m",
+        a.jump_height_m
+    );
+}
