@@ -416,3 +416,80 @@ fn block_diagonal_hessian_changes_the_path_not_the_solution() {
         r.message
     );
 }
+
+/// Two fixed coordinates whose rows the gradient-based scaling treats
+/// differently: min 100 x0 + x1² s.t. c0 = 1000 (x0 − 0.001) = 0 (gradient
+/// 1000, scaled by 0.1) and c1 = x1 − 0.3 = 0. Closed form: λ0 = −100/1000
+/// = −0.1, λ1 = −2·0.3 = −0.6 (L = f + λᵀc). In the problem's units c0 is
+/// violated more at x = 0 (1 against 0.3) and c1 has the larger multiplier
+/// (0.6 against 0.1); in the scaled units both orders flip (0.1 against
+/// 0.3, and 1.0 against 0.6), so the history must convert.
+struct ScaledRows;
+impl AdProblem for ScaledRows {
+    fn name(&self) -> String {
+        "scaled_rows".into()
+    }
+    fn num_variables(&self) -> usize {
+        2
+    }
+    fn num_constraints(&self) -> usize {
+        2
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(f64::NEG_INFINITY);
+        u.fill(f64::INFINITY);
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(0.0);
+        u.fill(0.0);
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x.fill(0.0);
+    }
+    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
+        c[0] = (x[0] - D::from(0.001)) * 1000.0;
+        c[1] = x[1] - D::from(0.3);
+        x[0] * 100.0 + x[1] * x[1]
+    }
+}
+
+#[test]
+fn history_names_the_most_violated_row_and_the_largest_multiplier() {
+    for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
+        let r = run(ScaledRows, mode);
+        assert_eq!(r.status, SqpStatus::Solved, "{mode:?}: {}", r.message);
+        assert!((r.lambda[0] + 0.1).abs() < 1e-8, "{mode:?}: {:?}", r.lambda);
+        assert!((r.lambda[1] + 0.6).abs() < 1e-8, "{mode:?}: {:?}", r.lambda);
+        let first = &r.history[0];
+        assert_eq!(first.max_violation_constraint, "c[0]", "{mode:?}");
+        assert_eq!(first.max_multiplier_constraint, "", "{mode:?}");
+        assert_eq!(first.max_multiplier, 0.0, "{mode:?}");
+        let last = r.history.last().unwrap();
+        assert_eq!(last.max_multiplier_constraint, "c[1]", "{mode:?}");
+        assert!(
+            (last.max_multiplier - 0.6).abs() < 1e-8,
+            "{mode:?}: {}",
+            last.max_multiplier
+        );
+        // The CSV carries them as its last three columns.
+        let dir =
+            std::env::temp_dir().join(format!("leap_sqp_rows_{}_{mode:?}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("history.csv");
+        r.write_history_csv(&path).unwrap();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+        assert_eq!(
+            &header[header.len() - 3..],
+            [
+                "max_violation_constraint",
+                "max_multiplier_constraint",
+                "max_multiplier"
+            ]
+        );
+        let row: Vec<&str> = text.lines().last().unwrap().split(',').collect();
+        assert_eq!(row[row.len() - 2], "c[1]");
+        assert!((row[row.len() - 1].parse::<f64>().unwrap() - 0.6).abs() < 1e-8);
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -322,6 +322,16 @@ pub struct IterationRecord {
     pub line_search_s: f64,
     pub hessian_s: f64,
     pub time_s: f64,
+    /// The constraint row violated most at this iterate (in the problem's
+    /// units; empty when none is violated), to see which part of the
+    /// problem holds the solve back.
+    pub max_violation_constraint: String,
+    /// The row whose multiplier estimate |λ_i| is largest (the QP's
+    /// multipliers of the previous step, in the problem's units), and that
+    /// |λ_i|: the merit penalty follows the largest one, so this names
+    /// the row that drives it (empty and 0 before the first QP).
+    pub max_multiplier_constraint: String,
+    pub max_multiplier: f64,
 }
 
 /// Where the time of a solve went (seconds).
@@ -382,11 +392,19 @@ pub fn write_history_csv(
 ) -> std::io::Result<()> {
     use std::io::Write;
     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s")?;
+    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s,max_violation_constraint,max_multiplier_constraint,max_multiplier")?;
+    // RFC 4180: a name holding a comma or quote is quoted, quotes doubled.
+    let field = |name: &str| {
+        if name.contains([',', '"', '\n']) {
+            format!("\"{}\"", name.replace('"', "\"\""))
+        } else {
+            name.to_string()
+        }
+    };
     for r in history {
         writeln!(
             f,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{},{},{:e}",
             r.iter,
             r.objective,
             r.inf_pr,
@@ -406,7 +424,10 @@ pub fn write_history_csv(
             r.qp_s,
             r.line_search_s,
             r.hessian_s,
-            r.time_s
+            r.time_s,
+            field(&r.max_violation_constraint),
+            field(&r.max_multiplier_constraint),
+            r.max_multiplier
         )?;
     }
     f.flush()
@@ -530,6 +551,30 @@ impl Problem {
         for (k, &(i, j)) in self.jac.iter().enumerate() {
             out[i] += s * jv[k] * d[j];
         }
+    }
+
+    /// The row violated most in the problem's units, with its violation
+    /// (None when every row holds).
+    fn max_violation_row(&self, c: &[f64]) -> Option<(usize, f64)> {
+        (0..self.m)
+            .map(|i| (i, self.row_violation(c, i) * self.row_unscale[i]))
+            .filter(|&(_, v)| v > 0.0)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+    }
+
+    /// The row with the largest multiplier in the problem's units
+    /// (λ_i · s_i / s_f for the scaled row i), with |λ_i| (None when all
+    /// are zero).
+    fn max_multiplier_row(&self, lambda: &[f64]) -> Option<(usize, f64)> {
+        (0..self.m)
+            .map(|i| {
+                (
+                    i,
+                    (lambda[i] * self.objective_unscale / self.row_unscale[i]).abs(),
+                )
+            })
+            .filter(|&(_, v)| v > 0.0)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
     }
 
     fn violation(&self, c: &[f64]) -> (f64, f64) {
@@ -1431,6 +1476,13 @@ impl<'s> Solver<'s> {
             time.derivatives_s += rec.derivatives_s;
             // Optimality at (x, λ, ζ).
             let (viol1, inf_pr) = self.pb.violation(&p.c);
+            if let Some((i, _)) = self.pb.max_violation_row(&p.c) {
+                rec.max_violation_constraint = nlp.constraint_name(i);
+            }
+            if let Some((i, v)) = self.pb.max_multiplier_row(&lambda) {
+                rec.max_multiplier_constraint = nlp.constraint_name(i);
+                rec.max_multiplier = v;
+            }
             let ms = measures(&self.pb, &p, &lambda, &zeta);
             rec.objective = p.f;
             rec.inf_pr = inf_pr;
