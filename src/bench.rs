@@ -653,6 +653,7 @@ impl SqpJumpReport {
 /// One whole `leap solve` (without the forward check), per repeat.
 #[derive(Debug, Clone, Serialize)]
 pub struct SolveBenchRun {
+    pub num_mesh_intervals: usize,
     pub status: crate::sqp::SqpStatus,
     pub iterations: usize,
     pub wall_time_s: f64,
@@ -672,50 +673,92 @@ pub struct SolveBenchReport {
     pub study: String,
     pub variables: usize,
     pub constraints: usize,
+    pub hessian: crate::sqp::HessianMode,
     pub runs: Vec<SolveBenchRun>,
     pub median_wall_time_s: f64,
+    /// Medians over all runs of the iteration count and of the wall time
+    /// per iteration: the SQP's path changes with the last bit of its
+    /// input, so one solve says little about a change to the solver and a
+    /// sweep over meshes says more.
+    pub median_iterations: f64,
+    pub median_time_per_iteration_s: f64,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let k = v.len();
+    if k == 0 {
+        f64::NAN
+    } else if k % 2 == 1 {
+        v[k / 2]
+    } else {
+        0.5 * (v[k / 2 - 1] + v[k / 2])
+    }
 }
 
 /// Solve `config` `repeats` times (output into a temporary directory,
-/// removed after; no forward check).
+/// removed after; no forward check), with the Hessian mode `hessian` when
+/// given, at each mesh of `meshes` (the study's own when empty).
 pub fn solve(
     config: &crate::study::SolveConfig,
     study: &str,
     repeats: usize,
+    hessian: Option<&str>,
+    meshes: &[i64],
 ) -> Result<SolveBenchReport, String> {
-    let mut config = config.clone();
     let out = std::env::temp_dir().join(format!("leap_bench_solve_{}", std::process::id()));
-    config
-        .apply(&crate::study::Overrides {
-            output_directory: Some(out.clone()),
-            no_forward_check: true,
-            ..Default::default()
-        })
-        .map_err(|e| e.to_string())?;
+    let mut configs = Vec::new();
+    let mesh_list: Vec<Option<i64>> = if meshes.is_empty() {
+        vec![None]
+    } else {
+        meshes.iter().map(|&n| Some(n)).collect()
+    };
+    // Every mesh is checked before the first solve starts.
+    for n in mesh_list {
+        let mut config = config.clone();
+        config
+            .apply(&crate::study::Overrides {
+                output_directory: Some(out.clone()),
+                no_forward_check: true,
+                hessian: hessian.map(str::to_string),
+                num_mesh_intervals: n,
+                ..Default::default()
+            })
+            .map_err(|e| e.to_string())?;
+        configs.push(config);
+    }
     let mut runs = Vec::new();
     let (mut variables, mut constraints) = (0, 0);
-    for _ in 0..repeats.max(1) {
-        let r = crate::solve::run(&config, false, &mut |_| {}).map_err(|e| e.to_string())?;
-        (variables, constraints) = (r.variables, r.constraints);
-        runs.push(SolveBenchRun {
-            status: r.status,
-            iterations: r.iterations,
-            wall_time_s: r.wall_time_s,
-            split: r.time_split,
-            jump_height_m: r.jump_height_m,
-            qp_fallbacks: r.qp_fallbacks,
-            qp_fallback_seconds: r.qp_fallback_seconds,
-        });
+    for config in &configs {
+        for _ in 0..repeats.max(1) {
+            let r = crate::solve::run(config, false, &mut |_| {}).map_err(|e| e.to_string())?;
+            (variables, constraints) = (r.variables, r.constraints);
+            runs.push(SolveBenchRun {
+                num_mesh_intervals: config.transcription.num_mesh_intervals,
+                status: r.status,
+                iterations: r.iterations,
+                wall_time_s: r.wall_time_s,
+                split: r.time_split,
+                jump_height_m: r.jump_height_m,
+                qp_fallbacks: r.qp_fallbacks,
+                qp_fallback_seconds: r.qp_fallback_seconds,
+            });
+        }
     }
     let _ = std::fs::remove_dir_all(&out);
-    let mut times: Vec<f64> = runs.iter().map(|r| r.wall_time_s).collect();
-    times.sort_by(f64::total_cmp);
     Ok(SolveBenchReport {
         study: study.into(),
         variables,
         constraints,
+        hessian: configs[0].settings.hessian,
+        median_wall_time_s: median(runs.iter().map(|r| r.wall_time_s).collect()),
+        median_iterations: median(runs.iter().map(|r| r.iterations as f64).collect()),
+        median_time_per_iteration_s: median(
+            runs.iter()
+                .map(|r| r.wall_time_s / r.iterations.max(1) as f64)
+                .collect(),
+        ),
         runs,
-        median_wall_time_s: times[times.len() / 2],
     })
 }
 
@@ -724,6 +767,7 @@ impl SolveBenchReport {
         let mut t = comfy_table::Table::new();
         t.set_header(vec![
             "run",
+            "mesh intervals",
             "status",
             "iterations",
             "wall time (s)",
@@ -740,6 +784,7 @@ impl SolveBenchReport {
             let s = &r.split;
             t.add_row(vec![
                 (k + 1).to_string(),
+                r.num_mesh_intervals.to_string(),
                 format!("{:?}", r.status),
                 r.iterations.to_string(),
                 format!("{:.1}", r.wall_time_s),
@@ -754,8 +799,42 @@ impl SolveBenchReport {
             ]);
         }
         format!(
-            "{}: {} variables, {} constraints; median wall time {:.1} s\n{t}",
-            self.study, self.variables, self.constraints, self.median_wall_time_s
+            "{} ({:?} Hessian): {} variables, {} constraints (last run); medians over {} runs: wall time {:.1} s, {} iterations, {:.3} s per iteration\n{t}",
+            self.study,
+            self.hessian,
+            self.variables,
+            self.constraints,
+            self.runs.len(),
+            self.median_wall_time_s,
+            self.median_iterations,
+            self.median_time_per_iteration_s
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(Vec::new()).is_nan());
+    }
+
+    /// A bad mesh or Hessian anywhere in a sweep is an error naming it,
+    /// raised before the first solve starts (a solve of the built-in
+    /// study at 28 intervals would come first otherwise).
+    #[test]
+    fn solve_sweep_checks_every_mesh_before_solving() {
+        let config = crate::study::SolveConfig::builtin().expect("built-in study");
+        let e = solve(&config, "built-in", 1, None, &[28, 1]).unwrap_err();
+        assert!(
+            e.contains("--num-mesh-intervals") && e.contains("got 1"),
+            "{e}"
+        );
+        let e = solve(&config, "built-in", 1, Some("newton"), &[]).unwrap_err();
+        assert!(e.contains("--hessian") && e.contains("'newton'"), "{e}");
     }
 }

@@ -221,9 +221,18 @@ enum BenchCommand {
     Solve {
         /// Study file (as `leap solve`).
         study: Option<PathBuf>,
-        /// Solves (the median wall time is reported).
+        /// Solves per mesh (the medians over all runs are reported).
         #[arg(long, default_value_t = 1)]
         repeats: usize,
+        /// Hessian mode (as `leap solve --hessian`; default: the study's).
+        #[arg(long)]
+        hessian: Option<String>,
+        /// Mesh intervals to sweep, comma-separated (e.g. 24,26,28,30;
+        /// default: the study's mesh). The SQP's path changes with the
+        /// last bit of its input: compare solver changes on the medians of
+        /// a sweep, not on one solve.
+        #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+        num_mesh_intervals: Vec<i64>,
         #[arg(long)]
         json: bool,
     },
@@ -557,13 +566,21 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 BenchCommand::Solve {
                     study,
                     repeats,
+                    hessian,
+                    num_mesh_intervals,
                     json,
                 },
         } => {
             let config = leap::study::SolveConfig::load(study.as_deref())?;
             let name = study.map_or("built-in jump study".into(), |p| p.display().to_string());
-            let report =
-                leap::bench::solve(&config, &name, repeats).map_err(|e| anyhow::anyhow!(e))?;
+            let report = leap::bench::solve(
+                &config,
+                &name,
+                repeats,
+                hessian.as_deref(),
+                &num_mesh_intervals,
+            )
+            .map_err(|e| anyhow::anyhow!(e))?;
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {

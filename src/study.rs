@@ -597,9 +597,9 @@ fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
             settings.trust_region_ratio = false;
         }
         _ => {
-            settings.hessian = s
-                .parse::<HessianMode>()
-                .map_err(|e| format!("{e}, 'exact-block-diagonal' or 'exact-inertia-corrected'"))?;
+            settings.hessian = s.parse::<HessianMode>().map_err(|_| {
+                format!("unknown Hessian mode '{s}' (expected 'exact', 'exact-block-diagonal', 'exact-inertia-corrected' or 'bfgs')")
+            })?;
         }
     }
     Ok(())
