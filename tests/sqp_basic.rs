@@ -493,3 +493,26 @@ fn history_names_the_most_violated_row_and_the_largest_multiplier() {
         std::fs::remove_dir_all(&dir).ok();
     }
 }
+
+/// A constraint name holding a comma or a quote stays one CSV field
+/// (RFC 4180: quoted, quotes doubled).
+#[test]
+fn history_csv_quotes_names_with_commas() {
+    let rec = leap::sqp::IterationRecord {
+        max_violation_constraint: "defect of interval 1, \"q\"".into(),
+        max_multiplier_constraint: "c[3]".into(),
+        max_multiplier: 2.5,
+        ..Default::default()
+    };
+    let dir = std::env::temp_dir().join(format!("leap_sqp_quote_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("history.csv");
+    leap::sqp::write_history_csv(&[rec], &path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let row = text.lines().nth(1).unwrap();
+    assert!(
+        row.ends_with(",\"defect of interval 1, \"\"q\"\"\",c[3],2.5e0"),
+        "{row}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
