@@ -823,9 +823,10 @@ mod tests {
         assert!(median(Vec::new()).is_nan());
     }
 
-    /// A bad mesh or Hessian anywhere in a sweep is an error naming it,
-    /// raised before the first solve starts (a solve of the built-in
-    /// study at 28 intervals would come first otherwise).
+    /// A bad mesh or Hessian anywhere in a sweep is an error naming the
+    /// option and the value. (Were the meshes checked lazily, the first
+    /// case would solve the 28-interval jump for minutes before failing:
+    /// the test would still pass, slowly.)
     #[test]
     fn solve_sweep_checks_every_mesh_before_solving() {
         let config = crate::study::SolveConfig::builtin().expect("built-in study");

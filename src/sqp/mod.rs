@@ -539,13 +539,6 @@ impl Problem {
         (self.cl[i] - c[i]).max(c[i] - self.cu[i]).max(0.0)
     }
 
-    /// The largest constraint violation in the problem's units.
-    fn violation_in_units(&self, c: &[f64]) -> f64 {
-        (0..self.m).fold(0.0f64, |inf, i| {
-            inf.max(self.row_violation(c, i) * self.row_unscale[i])
-        })
-    }
-
     /// out += s·J d, with J's values `jv`.
     fn add_jacobian_times(&self, jv: &[f64], d: &[f64], s: f64, out: &mut [f64]) {
         for (k, &(i, j)) in self.jac.iter().enumerate() {
@@ -1476,7 +1469,9 @@ impl<'s> Solver<'s> {
             time.derivatives_s += rec.derivatives_s;
             // Optimality at (x, λ, ζ).
             let (viol1, inf_pr) = self.pb.violation(&p.c);
-            if let Some((i, _)) = self.pb.max_violation_row(&p.c) {
+            // The largest violation in the problem's units and its row.
+            let worst_row = self.pb.max_violation_row(&p.c);
+            if let Some((i, _)) = worst_row {
                 rec.max_violation_constraint = nlp.constraint_name(i);
             }
             if let Some((i, v)) = self.pb.max_multiplier_row(&lambda) {
@@ -1496,7 +1491,7 @@ impl<'s> Solver<'s> {
                 && ms.compl <= st.optim_convergence_tolerance;
             // The paper's criterion and the best iterate judge the
             // constraints and the objective in the problem's units.
-            let inf_units = self.pb.violation_in_units(&p.c);
+            let inf_units = worst_row.map_or(0.0, |(_, v)| v);
             let f_units = p.f * self.pb.objective_unscale;
             // Only a change over a whole step counts: a step the line
             // search cut short changes the objective little wherever it
