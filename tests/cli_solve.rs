@@ -154,6 +154,12 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     let h = v["jump_height_m"].as_f64().unwrap();
     let hf = v["forward_jump_height_m"].as_f64().unwrap();
     assert!((hf - h - d).abs() < 1e-12);
+    // Agreement is within 1 cm (a 3-iteration solve may miss it).
+    assert_eq!(
+        v["forward_check_agrees"].as_bool(),
+        Some(d.abs() <= 0.01),
+        "{v}"
+    );
 
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
     let expected = [
