@@ -126,10 +126,11 @@ pub struct SolveReport {
     pub forward_jump_height_m: Option<f64>,
     pub forward_check_difference_m: Option<f64>,
     /// Whether the forward check reproduces the predicted height within
-    /// [`FORWARD_CHECK_TOLERANCE_M`]; when not, the prediction lives on the
-    /// discretisation error (a coarse mesh over a long push-off: the
+    /// [`FORWARD_CHECK_TOLERANCE_M`]. When not, the predicted jump does not
+    /// hold for the model: the solve stopped early, or it converged on the
+    /// discretisation error of a coarse mesh over a long push-off (the
     /// default jump from a slow push-off guess "solved" at 35.5 cm and
-    /// jumped 18.9 cm forward), not on the model.
+    /// jumped 18.9 cm forward).
     pub forward_check_agrees: Option<bool>,
     pub forward_jump_height_rust_m: Option<f64>,
     pub forward_check: Option<ForwardCheckReport>,
