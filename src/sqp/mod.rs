@@ -464,6 +464,15 @@ struct Problem {
     objective_unscale: f64,
 }
 
+/// The index and value of the largest positive value (None when none is
+/// positive; NaN values are passed over).
+fn largest_positive(values: impl Iterator<Item = f64>) -> Option<(usize, f64)> {
+    values
+        .enumerate()
+        .filter(|&(_, v)| v > 0.0)
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+}
+
 impl Problem {
     fn read<N: Nlp + ?Sized>(nlp: &N) -> Result<Problem, String> {
         let (n, m) = (nlp.num_variables(), nlp.num_constraints());
@@ -561,25 +570,16 @@ impl Problem {
     /// The row violated most in the problem's units, with its violation
     /// (None when every row holds).
     fn max_violation_row(&self, c: &[f64]) -> Option<(usize, f64)> {
-        (0..self.m)
-            .map(|i| (i, self.row_violation(c, i) * self.row_unscale[i]))
-            .filter(|&(_, v)| v > 0.0)
-            .max_by(|a, b| a.1.total_cmp(&b.1))
+        largest_positive((0..self.m).map(|i| self.row_violation(c, i) * self.row_unscale[i]))
     }
 
     /// The row with the largest multiplier in the problem's units
     /// (λ_i · s_i / s_f for the scaled row i), with |λ_i| (None when all
     /// are zero).
     fn max_multiplier_row(&self, lambda: &[f64]) -> Option<(usize, f64)> {
-        (0..self.m)
-            .map(|i| {
-                (
-                    i,
-                    (lambda[i] * self.objective_unscale / self.row_unscale[i]).abs(),
-                )
-            })
-            .filter(|&(_, v)| v > 0.0)
-            .max_by(|a, b| a.1.total_cmp(&b.1))
+        largest_positive(
+            (0..self.m).map(|i| (lambda[i] * self.objective_unscale / self.row_unscale[i]).abs()),
+        )
     }
 
     fn violation(&self, c: &[f64]) -> (f64, f64) {
