@@ -3,7 +3,10 @@
 //! eigenvalue floor 1e-4, as `leap solve`), for profiling the QP solver:
 //! `cargo run --release --example sqp_jump_dump -- DIR [ITERATIONS]`;
 //! with `INERTIA=1` the QPs of `--hessian exact-inertia-corrected` instead
-//! (element Hessians unmodified, for leap's interior-point solver).
+//! (element Hessians unmodified, for leap's interior-point solver); `MESH`
+//! sets the number of mesh intervals (default 28). Besides each
+//! iteration's QP (`qp_iter<k>_qp.json`) it writes the plain QPs the SQP
+//! took as infeasible (`qp_iter<k>_plain_infeasible.json`).
 use std::sync::Arc;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
@@ -11,7 +14,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let iterations: usize = args.next().map(|s| s.parse()).transpose()?.unwrap_or(1);
     let model = leap::model::Model::from_file(std::path::Path::new("models/jumper.json"))?;
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, Default::default())?);
-    let mut tr = leap::transcription::Transcription::new(ocp, Default::default())?;
+    let mesh: usize = match std::env::var("MESH") {
+        Ok(s) => s.parse().map_err(|e| format!("MESH={s}: {e}"))?,
+        Err(_) => 28,
+    };
+    let mut tr = leap::transcription::Transcription::new(
+        ocp,
+        leap::transcription::TranscriptionOptions {
+            num_mesh_intervals: mesh,
+            ..Default::default()
+        },
+    )?;
     let (guess, _) = tr.bang_bang_guess()?;
     let settings = leap::sqp::SqpSettings {
         max_iterations: iterations,

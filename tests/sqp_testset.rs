@@ -163,3 +163,53 @@ fn unbounded_problems_are_reported() {
         );
     }
 }
+
+/// With `qp_dump_every`, the plain QP the SQP takes as infeasible is
+/// written beside each iteration's QP: clarabel, reading the file back,
+/// must find it primal infeasible, and the elastic QP the SQP went on with
+/// must solve.
+#[test]
+fn plain_qps_taken_as_infeasible_are_written() {
+    use clarabel::solver::{DefaultSolver, IPSolver, SolverJSONReadWrite, SolverStatus};
+    let dir = std::env::temp_dir().join(format!("leap_qp_dump_{}", std::process::id()));
+    let p = infeasible_problems()
+        .into_iter()
+        .find(|p| p.name == "infeasible_linear")
+        .expect("infeasible_linear is in the test set");
+    for qp_solver in [QpSolver::Clarabel, QpSolver::InteriorPoint] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let st = SqpSettings {
+            qp_solver,
+            qp_dump_dir: Some(dir.clone()),
+            qp_dump_every: true,
+            ..settings(HessianMode::PartitionedBfgs)
+        };
+        let r = solve(&mut AdNlp::new(p.clone()), &st);
+        assert_eq!(
+            r.status,
+            SqpStatus::Infeasible,
+            "{qp_solver:?}: {}",
+            r.message
+        );
+        let status = |name: &str| {
+            let path = dir.join(name);
+            let mut f = std::fs::File::open(&path)
+                .unwrap_or_else(|e| panic!("{qp_solver:?}: {}: {e}", path.display()));
+            let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None)
+                .unwrap_or_else(|e| panic!("{qp_solver:?}: {}: {e:?}", path.display()));
+            s.solve();
+            s.solution.status
+        };
+        assert_eq!(
+            status("qp_iter0_plain_infeasible.json"),
+            SolverStatus::PrimalInfeasible,
+            "{qp_solver:?}"
+        );
+        assert_eq!(
+            status("qp_iter0_qp.json"),
+            SolverStatus::Solved,
+            "{qp_solver:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

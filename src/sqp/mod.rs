@@ -198,7 +198,10 @@ pub struct SqpSettings {
     pub verbose: bool,
     /// Directory where a failing QP is written (clarabel JSON).
     pub qp_dump_dir: Option<PathBuf>,
-    /// Also write every iteration's QP there (for profiling the QP solver).
+    /// Also write every iteration's QP there (`qp_iter<k>_qp.json`, the
+    /// elastic one where the plain QP was infeasible), and each plain QP
+    /// found or taken as infeasible (`qp_iter<k>_plain_infeasible.json`),
+    /// for profiling the QP solver and checking its verdicts.
     pub qp_dump_every: bool,
     /// Gradient-based scaling of the objective and constraints at the
     /// starting point (IPOPT's default); tolerances apply to the scaled
@@ -1657,6 +1660,11 @@ impl<'s> Solver<'s> {
             ) {
                 if matches!(outcome, Ok(QpOutcome::Failed(_))) {
                     self.dump(false, iter, "plain_failed");
+                } else if st.qp_dump_every {
+                    // The plain QP found (or, where the interior-point
+                    // solver stalled, taken as) infeasible: replayable with
+                    // clarabel to check that verdict (`examples/qp_replay`).
+                    self.dump(false, iter, "plain_infeasible");
                 }
                 elastic = true;
                 outcome = self.solve_qp(true, &p, &p.c, None, delta, rho, true);
