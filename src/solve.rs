@@ -658,7 +658,7 @@ impl SolveReport {
                             .map(|t| format!("{t:.3} s"))
                             .unwrap_or_else(|| "— (no lift-off)".into())
                     ));
-                    if d.abs() > FORWARD_CHECK_TOLERANCE_M {
+                    if self.forward_check_agrees == Some(false) {
                         s.push_str(&format!(
                             "  warning: the forward check misses the prediction by more than {:.0} cm: the predicted jump does not hold for the model (a solve stopped early, or on a converged one the discretisation error of {:.1} ms intervals, which the optimizer exploits over a long push-off); do not read the predicted height as the model's\n",
                             100.0 * FORWARD_CHECK_TOLERANCE_M,
