@@ -97,3 +97,48 @@ fn inertia_correction_needs_the_interior_point_solver() {
     assert_eq!(r.status, SqpStatus::InvalidProblem);
     assert!(r.message.contains("interior-point"), "{}", r.message);
 }
+
+/// The history reports the inertia correction's τ (`hessian_shift`, the
+/// CSV column of that name): 0 at every iteration of hs035, whose
+/// objective Hessian [[4, 2, 2], [2, 4, 0], [2, 0, 2]] is positive definite
+/// and whose constraints are linear, and positive at the first iteration
+/// of hs044, whose bilinear objective has Hessian eigenvalues ±2 and whose
+/// first QP counts no inequality row as active (every direction must then
+/// be convex).
+#[test]
+fn history_reports_the_inertia_correction() {
+    let by_name = |n: &str| {
+        hock_schittkowski()
+            .into_iter()
+            .find(|p| p.name == n)
+            .expect("in the test set")
+    };
+    let convex = solve(&mut AdNlp::new(by_name("hs035")), &settings());
+    assert_eq!(convex.status, SqpStatus::Solved, "{}", convex.message);
+    assert!(!convex.history.is_empty());
+    for r in &convex.history {
+        assert_eq!(r.hessian_shift, 0.0, "hs035 iteration {}", r.iter);
+    }
+    let indefinite = solve(&mut AdNlp::new(by_name("hs044")), &settings());
+    let first = indefinite.history.first().expect("one iteration at least");
+    assert!(
+        first.hessian_shift > 0.0,
+        "hs044: τ {}",
+        first.hessian_shift
+    );
+    // The CSV carries it under its name.
+    let dir = std::env::temp_dir().join(format!("leap_sqp_shift_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("history.csv");
+    indefinite.write_history_csv(&path).unwrap();
+    let text = std::fs::read_to_string(&path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header
+        .iter()
+        .position(|&h| h == "hessian_shift")
+        .expect("a hessian_shift column");
+    let row: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(row[col].parse::<f64>().unwrap(), first.hessian_shift);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -396,6 +396,12 @@ impl Ipm {
         })
     }
 
+    /// τ of the last solve: the multiple of I the inertia correction added
+    /// to the equilibrated QP's Hessian (0 where P was convex enough).
+    pub fn shift(&self) -> f64 {
+        self.shift
+    }
+
     /// Non-zeros of the KKT matrix (upper triangle) and of its factor.
     pub fn size(&self) -> (usize, usize) {
         (self.rowind.len(), self.l_values.len())

@@ -332,6 +332,13 @@ pub struct IterationRecord {
     pub penalty: f64,
     pub merit: f64,
     pub hessian_skips: usize,
+    /// τ of the QP's inertia correction (leap's interior-point solver with
+    /// [`Convexification::InertiaCorrection`]): the multiple of I added to
+    /// the Hessian of the equilibrated QP, whose entries are at most about
+    /// 1, until it is convex on the QP's constraints; 0 where none was
+    /// needed or in the other modes. IPOPT logs its counterpart as lg(rg).
+    /// A τ near 1 turns the step into a damped gradient step.
+    pub hessian_shift: f64,
     pub derivatives_s: f64,
     pub qp_s: f64,
     pub line_search_s: f64,
@@ -400,6 +407,16 @@ impl SqpResult {
     }
 }
 
+/// IPOPT's lg(rg) column: log10 of the Hessian regularisation, "-" where
+/// there was none.
+fn lg_rg(shift: f64) -> String {
+    if shift > 0.0 {
+        format!("{:.1}", shift.log10())
+    } else {
+        "-".into()
+    }
+}
+
 /// Write iteration records as CSV (one header line, one row each).
 pub fn write_history_csv(
     history: &[IterationRecord],
@@ -407,7 +424,7 @@ pub fn write_history_csv(
 ) -> std::io::Result<()> {
     use std::io::Write;
     let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
-    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,derivatives_s,qp_s,line_search_s,hessian_s,time_s,max_violation_constraint,max_multiplier_constraint,max_multiplier")?;
+    writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,hessian_shift,derivatives_s,qp_s,line_search_s,hessian_s,time_s,max_violation_constraint,max_multiplier_constraint,max_multiplier")?;
     // RFC 4180: a name holding a comma or quote is quoted, quotes doubled.
     let field = |name: &str| {
         if name.contains([',', '"', '\n']) {
@@ -419,7 +436,7 @@ pub fn write_history_csv(
     for r in history {
         writeln!(
             f,
-            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{},{},{:e}",
+            "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{},{:e},{:e},{},{:e},{:e},{:e},{:e},{:e},{:e},{},{},{:e}",
             r.iter,
             r.objective,
             r.inf_pr,
@@ -435,6 +452,7 @@ pub fn write_history_csv(
             r.penalty,
             r.merit,
             r.hessian_skips,
+            r.hessian_shift,
             r.derivatives_s,
             r.qp_s,
             r.line_search_s,
@@ -1808,6 +1826,7 @@ impl<'s> Solver<'s> {
             .expect("solved above");
             let d = qp.d.clone();
             let shift_curvature = qp.shift_curvature;
+            rec.hessian_shift = qp.hessian_shift;
             let (lam_qp, zeta_qp) = (qp.lambda.clone(), qp.zeta.clone());
             let slack_sum = if elastic { qp.slack_sum } else { 0.0 };
             // Merit penalty ν ≥ ‖λ‖∞ with a margin; lowered again when the
@@ -2112,11 +2131,11 @@ impl<'s> Solver<'s> {
         rec.time_s = start.elapsed().as_secs_f64();
         if self.settings.verbose {
             if rec.iter.is_multiple_of(10) {
-                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta  ratio    alpha  ls  qp_it  qp_mode   penalty  time_s");
+                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta  ratio    alpha  ls  qp_it  qp_mode   lg(rg)  penalty  time_s");
             }
             eprintln!(
-                "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:6.0e} {:6.2} {:8.2e} {:3} {:6} {:8} {:8.2e} {:7.2}",
-                rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.step_bound, rec.model_ratio, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, rec.penalty, rec.time_s
+                "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:6.0e} {:6.2} {:8.2e} {:3} {:6} {:8} {:>6} {:8.2e} {:7.2}",
+                rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.step_bound, rec.model_ratio, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, lg_rg(rec.hessian_shift), rec.penalty, rec.time_s
             );
         }
         result.history.push(rec);
