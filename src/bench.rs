@@ -684,17 +684,7 @@ pub struct SolveBenchReport {
     pub median_time_per_iteration_s: f64,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let k = v.len();
-    if k == 0 {
-        f64::NAN
-    } else if k % 2 == 1 {
-        v[k / 2]
-    } else {
-        0.5 * (v[k / 2 - 1] + v[k / 2])
-    }
-}
+use crate::sqp::median;
 
 /// Solve `config` `repeats` times (output into a temporary directory,
 /// removed after; no forward check), with the Hessian mode `hessian` when
@@ -815,13 +805,6 @@ impl SolveBenchReport {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn median_of_odd_and_even_counts() {
-        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
-        assert!(median(Vec::new()).is_nan());
-    }
 
     /// A bad mesh or Hessian anywhere in a sweep is an error naming the
     /// option and the value. (Were the meshes checked lazily, the first

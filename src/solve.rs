@@ -153,6 +153,9 @@ pub struct SolveReport {
     /// primal residual stalled (no clarabel certificate asked for; the
     /// elastic QP followed, or a second-order correction was dropped).
     pub qp_stalls_taken_infeasible: usize,
+    /// The inertia correction's τ over the solve's QPs (None where no QP
+    /// needed one, as in every mode but `exact-inertia-corrected`).
+    pub hessian_shift: Option<crate::sqp::HessianShiftSummary>,
     pub study: Option<String>,
     pub model: String,
     pub output_files: Vec<String>,
@@ -381,6 +384,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
         qp_fallback_seconds: r.qp_fallback_seconds,
         qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
+        hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
         model: String::new(),
         output_files: Vec::new(),
@@ -643,6 +647,12 @@ impl SolveReport {
             s.push_str(&format!(
                 "  {} plain QPs taken as infeasible where the interior-point solver stalled (the SQP went on with the elastic QP, or without a second-order correction)\n",
                 self.qp_stalls_taken_infeasible
+            ));
+        }
+        if let Some(h) = &self.hessian_shift {
+            s.push_str(&format!(
+                "  inertia correction: τ > 0 in {} of {} QPs, median {:.2e}, largest {:.2e} (on the equilibrated QP, entries up to about 1: from 0.1 on, the steps are damped towards gradient steps)\n",
+                h.shifted, h.qps, h.median, h.max
             ));
         }
         if let Some(fc) = &self.forward_check {

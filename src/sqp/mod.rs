@@ -407,6 +407,48 @@ impl SqpResult {
     }
 }
 
+/// The median of `v` (NaN when empty).
+pub(crate) fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let k = v.len();
+    if k == 0 {
+        f64::NAN
+    } else if k % 2 == 1 {
+        v[k / 2]
+    } else {
+        0.5 * (v[k / 2 - 1] + v[k / 2])
+    }
+}
+
+/// How much the inertia correction damped a solve's QPs: over the
+/// iterations whose QP was solved, how many needed τ > 0, their median
+/// and largest τ (see [`IterationRecord::hessian_shift`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct HessianShiftSummary {
+    pub qps: usize,
+    pub shifted: usize,
+    pub median: f64,
+    pub max: f64,
+}
+
+impl HessianShiftSummary {
+    /// None where no QP needed a shift.
+    pub fn of(history: &[IterationRecord]) -> Option<HessianShiftSummary> {
+        let solved: Vec<f64> = history
+            .iter()
+            .filter(|r| !r.qp_mode.is_empty() && r.qp_mode != "failed")
+            .map(|r| r.hessian_shift)
+            .collect();
+        let shifted: Vec<f64> = solved.iter().copied().filter(|&t| t > 0.0).collect();
+        (!shifted.is_empty()).then(|| HessianShiftSummary {
+            qps: solved.len(),
+            shifted: shifted.len(),
+            max: shifted.iter().fold(0.0f64, |a, &b| a.max(b)),
+            median: median(shifted),
+        })
+    }
+}
+
 /// IPOPT's lg(rg) column: log10 of the Hessian regularisation, "-" where
 /// there was none.
 fn lg_rg(shift: f64) -> String {
@@ -2145,6 +2187,35 @@ impl<'s> Solver<'s> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 3.0, 2.0]), 2.5);
+        assert!(median(Vec::new()).is_nan());
+    }
+
+    /// Only iterations with a solved QP count; the median and the largest
+    /// are over those with τ > 0.
+    #[test]
+    fn hessian_shift_summary_counts_the_shifted_qps() {
+        let rec = |mode: &str, t: f64| IterationRecord {
+            qp_mode: mode.into(),
+            hessian_shift: t,
+            ..Default::default()
+        };
+        let h = [
+            rec("ok", 0.0),
+            rec("ok", 0.5),
+            rec("elastic", 0.1),
+            rec("soc", 2.0),
+            rec("failed", 9.0),
+            rec("", 7.0),
+        ];
+        let s = HessianShiftSummary::of(&h).expect("three shifted QPs");
+        assert_eq!((s.qps, s.shifted, s.median, s.max), (4, 3, 0.5, 2.0));
+        assert_eq!(HessianShiftSummary::of(&h[..1]), None);
+    }
 
     /// Each block convexified alone (as `convexify` of the submatrix), the
     /// entries between blocks zero, the whole positive definite.
