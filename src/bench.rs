@@ -4,6 +4,7 @@
 use crate::model::Model;
 use crate::multibody::Multibody;
 use crate::simbody::SimbodyModel;
+use crate::sqp::median;
 use serde::Serialize;
 use std::hint::black_box;
 use std::time::Instant;
@@ -683,8 +684,6 @@ pub struct SolveBenchReport {
     pub median_iterations: f64,
     pub median_time_per_iteration_s: f64,
 }
-
-use crate::sqp::median;
 
 /// Solve `config` `repeats` times (output into a temporary directory,
 /// removed after; no forward check), with the Hessian mode `hessian` when

@@ -651,7 +651,7 @@ impl SolveReport {
         }
         if let Some(h) = &self.hessian_shift {
             s.push_str(&format!(
-                "  inertia correction: τ > 0 in {} of {} QPs, median {:.2e}, largest {:.2e} (on the equilibrated QP, entries up to about 1: from 0.1 on, the steps are damped towards gradient steps)\n",
+                "  inertia correction: τ > 0 in {} of {} QPs, median {:.2e}, largest {:.2e} (τ I on the equilibrated QP, whose entries are at most about 1: a τ near 1 or above outweighs much of the exact curvature)\n",
                 h.shifted, h.qps, h.median, h.max
             ));
         }

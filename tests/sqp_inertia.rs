@@ -107,12 +107,7 @@ fn inertia_correction_needs_the_interior_point_solver() {
 /// be convex).
 #[test]
 fn history_reports_the_inertia_correction() {
-    let by_name = |n: &str| {
-        hock_schittkowski()
-            .into_iter()
-            .find(|p| p.name == n)
-            .expect("in the test set")
-    };
+    let by_name = |n: &str| leap::testset::by_name(n).expect("in the test set");
     let convex = solve(&mut AdNlp::new(by_name("hs035")), &settings());
     assert_eq!(convex.status, SqpStatus::Solved, "{}", convex.message);
     assert!(!convex.history.is_empty());

@@ -337,7 +337,7 @@ pub struct IterationRecord {
     /// the Hessian of the equilibrated QP, whose entries are at most about
     /// 1, until it is convex on the QP's constraints; 0 where none was
     /// needed or in the other modes. IPOPT logs its counterpart as lg(rg).
-    /// A τ near 1 turns the step into a damped gradient step.
+    /// A τ near 1 or above outweighs much of the exact curvature.
     pub hessian_shift: f64,
     pub derivatives_s: f64,
     pub qp_s: f64,
