@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """Where a dumped SQP subproblem of the jump is nonconvex.
 
-Reads a QP that the SQP wrote as clarabel JSON (`examples/sqp_jump_dump`,
-or `qp_dump_every` in a study), projects its Hessian P onto the null space
+Reads a QP that the SQP wrote as clarabel JSON (`leap solve --dump-qps`,
+`examples/sqp_jump_dump`, or `qp_dump_every` in the library), projects its Hessian P onto the null space
 of the equality rows (the linearised defects and the other equality
 constraints) and reports the reduced Hessian's negative eigenvalues: how
 many, their sum, the most negative ones with the variables that carry
@@ -17,8 +17,9 @@ with t_f last. They are the SQP's variables, scaled by their bounds.
 
 Needs numpy and scipy (not part of leap's install):
     python3 -m venv .venv && .venv/bin/pip install numpy scipy
-    INERTIA=1 cargo run --release --example sqp_jump_dump -- /tmp/qps 6
-    .venv/bin/python scripts/qp_negative_curvature.py /tmp/qps/qp_iter5_qp.json
+    leap solve --hessian exact-inertia-corrected --dump-qps \
+        --max-iterations 6 --no-forward-check --out /tmp/r
+    .venv/bin/python scripts/qp_negative_curvature.py /tmp/r/qps/qp_iter5_qp.json
 """
 
 import argparse

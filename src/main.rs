@@ -98,6 +98,12 @@ enum Command {
         /// Skip the forward simulation of the optimal excitations.
         #[arg(long)]
         no_forward_check: bool,
+        /// Write each SQP iteration's QP (and each plain QP taken as
+        /// infeasible) as clarabel JSON into OUT/qps/, a few MB each, for
+        /// examples/qp_replay, examples/ipm_bench and
+        /// scripts/qp_negative_curvature.py.
+        #[arg(long)]
+        dump_qps: bool,
         /// Print one JSON object (no progress output).
         #[arg(long)]
         json: bool,
@@ -315,6 +321,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             scheme,
             hessian,
             no_forward_check,
+            dump_qps,
             json,
             quiet,
             verbose,
@@ -327,6 +334,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 scheme,
                 hessian,
                 no_forward_check,
+                dump_qps,
             };
             solve(study, overrides, json, quiet, verbose)
         }

@@ -194,6 +194,8 @@ pub struct SolveConfig {
     pub output_directory: PathBuf,
     /// None: skipped.
     pub forward_check: Option<ForwardCheck>,
+    /// Write every SQP iteration's QP into `<output_directory>/qps/`.
+    pub dump_qps: bool,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -208,6 +210,8 @@ pub struct Overrides {
     pub scheme: Option<String>,
     pub hessian: Option<String>,
     pub no_forward_check: bool,
+    /// `--dump-qps`.
+    pub dump_qps: bool,
 }
 
 impl SolveStudy {
@@ -421,6 +425,7 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
+            dump_qps: false,
         })
     }
 }
@@ -481,6 +486,7 @@ impl SolveConfig {
         if o.no_forward_check {
             self.forward_check = None;
         }
+        self.dump_qps |= o.dump_qps;
         Ok(())
     }
 }

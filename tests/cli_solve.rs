@@ -384,3 +384,56 @@ fn bench_solve_reports_iterations_and_time_split() {
     assert_eq!(v["variables"].as_u64(), Some(4 * 86 + 1));
     assert!(!Path::new("results").join("small_solution.sto").exists());
 }
+
+/// `--dump-qps` writes each iteration's QP into OUT/qps/ and nowhere else,
+/// as clarabel JSON that clarabel itself reads back and solves.
+#[test]
+fn dump_qps_writes_each_iteration_qp_into_out() {
+    use clarabel::solver::{DefaultSolver, IPSolver, SolverJSONReadWrite, SolverStatus};
+    let cwd = fresh_dir("dump_cwd");
+    let out = fresh_dir("dump_out");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .current_dir(&cwd)
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "2",
+            "--no-forward-check",
+            "--dump-qps",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
+    let qps = out.join("qps");
+    let dumped = files_in(&qps);
+    let its = v["iterations"].as_u64().unwrap() as usize;
+    assert!(its >= 1, "{v}");
+    for k in 0..its {
+        let name = format!("qp_iter{k}_qp.json");
+        assert!(dumped.contains(&name), "{name} not in {dumped:?}");
+    }
+    let mut f = std::fs::File::open(qps.join("qp_iter0_qp.json")).unwrap();
+    let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None).unwrap();
+    s.solve();
+    // The dump keeps the SQP's tolerance (1e-10), where clarabel may stop
+    // at its reduced one: a feasible, bounded QP either way.
+    assert!(
+        matches!(
+            s.solution.status,
+            SolverStatus::Solved | SolverStatus::AlmostSolved
+        ),
+        "{:?}",
+        s.solution.status
+    );
+    let _ = std::fs::remove_dir_all(&cwd);
+    let _ = std::fs::remove_dir_all(&out);
+}
