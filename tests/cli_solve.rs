@@ -114,31 +114,31 @@ const KEYS: [&str; 13] = [
     "output_files",
 ];
 
-#[test]
-fn small_solve_writes_only_into_out_and_files_parse_back() {
-    // Run from an empty working directory: the default model is found next
-    // to the crate, and nothing may appear there (no results/).
-    let cwd = fresh_dir("cwd");
-    let out = fresh_dir("out");
+/// `leap solve` of the 4-interval jump from `cwd` into `out` with `args`,
+/// in JSON: it must end solved or stopped (exit 0 or 1).
+fn small_solve(cwd: &Path, out: &Path, args: &[&str]) -> (std::process::Output, serde_json::Value) {
     let o = Command::cargo_bin("leap")
         .unwrap()
-        .current_dir(&cwd)
-        .args([
-            "solve",
-            "--num-mesh-intervals",
-            "4",
-            "--max-iterations",
-            "3",
-            "--json",
-            "--out",
-        ])
-        .arg(&out)
+        .current_dir(cwd)
+        .args(["solve", "--num-mesh-intervals", "4", "--json", "--out"])
+        .arg(out)
+        .args(args)
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
     let v: serde_json::Value = serde_json::from_slice(&o.stdout)
         .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)));
+    (o, v)
+}
+
+#[test]
+fn small_solve_writes_only_into_out_and_files_parse_back() {
+    // Run from an empty working directory: the default model is found next
+    // to the crate, and nothing may appear there (no results/).
+    let cwd = fresh_dir("cwd");
+    let out = fresh_dir("out");
+    let (o, v) = small_solve(&cwd, &out, &["--max-iterations", "3"]);
     for k in KEYS {
         assert!(v.get(k).is_some(), "missing key {k} in {v}");
     }
@@ -392,26 +392,11 @@ fn dump_qps_writes_each_iteration_qp_into_out() {
     use clarabel::solver::{DefaultSolver, IPSolver, SolverJSONReadWrite, SolverStatus};
     let cwd = fresh_dir("dump_cwd");
     let out = fresh_dir("dump_out");
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .current_dir(&cwd)
-        .args([
-            "solve",
-            "--num-mesh-intervals",
-            "4",
-            "--max-iterations",
-            "2",
-            "--no-forward-check",
-            "--dump-qps",
-            "--json",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (_, v) = small_solve(
+        &cwd,
+        &out,
+        &["--max-iterations", "2", "--no-forward-check", "--dump-qps"],
+    );
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
     let qps = out.join("qps");
     let dumped = files_in(&qps);
