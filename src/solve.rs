@@ -222,10 +222,6 @@ pub fn run(
     })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
-    if config.dump_qps {
-        settings.qp_dump_dir = Some(dir.join("qps"));
-        settings.qp_dump_every = true;
-    }
     progress(&format!(
         "SQP: {} variables, {} constraints, at most {} iterations",
         tr.num_variables(),

@@ -194,8 +194,6 @@ pub struct SolveConfig {
     pub output_directory: PathBuf,
     /// None: skipped.
     pub forward_check: Option<ForwardCheck>,
-    /// Write every SQP iteration's QP into `<output_directory>/qps/`.
-    pub dump_qps: bool,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -425,7 +423,6 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
-            dump_qps: false,
         })
     }
 }
@@ -486,7 +483,10 @@ impl SolveConfig {
         if o.no_forward_check {
             self.forward_check = None;
         }
-        self.dump_qps |= o.dump_qps;
+        if o.dump_qps {
+            self.settings.qp_dump_dir = Some(self.output_directory.join("qps"));
+            self.settings.qp_dump_every = true;
+        }
         Ok(())
     }
 }

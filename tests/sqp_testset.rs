@@ -170,7 +170,7 @@ fn unbounded_problems_are_reported() {
 /// must solve.
 #[test]
 fn plain_qps_taken_as_infeasible_are_written() {
-    use clarabel::solver::{DefaultSolver, IPSolver, SolverJSONReadWrite, SolverStatus};
+    use clarabel::solver::SolverStatus;
     let dir = std::env::temp_dir().join(format!("leap_qp_dump_{}", std::process::id()));
     let p = infeasible_problems()
         .into_iter()
@@ -191,15 +191,7 @@ fn plain_qps_taken_as_infeasible_are_written() {
             "{qp_solver:?}: {}",
             r.message
         );
-        let status = |name: &str| {
-            let path = dir.join(name);
-            let mut f = std::fs::File::open(&path)
-                .unwrap_or_else(|e| panic!("{qp_solver:?}: {}: {e}", path.display()));
-            let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None)
-                .unwrap_or_else(|e| panic!("{qp_solver:?}: {}: {e:?}", path.display()));
-            s.solve();
-            s.solution.status
-        };
+        let status = |name: &str| crate::common::clarabel_status(&dir.join(name));
         assert_eq!(
             status("qp_iter0_plain_infeasible.json"),
             SolverStatus::PrimalInfeasible,

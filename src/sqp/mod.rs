@@ -1868,7 +1868,7 @@ impl<'s> Solver<'s> {
             .expect("solved above");
             let d = qp.d.clone();
             let shift_curvature = qp.shift_curvature;
-            rec.hessian_shift = qp.hessian_shift;
+            rec.hessian_shift = qp.hessian_shift();
             let (lam_qp, zeta_qp) = (qp.lambda.clone(), qp.zeta.clone());
             let slack_sum = if elastic { qp.slack_sum } else { 0.0 };
             // Merit penalty ν ≥ ‖λ‖∞ with a margin; lowered again when the

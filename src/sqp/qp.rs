@@ -87,10 +87,6 @@ pub(crate) struct Qp {
     /// ½ dᵀ (τ-part) d of the last answer: the curvature the correction
     /// added to the QP's model along its step.
     pub shift_curvature: f64,
-    /// τ of the last answer's inertia correction, on the equilibrated QP
-    /// (whose entries are at most about 1): 0 without the correction or
-    /// where P needed none.
-    pub hessian_shift: f64,
     ipm: Option<Ipm>,
     /// QPs the interior-point solver handed to clarabel, and how many of
     /// them clarabel found infeasible.
@@ -326,7 +322,6 @@ impl Qp {
             use_ipm,
             inertia_correction,
             shift_curvature: 0.0,
-            hessian_shift: 0.0,
             ipm: None,
             fallbacks: 0,
             fallbacks_infeasible: 0,
@@ -413,7 +408,6 @@ impl Qp {
 
     /// Solve with the current values (creating the solver on first use).
     pub fn solve(&mut self) -> Result<QpOutcome, String> {
-        self.hessian_shift = 0.0;
         if self.use_ipm {
             if let Some(outcome) = self.solve_ipm()? {
                 return Ok(outcome);
@@ -447,7 +441,6 @@ impl Qp {
         match status {
             IpmStatus::Solved => {
                 self.shift_curvature = ipm.shift_curvature;
-                self.hessian_shift = ipm.shift();
                 let ipm = self.ipm.take().expect("created above");
                 self.extract(&ipm.x, &ipm.z, &ipm.s);
                 self.ipm = Some(ipm);
@@ -477,9 +470,6 @@ impl Qp {
         } else {
             None
         };
-        if self.inertia_correction {
-            self.hessian_shift = self.ipm.as_ref().map_or(0.0, |i| i.shift());
-        }
         let p_shifted = shift.as_ref().map(|sd| {
             let mut p = self.p.clone();
             for (j, t) in sd.iter().enumerate() {
@@ -539,6 +529,14 @@ impl Qp {
         });
         self.solver = Some(s);
         Ok(QpOutcome::Solved)
+    }
+
+    /// τ of the last answer's inertia correction, on the equilibrated QP
+    /// (whose entries are at most about 1; a clarabel fallback gets the
+    /// same τ on P's diagonal): 0 without the interior-point solver, without
+    /// the correction, or where P needed none.
+    pub fn hessian_shift(&self) -> f64 {
+        self.ipm.as_ref().map_or(0.0, Ipm::shift)
     }
 
     /// Read the step, multipliers and slack sum from a solution in

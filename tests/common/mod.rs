@@ -97,3 +97,14 @@ pub fn assert_push_off_consistent(
         a.jump_height_m
     );
 }
+
+/// Clarabel's verdict on a QP the SQP wrote (clarabel JSON), read back
+/// with clarabel's own loader and solved with the settings saved in it.
+pub fn clarabel_status(path: &std::path::Path) -> clarabel::solver::SolverStatus {
+    use clarabel::solver::{DefaultSolver, IPSolver, SolverJSONReadWrite};
+    let mut f = std::fs::File::open(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut s = DefaultSolver::<f64>::load_from_file(&mut f, None)
+        .unwrap_or_else(|e| panic!("{}: {e:?}", path.display()));
+    s.solve();
+    s.solution.status
+}
