@@ -197,6 +197,56 @@ impl Thelen {
         }
     }
 
+    /// Thelen's force-velocity multiplier at normalised fibre velocity `vn`
+    /// (lengthening positive, units of v_max·l_o) and clamped activation
+    /// `act`: the exact inverse of [`Thelen::dlce_n`], its linear
+    /// extrapolations included, so that act·f_al·f_v(dlce_n(act, f_al, f))
+    /// = f. With k = 0.25 + 0.75·act, c = (2 + 2/A_f)/(F_len − 1) and the
+    /// knee at f_v = 0.95·F_len:
+    /// * v ≤ −k (tendon slack): (v + k)/(k·(1 + 1/A_f));
+    /// * −k < v ≤ 0 (shortening): (k + v)/(k − v/A_f);
+    /// * 0 < v below the knee (lengthening): (k + c·F_len·v)/(k + c·v);
+    /// * beyond the knee: linear with the curve's slope there.
+    ///
+    /// Unlike its inverse, f_v has no 1/act in it: the implicit fibre
+    /// dynamics ([`Thelen::force_balance`]) stay mild at the minimum
+    /// activation.
+    pub fn fv<S: Scalar>(&self, act: S, vn: S) -> S {
+        let k = act * 0.75 + 0.25;
+        let (af, flen) = (self.af, self.flen);
+        let cc = (2.0 + 2.0 / af) / (flen - 1.0);
+        let knee = FV_THRESHOLD * flen;
+        let knee_v = k * ((knee - 1.0) / ((flen - knee) * cc));
+        if vn.re() <= -k.re() {
+            (vn + k) / (k * (1.0 + 1.0 / af))
+        } else if vn.re() <= 0.0 {
+            (vn + k) / (k - vn / af)
+        } else if vn.re() < knee_v.re() {
+            (vn * (cc * flen) + k) / (vn * cc + k)
+        } else {
+            let slope = k * ((flen - 1.0) / ((flen - knee) * (flen - knee) * cc));
+            (vn - knee_v) / slope + knee
+        }
+    }
+
+    /// The muscle-tendon force balance in units of F_0 at fibre length
+    /// `lm_state`, muscle-tendon length `lmt` and normalised fibre velocity
+    /// `vn`: f_se − (a·f_al·f_v + f_pe)·cos φ. Zero exactly where `vn` is
+    /// the velocity [`Thelen::rates`] gives (the implicit form of the
+    /// same fibre dynamics; activation and fibre length clamped as there).
+    pub fn force_balance<S: Scalar>(&self, a: S, lm_state: S, lmt: S, vn: S) -> S {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let lm = if lm_state.re() < self.min_fiber_length {
+            c(self.min_fiber_length)
+        } else {
+            lm_state
+        };
+        let (_, cos_phi) = self.pennation_sin_cos(lm);
+        let ln = lm / self.lopt;
+        let fse = self.fse((lmt - lm * cos_phi) / self.lts - 1.0);
+        fse - (ac * self.fal(ln) * self.fv(ac, vn) + self.fpe(ln)) * cos_phi
+    }
+
     /// Activation rate (OpenSim 4.x: excitation not clamped; §1.1).
     pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
@@ -534,6 +584,17 @@ impl DeGroote {
         }
     }
 
+    /// The force balance in units of F_0 at normalised fibre velocity `vn`:
+    /// f_T − (a·f_al·f_v(vn) + f_pe)·cos φ, zero where [`DeGroote::calc`]'s
+    /// velocity is `vn`.
+    pub fn force_balance<S: Scalar>(&self, a: S, lm: S, lmt: S, vn: S) -> S {
+        let along = (lm * lm - self.width * self.width).sqrt();
+        let cos_phi = along / lm;
+        let ln = lm / self.lopt;
+        let ft = self.ft((lmt - along) / self.lts);
+        ft - (a * self.fal(ln) * self.fv(vn) + self.fpe(ln)) * cos_phi
+    }
+
     /// Fibre length in static equilibrium: (a·f_al + f_pe)·cos φ = f_T.
     pub fn equilibrium_fiber_length(&self, a: f64, lmt: f64) -> f64 {
         let resid = |lm: f64| {
@@ -566,6 +627,21 @@ impl MuscleLaw {
         match self {
             MuscleLaw::Thelen(t) => t.equilibrium_fiber_length(a, lmt),
             MuscleLaw::DeGroote(d) => d.equilibrium_fiber_length(a, lmt),
+        }
+    }
+    /// The force balance of the implicit fibre dynamics (units of F_0) at
+    /// normalised fibre velocity `vn`; see [`Thelen::force_balance`].
+    pub fn force_balance<S: Scalar>(&self, a: S, lm: S, lmt: S, vn: S) -> S {
+        match self {
+            MuscleLaw::Thelen(t) => t.force_balance(a, lm, lmt, vn),
+            MuscleLaw::DeGroote(d) => d.force_balance(a, lm, lmt, vn),
+        }
+    }
+    /// v_max·l_o (m/s): the fibre speed of a normalised velocity of 1.
+    pub fn max_fiber_speed(&self) -> f64 {
+        match self {
+            MuscleLaw::Thelen(t) => t.vmax * t.lopt,
+            MuscleLaw::DeGroote(d) => d.vmax * d.lopt,
         }
     }
     /// The smallest excitation the law takes (OpenSim's min_control).

@@ -106,6 +106,96 @@ fn thelen_matches_opensim_46_tables() {
     }
 }
 
+/// The implicit fibre dynamics hold where OpenSim's explicit ones do: at
+/// every row of the OpenSim 4.6 tables (both parameter sets, shortening,
+/// lengthening and slack tendons), the force balance at OpenSim's own
+/// fibre velocity is zero, and Thelen's forward force-velocity curve gives
+/// back OpenSim's f_v.
+#[test]
+fn thelen_force_balance_vanishes_at_opensim_fibre_velocity() {
+    let data: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap())
+            .unwrap();
+    let mut rows = 0;
+    for set in ["defaults", "legacy"] {
+        let d = &data[set];
+        for row in d["rows"].as_array().unwrap() {
+            let r: Vec<f64> = row
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .collect();
+            let th = Thelen::new(&muscle(r[0], &d["params"]));
+            let (lmt, lm, a) = (r[1], r[3], r[4]);
+            let info = th.calc(a, lm, lmt, r[2], r[5]);
+            if info.fiber_clamped {
+                continue;
+            }
+            rows += 1;
+            let vn = r[7] / (th.vmax * th.lopt);
+            // OpenSim's table carries 10 digits of v_M; the balance's
+            // slope in v is at most ~10 F0 per unit of v_n here.
+            let res = th.force_balance(a, lm, lmt, vn);
+            assert!(res.abs() < 1e-7, "{set} {r:?}: residual {res}");
+            let fv = th.fv(a.clamp(0.01, 1.0), vn);
+            assert!(close(fv, r[8], 1e-3), "{set} {r:?}: f_v {fv} vs {}", r[8]);
+        }
+    }
+    assert!(rows > 10, "only {rows} unclamped rows");
+}
+
+/// f_v is the inverse of the explicit velocity in all four regions (slack
+/// tendon, shortening, lengthening, beyond the knee), and continuous with a
+/// continuous slope where the regions meet except at v = 0, where Thelen's
+/// curve itself has a kink.
+#[test]
+fn thelen_forward_force_velocity_inverts_the_explicit_one() {
+    let p = serde_json::json!({"activation_time_constant": 0.01, "deactivation_time_constant": 0.04,
+        "FmaxTendonStrain": 0.033, "KshapeActive": 0.5, "KshapePassive": 4.0, "Af": 0.3, "Flen": 1.8});
+    let th = Thelen::new(&muscle(0.2, &p));
+    let (lo, vm) = (th.lopt, th.vmax);
+    let mut regions = [0usize; 4];
+    for &a in &[0.01, 0.05, 0.3, 1.0] {
+        let k = 0.25 + 0.75 * a;
+        for i in 0..=400 {
+            // Tendon lengths from slack to far beyond isometric.
+            let lmt = 0.25 + 0.1 * i as f64 / 400.0;
+            let r = th.rates(a, lo, lmt, a);
+            let vn = r.fiber_velocity / (vm * lo);
+            let region = if vn <= -k {
+                0
+            } else if vn <= 0.0 {
+                1
+            } else if th.fv(a, vn) < 0.95 * 1.8 {
+                2
+            } else {
+                3
+            };
+            regions[region] += 1;
+            let res = th.force_balance(a, lo, lmt, vn);
+            assert!(res.abs() < 1e-12, "a {a} l_MT {lmt}: residual {res}");
+        }
+        // Value and slope continuity at v = −k and at the knee.
+        let cc = (2.0 + 2.0 / 0.3) / 0.8;
+        let knee_v = k * (0.95 * 1.8 - 1.0) / ((1.8 - 0.95 * 1.8) * cc);
+        for v0 in [-k, knee_v] {
+            let e = 1e-7;
+            let (fm, f0, fp) = (th.fv(a, v0 - e), th.fv(a, v0), th.fv(a, v0 + e));
+            assert!((fp - fm).abs() < 1e-5, "f_v jumps at {v0}");
+            let (sl, sr) = ((f0 - fm) / e, (fp - f0) / e);
+            assert!(
+                (sl - sr).abs() < 1e-4 * sl.abs(),
+                "slope {sl} vs {sr} at {v0}"
+            );
+        }
+    }
+    assert!(
+        regions.iter().all(|&n| n > 0),
+        "regions covered {regions:?}"
+    );
+}
+
 /// Hunt-Crossley in closed form: f = (4/3)·√R·(E/2^{3/2})·δ^{3/2}·(1 + 1.5 c v_n),
 /// friction μ·f·min(v_s/v_t, 1) with μ_s = μ_d (model-equations.md §4.2).
 #[test]
