@@ -89,6 +89,12 @@ enum Command {
         /// midpoint-euler (default), trapezoidal, hermite-simpson or backward-euler.
         #[arg(long)]
         scheme: Option<String>,
+        /// explicit (default: fibre velocity from the inverted
+        /// force-velocity curve, the paper's form) or implicit (the
+        /// muscle-tendon force balance at the interval's fibre velocity;
+        /// midpoint-euler only).
+        #[arg(long)]
+        fiber_dynamics: Option<String>,
         /// exact (default: exact element Hessians, negative eigenvalues
         /// clipped), exact-block-diagonal, exact-inertia-corrected (exact
         /// element Hessians unmodified, the interior-point QP solver's
@@ -319,6 +325,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             max_iterations,
             guess,
             scheme,
+            fiber_dynamics,
             hessian,
             no_forward_check,
             dump_qps,
@@ -332,6 +339,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 max_iterations,
                 guess,
                 scheme,
+                fiber_dynamics,
                 hessian,
                 no_forward_check,
                 dump_qps,

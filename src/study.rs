@@ -32,7 +32,7 @@ use crate::simbody::SimbodyIntegrator;
 pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
 use crate::simulate::{parse_integrator, IntegratorChoice};
 use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
-use crate::transcription::{Scheme, TranscriptionOptions};
+use crate::transcription::{FiberDynamics, Scheme, TranscriptionOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -129,6 +129,12 @@ pub struct MeshSpec {
     /// "hermite-simpson" or "backward-euler".
     #[serde(default, alias = "transcription_scheme")]
     pub scheme: Option<String>,
+    /// How the fibre-length rows state the fibre dynamics: "explicit"
+    /// (default; the fibre velocity from the inverted force–velocity curve,
+    /// the paper's form) or "implicit" (the force balance at the interval's
+    /// fibre velocity; midpoint-euler only).
+    #[serde(default)]
+    pub fiber_dynamics: Option<String>,
 }
 
 /// Stopping rules of the optimizer (Moco's names; −1 means the default,
@@ -206,6 +212,7 @@ pub struct Overrides {
     /// "bang-bang" or a file.
     pub guess: Option<String>,
     pub scheme: Option<String>,
+    pub fiber_dynamics: Option<String>,
     pub hessian: Option<String>,
     pub no_forward_check: bool,
     /// `--dump-qps`.
@@ -286,6 +293,10 @@ impl SolveStudy {
         }
         if let Some(s) = &self.mesh.scheme {
             transcription.scheme = parse_scheme(s).map_err(|r| err("mesh.scheme", r))?;
+        }
+        if let Some(s) = &self.mesh.fiber_dynamics {
+            transcription.fiber_dynamics =
+                parse_fiber_dynamics(s).map_err(|r| err("mesh.fiber_dynamics", r))?;
         }
 
         let guess = match self.guess.as_deref() {
@@ -463,6 +474,10 @@ impl SolveConfig {
         if let Some(s) = &o.scheme {
             self.transcription.scheme = parse_scheme(s).map_err(|r| err("--scheme", r))?;
         }
+        if let Some(s) = &o.fiber_dynamics {
+            self.transcription.fiber_dynamics =
+                parse_fiber_dynamics(s).map_err(|r| err("--fiber-dynamics", r))?;
+        }
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
@@ -553,6 +568,17 @@ fn check_max_iterations(n: i64) -> Result<Option<usize>, String> {
             .map(Some)
             .map_err(|_| format!("{n} is too large")),
         n => Err(format!("must be ≥ 1 (or -1 for the default), got {n}")),
+    }
+}
+
+/// Fibre dynamics by name ("explicit" or "implicit").
+pub fn parse_fiber_dynamics(s: &str) -> Result<FiberDynamics, String> {
+    match s {
+        "explicit" => Ok(FiberDynamics::Explicit),
+        "implicit" => Ok(FiberDynamics::Implicit),
+        _ => Err(format!(
+            "unknown fibre dynamics '{s}' (valid: explicit, implicit)"
+        )),
     }
 }
 

@@ -89,12 +89,34 @@ pub enum Scheme {
     BackwardEuler,
 }
 
+/// How the defects state the fibre dynamics of the muscles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+pub enum FiberDynamics {
+    /// The fibre-length defect l^M_k − l^M_{k−1} − h·v^M(x̄, ū), with v^M
+    /// from the muscle's inverted force–velocity curve (OpenSim's explicit
+    /// Thelen2003Muscle; the paper's eq. 7).
+    #[default]
+    Explicit,
+    /// The force balance at the midpoint, with the interval's fibre velocity
+    /// v̄ = (l^M_k − l^M_{k−1})/h in place of the inverted curve:
+    /// f_T − (a·f_al·f_v(v̄/(v_max l_o)) + f_pe)·cos φ = 0 (units of F_0;
+    /// [`crate::laws::Thelen::force_balance`]). The variables and the
+    /// solutions are those of the explicit form (the two rows vanish
+    /// together), but the row is smooth in a: the explicit row's 1/a
+    /// (Thelen's inverted curve at the minimum activation) is gone. As
+    /// Moco's implicit muscle dynamics; midpoint Euler only.
+    Implicit,
+}
+
 /// Settings of the transcription.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TranscriptionOptions {
     /// Mesh intervals N (Moco's name); N + 1 nodes.
     pub num_mesh_intervals: usize,
     pub scheme: Scheme,
+    /// The fibre-length rows (default explicit).
+    #[serde(default)]
+    pub fiber_dynamics: FiberDynamics,
     /// Threads of the Jacobian evaluation (its points are split between
     /// them); constraint values always run on the calling thread.
     pub threads: usize,
@@ -111,6 +133,7 @@ impl Default for TranscriptionOptions {
         TranscriptionOptions {
             num_mesh_intervals: 28,
             scheme: Scheme::MidpointEuler,
+            fiber_dynamics: FiberDynamics::Explicit,
             threads: 2,
             compress_columns: true,
             pattern_samples: 60,
@@ -134,7 +157,9 @@ pub enum TranscriptionError {
 
 /// The sparsity of the node outputs g(x, u) = (f(x, u), Ÿ_C, F_y/(m g))
 /// with respect to (x, u): rows 0..n_x are f, row n_x is Ÿ_C, row n_x + 1
-/// the lift-off force; columns 0..n_x are x, then u.
+/// the lift-off force; columns 0..n_x are x, then u. With implicit fibre
+/// dynamics the fibre-length rows are the force balances and u holds the
+/// excitations and then the normalised fibre velocities (`nu` = 2·n_m).
 #[derive(Debug, Clone, PartialEq)]
 pub struct StatePattern {
     pub nx: usize,
@@ -167,8 +192,19 @@ impl StatePattern {
     /// squat (in contact). [`StatePattern::violations`] checks the result at
     /// fresh states.
     pub fn detect(ocp: &JumpOcp, samples: usize, seed: u64) -> Result<Self, TranscriptionError> {
+        Self::detect_for(ocp, FiberDynamics::Explicit, samples, seed)
+    }
+
+    /// [`StatePattern::detect`] for the given fibre dynamics.
+    pub fn detect_for(
+        ocp: &JumpOcp,
+        fiber: FiberDynamics,
+        samples: usize,
+        seed: u64,
+    ) -> Result<Self, TranscriptionError> {
         let (n, nm) = (ocp.nq(), ocp.nm());
-        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let nx = ocp.nx();
+        let nu = point_inputs(ocp, fiber);
         let (nin, nout) = (nx + nu, nx + 2);
         if samples < 3 {
             return Err(TranscriptionError::Pattern(format!(
@@ -188,6 +224,9 @@ impl StatePattern {
             found[2 * n + k][2 * n + nm + k] = true;
             found[2 * n + nm + k][2 * n + nm + k] = true;
             found[2 * n + nm + k][nx + k] = true;
+            if nu > ocp.nu() {
+                found[2 * n + k][nx + ocp.nu() + k] = true;
+            }
         }
         for c in 0..2 * n {
             found[nx][c] = true;
@@ -195,7 +234,7 @@ impl StatePattern {
         }
         // Sampled part: dense dual Jacobians.
         let dense = Compiled::new(&vec![(0..nin).collect::<Vec<_>>(); nout], nin, false, LANES);
-        let mut w = Worker::<LANES>::new(ocp);
+        let mut w = Worker::<LANES>::new(ocp, nu);
         let mut out = vec![0.0; nout];
         let mut jac = vec![0.0; dense.entries.len()];
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -245,7 +284,7 @@ impl StatePattern {
         let (nx, nu) = (self.nx, self.nu);
         let (nin, nout) = (nx + nu, nx + 2);
         let dense = Compiled::new(&vec![(0..nin).collect::<Vec<_>>(); nout], nin, false, LANES);
-        let mut w = Worker::<LANES>::new(ocp);
+        let mut w = Worker::<LANES>::new(ocp, nu);
         let mut out = vec![0.0; nout];
         let mut jac = vec![0.0; dense.entries.len()];
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -337,6 +376,10 @@ fn sample_state(ocp: &JumpOcp, kind: usize, rng: &mut ChaCha8Rng, x: &mut [f64],
         let a = 2 * n + nm + k;
         x[a] = uni(lo[a], hi[a]);
         u[k] = uni(ocp.control_lower[k], ocp.control_upper[k]);
+    }
+    // Normalised fibre velocities of the implicit form.
+    for v in u.iter_mut().skip(ocp.nu()) {
+        *v = uni(-1.0, 1.0);
     }
     if kind != 1 {
         let depth = if kind == 0 {
@@ -467,6 +510,8 @@ impl Compiled {
 
 /// Buffers of one evaluation thread.
 struct Worker<const W: usize> {
+    /// The inputs u hold the fibre velocities after the excitations.
+    implicit: bool,
     ws: StateWorkspace<f64>,
     wd: StateWorkspace<DualSVec64<W>>,
     x: Vec<f64>,
@@ -478,10 +523,12 @@ struct Worker<const W: usize> {
 }
 
 impl<const W: usize> Worker<W> {
-    fn new(ocp: &JumpOcp) -> Self {
-        let (nx, nu) = (ocp.nx(), ocp.nu());
+    /// A worker for `nu` point inputs u ([`point_inputs`]).
+    fn new(ocp: &JumpOcp, nu: usize) -> Self {
+        let nx = ocp.nx();
         let z = DualSVec64::<W>::from(0.0);
         Worker {
+            implicit: nu > ocp.nu(),
             ws: ocp.eq.workspace(),
             wd: ocp.eq.workspace(),
             x: vec![0.0; nx],
@@ -494,6 +541,41 @@ impl<const W: usize> Worker<W> {
     }
 }
 
+/// The point inputs u per point: the excitations, and with implicit fibre
+/// dynamics the normalised fibre velocities after them.
+fn point_inputs(ocp: &JumpOcp, fiber: FiberDynamics) -> usize {
+    match fiber {
+        FiberDynamics::Explicit => ocp.nu(),
+        FiberDynamics::Implicit => ocp.nu() + ocp.nm(),
+    }
+}
+
+/// ẋ = f(x, u) into `xdot` and (Ÿ_C, F_y/(m g)), with `implicit` the
+/// fibre-length rows replaced by the force balances at the normalised fibre
+/// velocities u[n_u..] ([`FiberDynamics::Implicit`]).
+fn point_rates<S: crate::scalar::Scalar>(
+    ocp: &JumpOcp,
+    implicit: bool,
+    ws: &mut StateWorkspace<S>,
+    x: &[S],
+    u: &[S],
+    xdot: &mut [S],
+) -> Result<(S, S), String> {
+    let nu = ocp.nu();
+    let out = ocp
+        .state_rates(ws, x, &u[..nu], xdot)
+        .map_err(|e| e.to_string())?;
+    if implicit {
+        let (n, nm) = (ocp.nq(), ocp.nm());
+        for k in 0..nm {
+            let law = &ocp.laws.muscles[ocp.eq.muscles[k]];
+            xdot[2 * n + k] =
+                law.force_balance(x[2 * n + nm + k], x[2 * n + k], ws.mtu_length[k], u[nu + k]);
+        }
+    }
+    Ok(out)
+}
+
 /// g(x, u) = (f, Ÿ_C, F_y/(m g)) at the worker's (x, u) into `out`.
 fn eval_value<const W: usize>(
     ocp: &JumpOcp,
@@ -501,9 +583,7 @@ fn eval_value<const W: usize>(
     out: &mut [f64],
 ) -> Result<(), String> {
     let nx = w.x.len();
-    let (ydd, fy) = ocp
-        .state_rates(&mut w.ws, &w.x, &w.u, &mut w.xdot)
-        .map_err(|e| e.to_string())?;
+    let (ydd, fy) = point_rates(ocp, w.implicit, &mut w.ws, &w.x, &w.u, &mut w.xdot)?;
     out[..nx].copy_from_slice(&w.xdot);
     out[nx] = ydd;
     out[nx + 1] = fy;
@@ -542,9 +622,7 @@ fn eval_jac<const W: usize>(
                 w.ud[c - nx] = DualSVec64::from_re(w.u[c - nx]).derivative(l);
             }
         }
-        let (ydd, fy) = ocp
-            .state_rates(&mut w.wd, &w.xd, &w.ud, &mut w.xdotd)
-            .map_err(|e| e.to_string())?;
+        let (ydd, fy) = point_rates(ocp, w.implicit, &mut w.wd, &w.xd, &w.ud, &mut w.xdotd)?;
         if s == 0 {
             for i in 0..nx {
                 out[i] = w.xdotd[i].re;
@@ -606,6 +684,23 @@ enum Src {
         b: usize,
         row: usize,
         scale: f64,
+    },
+    /// A force-balance row (implicit fibre dynamics) w.r.t. a node
+    /// variable: ½·J_point[entry], plus for the muscle's own fibre length
+    /// ±J_point[velocity entry]/(h·v_max·l_o) (speed: (entry, ±1/(v_max l_o))).
+    Balance {
+        point: usize,
+        entry: Option<usize>,
+        speed: Option<(usize, f64)>,
+    },
+    /// A force-balance row w.r.t. t_f: −J_point[entry]·v̄/t_f, v̄ = (l^M_k −
+    /// l^M_{k−1})/(h·v_max·l_o) of state row `row` in interval `k`.
+    BalanceTf {
+        point: usize,
+        entry: usize,
+        row: usize,
+        k: usize,
+        inv_speed: f64,
     },
     /// A Hermite–Simpson defect entry (filled block by block).
     Hs,
@@ -682,6 +777,11 @@ pub struct Transcription {
     compiled: Compiled,
     nx: usize,
     nu: usize,
+    /// Point inputs u: the excitations, then with implicit fibre dynamics
+    /// the normalised fibre velocities ([`point_inputs`]).
+    npu: usize,
+    /// v_max·l_o per carried muscle (m/s).
+    fiber_speed: Vec<f64>,
     n_cm: usize,
     /// Rows Ẏ_C(t_k) ≥ 0, k = 1..n_cv (N with `no_com_descent`, else 0).
     n_cv: usize,
@@ -730,7 +830,12 @@ impl Transcription {
         ocp: Arc<JumpOcp>,
         options: TranscriptionOptions,
     ) -> Result<Self, TranscriptionError> {
-        let pattern = StatePattern::detect(&ocp, options.pattern_samples, options.pattern_seed)?;
+        let pattern = StatePattern::detect_for(
+            &ocp,
+            options.fiber_dynamics,
+            options.pattern_samples,
+            options.pattern_seed,
+        )?;
         Self::with_pattern(ocp, options, pattern)
     }
 
@@ -753,18 +858,34 @@ impl Transcription {
                 "{n_cm} no-countermovement rows need at least {n_cm} mesh intervals, got num_mesh_intervals = {big_n}"
             )));
         }
-        if pattern.nx != nx || pattern.nu != nu || pattern.rows.len() != nx + 2 {
+        let implicit = options.fiber_dynamics == FiberDynamics::Implicit;
+        if implicit && options.scheme != Scheme::MidpointEuler {
+            return Err(TranscriptionError::Invalid(format!(
+                "implicit fibre dynamics need the midpoint-euler scheme, not {:?}",
+                options.scheme
+            )));
+        }
+        let npu = point_inputs(&ocp, options.fiber_dynamics);
+        if pattern.nx != nx || pattern.nu != npu || pattern.rows.len() != nx + 2 {
             return Err(TranscriptionError::Pattern(format!(
-                "the pattern is for {} states and {} controls, the problem has {nx} and {nu}",
+                "the pattern is for {} states and {} point inputs, the problem has {nx} and {npu}",
                 pattern.nx, pattern.nu
             )));
         }
+        let (lm0, nm) = (2 * ocp.nq(), ocp.nm());
+        let fiber_speed: Vec<f64> = ocp
+            .eq
+            .muscles
+            .iter()
+            .map(|&mi| ocp.laws.muscles[mi].max_fiber_speed())
+            .collect();
+        let balance_row = |r: usize| implicit && (lm0..lm0 + nm).contains(&r);
         if options.threads == 0 {
             return Err(TranscriptionError::Invalid(
                 "threads must be at least 1".into(),
             ));
         }
-        let nin = nx + nu;
+        let nin = nx + npu;
         let compiled = Compiled::new(&pattern.rows, nin, options.compress_columns, LANES);
         // Evaluation points.
         let mut points = Vec::new();
@@ -805,7 +926,7 @@ impl Transcription {
         } else {
             points.len()
         };
-        let nv = nin;
+        let nv = nx + nu;
         let var = |k: usize, c: usize| (k - 1) * nv + c;
         let tf = big_n * nv;
         // Defect rows: per state row, the node columns (pattern ∪ identity).
@@ -862,6 +983,37 @@ impl Transcription {
                 ),
             };
             for r in 0..nx {
+                if balance_row(r) {
+                    // The force balance at the midpoint: the node columns
+                    // of its pattern (and its own fibre length), with the
+                    // fibre velocity v̄ = (l^M_k − l^M_{k−1})/(h v_max l_o).
+                    let i = r - lm0;
+                    let ve = compiled.entry(r, nx + nu + i).unwrap_or(usize::MAX);
+                    let inv_speed = 1.0 / fiber_speed[i];
+                    let cols: Vec<usize> = node_columns(&pattern.rows[r], r, nv);
+                    for (node, sign) in [(k - 1, -1.0), (k, 1.0)] {
+                        if node == 0 {
+                            continue;
+                        }
+                        for &c in &cols {
+                            structure.push((row0 + r, var(node, c)));
+                            sources.push(Src::Balance {
+                                point: pa,
+                                entry: compiled.entry(r, c),
+                                speed: (c == r).then_some((ve, sign * inv_speed)),
+                            });
+                        }
+                    }
+                    structure.push((row0 + r, tf));
+                    sources.push(Src::BalanceTf {
+                        point: pa,
+                        entry: ve,
+                        row: r,
+                        k,
+                        inv_speed,
+                    });
+                    continue;
+                }
                 let cols = if options.scheme == Scheme::HermiteSimpson {
                     &hs_rows[r]
                 } else {
@@ -967,14 +1119,16 @@ impl Transcription {
         }
         let off_end = structure.len();
         // Node 0.
-        let mut w0 = Worker::<LANES>::new(&ocp);
+        let mut w0 = Worker::<LANES>::new(&ocp, npu);
         w0.x.copy_from_slice(ocp.x0());
-        w0.u.copy_from_slice(ocp.u0());
+        w0.u[..nu].copy_from_slice(ocp.u0());
         let mut node0 = vec![0.0; nx + 2];
         eval_value(&ocp, &mut w0, &mut node0).map_err(|e| {
             TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}"))
         })?;
-        let workers = (0..options.threads).map(|_| Worker::new(&ocp)).collect();
+        let workers = (0..options.threads)
+            .map(|_| Worker::new(&ocp, npu))
+            .collect();
         let npts = points.len();
         let nnz_g = compiled.entries.len();
         let mut me = Transcription {
@@ -985,6 +1139,8 @@ impl Transcription {
             compiled,
             nx,
             nu,
+            npu,
+            fiber_speed,
             n_cm,
             n_cv,
             points,
@@ -1057,6 +1213,14 @@ impl Transcription {
     /// Variables per node (n_x + n_u).
     pub fn node_size(&self) -> usize {
         self.nx + self.nu
+    }
+
+    /// Whether defect row `r` of an interval is a fibre force balance
+    /// ([`FiberDynamics::Implicit`]).
+    pub fn is_balance_row(&self, r: usize) -> bool {
+        let lm0 = 2 * self.ocp.nq();
+        self.options.fiber_dynamics == FiberDynamics::Implicit
+            && (lm0..lm0 + self.ocp.nm()).contains(&r)
     }
 
     /// Index of state `i` of node `k` (None for node 0, which is fixed).
@@ -1349,10 +1513,7 @@ impl Transcription {
     fn defect_row_groups(&self) -> Vec<(Vec<usize>, Vec<usize>)> {
         let mut groups: Vec<(Vec<usize>, Vec<usize>)> = Vec::new();
         for r in 0..self.nx {
-            let mut cols = self.pattern.rows[r].clone();
-            cols.push(r);
-            cols.sort_unstable();
-            cols.dedup();
+            let cols = node_columns(&self.pattern.rows[r], r, self.node_size());
             match groups.iter_mut().find(|g| g.0 == cols) {
                 Some(g) => g.1.push(r),
                 None => groups.push((cols, vec![r])),
@@ -1403,6 +1564,8 @@ impl Transcription {
     /// Evaluate points `lo..hi`; earlier points' values are available.
     fn eval_stage(&mut self, v: &[f64], jac: bool, lo: usize, hi: usize) -> Result<(), String> {
         let (nx, nu) = (self.nx, self.nu);
+        let lm0 = 2 * self.ocp.nq();
+        let fiber_speed = &self.fiber_speed[..];
         let nv = nx + nu;
         let nout = nx + 2;
         let ocp: &JumpOcp = &self.ocp;
@@ -1442,16 +1605,19 @@ impl Transcription {
                     Point::Node(k) => {
                         let (x, u) = node(k);
                         w.x.copy_from_slice(x);
-                        w.u.copy_from_slice(u);
+                        w.u[..u.len()].copy_from_slice(u);
+                        w.u[u.len()..].fill(0.0);
                     }
                     Point::Mid(k) => {
                         let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
-                        for j in 0..nx {
-                            w.x[j] = 0.5 * (xa[j] + xb[j]);
-                        }
-                        for j in 0..nu {
-                            w.u[j] = 0.5 * (ua[j] + ub[j]);
-                        }
+                        midpoint_inputs(
+                            (xa, ua),
+                            (xb, ub),
+                            h,
+                            (lm0, fiber_speed),
+                            &mut w.x,
+                            &mut w.u,
+                        );
                     }
                     Point::Center(k) => {
                         let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
@@ -1605,6 +1771,41 @@ impl Transcription {
     }
 }
 
+/// The inputs of the midpoint between nodes a and b into `x` and `u`: the
+/// means, and after the excitations (implicit fibre dynamics, `u` longer
+/// than the nodes' excitations) the normalised fibre velocities
+/// (l^M_b − l^M_a)/(h·v_max·l_o) of the fibre lengths from `lm0` on.
+fn midpoint_inputs(
+    (xa, ua): (&[f64], &[f64]),
+    (xb, ub): (&[f64], &[f64]),
+    h: f64,
+    (lm0, speed): (usize, &[f64]),
+    x: &mut [f64],
+    u: &mut [f64],
+) {
+    for j in 0..x.len() {
+        x[j] = 0.5 * (xa[j] + xb[j]);
+    }
+    let nu = ua.len();
+    for j in 0..nu {
+        u[j] = 0.5 * (ua[j] + ub[j]);
+    }
+    for (i, v) in u[nu..].iter_mut().enumerate() {
+        *v = (xb[lm0 + i] - xa[lm0 + i]) / (h * speed[i]);
+    }
+}
+
+/// Row `r`'s columns among the node variables (below `nv`; a force
+/// balance also depends on a fibre velocity, which is no variable) with
+/// its own state, increasing.
+fn node_columns(pattern_row: &[usize], r: usize, nv: usize) -> Vec<usize> {
+    let mut cols: Vec<usize> = pattern_row.iter().copied().filter(|&c| c < nv).collect();
+    cols.push(r);
+    cols.sort_unstable();
+    cols.dedup();
+    cols
+}
+
 fn check_len(what: &str, name: &str, got: usize, want: usize) -> Result<(), EvalError> {
     if got == want {
         Ok(())
@@ -1714,7 +1915,11 @@ impl Nlp for Transcription {
                     let p = self.interval_point[k - 1];
                     let f = &self.point_vals[p * (nx + 2)..p * (nx + 2) + nx];
                     for r in 0..nx {
-                        c[row0 + r] = xb[r] - xa[r] - h * f[r];
+                        c[row0 + r] = if self.is_balance_row(r) {
+                            f[r]
+                        } else {
+                            xb[r] - xa[r] - h * f[r]
+                        };
                     }
                 }
                 Scheme::BackwardEuler => {
@@ -1806,6 +2011,26 @@ impl Nlp for Transcription {
                     entry,
                     scale,
                 } => scale * self.point_jac[point * nnz + entry],
+                Src::Balance {
+                    point,
+                    entry,
+                    speed,
+                } => {
+                    let j = &self.point_jac[point * nnz..(point + 1) * nnz];
+                    entry.map_or(0.0, |e| 0.5 * j[e])
+                        + speed.map_or(0.0, |(e, s)| j[e] * s / h)
+                }
+                Src::BalanceTf {
+                    point,
+                    entry,
+                    row,
+                    k,
+                    inv_speed,
+                } => {
+                    let dl = self.node_state(x, k)[row] - self.node_state(x, k - 1)[row];
+                    let vbar = dl * inv_speed / h;
+                    -self.point_jac[point * nnz + entry] * vbar / self.final_time(x)
+                }
             };
         }
         if self.n_cv > 0 {
@@ -1970,7 +2195,12 @@ impl Nlp for Transcription {
 
     fn constraint_name(&self, i: usize) -> String {
         let nx = self.nx;
-        if i < self.num_intervals() * nx {
+        if i < self.num_intervals() * nx && self.is_balance_row(i % nx) {
+            let name = &self.ocp.eq.model.muscles[self.ocp.eq.muscles[i % nx - 2 * self.ocp.nq()]]
+                .spec
+                .name;
+            format!("force balance of interval {} in {name}", i / nx + 1)
+        } else if i < self.num_intervals() * nx {
             format!(
                 "defect of interval {} in {}",
                 i / nx + 1,
@@ -2001,7 +2231,7 @@ pub fn time_point_jacobian<const W: usize>(
 ) -> Result<f64, String> {
     let nin = pattern.nx + pattern.nu;
     let cp = Compiled::new(&pattern.rows, nin, compress, W);
-    let mut w = Worker::<W>::new(ocp);
+    let mut w = Worker::<W>::new(ocp, ocp.nu());
     w.x.copy_from_slice(x);
     w.u.copy_from_slice(u);
     let mut out = vec![0.0; pattern.nx + 2];
@@ -2071,7 +2301,9 @@ impl HessPlan {
     fn new(pattern: &StatePattern, n: usize, nm: usize) -> Option<Self> {
         let (nx, nu) = (pattern.nx, pattern.nu);
         let nin = nx + nu;
-        if nx != 2 * n + 2 * nm || nu != nm || n > HESS_Q {
+        // The point inputs u: excitations, or excitations and fibre
+        // velocities (implicit fibre dynamics), both seeded as one sum.
+        if nx != 2 * n + 2 * nm || (nu != nm && nu != 2 * nm) || n > HESS_Q {
             return None;
         }
         let (m1, n2) = (2 * n + nm + 2, 2 * n + 3);
@@ -2162,6 +2394,7 @@ enum HessElement {
 
 /// Buffers of one second-order pass.
 struct PassBuf<const M: usize, const N: usize> {
+    implicit: bool,
     ws: StateWorkspace<HyperDualSVec64<M, N>>,
     xd: Vec<HyperDualSVec64<M, N>>,
     ud: Vec<HyperDualSVec64<M, N>>,
@@ -2169,10 +2402,11 @@ struct PassBuf<const M: usize, const N: usize> {
 }
 
 impl<const M: usize, const N: usize> PassBuf<M, N> {
-    fn new(ocp: &JumpOcp) -> Self {
-        let (nx, nu) = (ocp.nx(), ocp.nu());
+    fn new(ocp: &JumpOcp, nu: usize) -> Self {
+        let nx = ocp.nx();
         let z = HyperDualSVec64::<M, N>::from_re(0.0);
         PassBuf {
+            implicit: nu > ocp.nu(),
             ws: ocp.eq.workspace(),
             xd: vec![z; nx],
             ud: vec![z; nu],
@@ -2212,9 +2446,14 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
                 self.ud[c - nx] = d;
             }
         }
-        let (ydd, fy) = ocp
-            .state_rates(&mut self.ws, &self.xd, &self.ud, &mut self.xdotd)
-            .map_err(|e| e.to_string())?;
+        let (ydd, fy) = point_rates(
+            ocp,
+            self.implicit,
+            &mut self.ws,
+            &self.xd,
+            &self.ud,
+            &mut self.xdotd,
+        )?;
         let (m1, n2, block) = (plan.m1, plan.n2, plan.block);
         for r in 0..nx + 2 {
             let d = if r < nx {
@@ -2253,13 +2492,14 @@ struct HessWorker {
 }
 
 impl HessWorker {
-    fn new(ocp: &JumpOcp) -> Self {
+    /// A worker for `nu` point inputs ([`point_inputs`]).
+    fn new(ocp: &JumpOcp, nu: usize) -> Self {
         HessWorker {
-            a: PassBuf::new(ocp),
-            b: PassBuf::new(ocp),
-            c: PassBuf::new(ocp),
+            a: PassBuf::new(ocp, nu),
+            b: PassBuf::new(ocp, nu),
+            c: PassBuf::new(ocp, nu),
             x: vec![0.0; ocp.nx()],
-            u: vec![0.0; ocp.nu()],
+            u: vec![0.0; nu],
         }
     }
 }
@@ -2369,9 +2609,11 @@ impl Transcription {
         let nout = self.nx + 2;
         let block = plan.block;
         let threads = self.options.threads;
+        let npu = self.npu;
+        let h = v[self.final_time_index()] / self.num_intervals() as f64;
         let cache = self.hess.get_or_insert_with(|| {
             Box::new(HessCache {
-                workers: (0..threads).map(|_| HessWorker::new(ocp)).collect(),
+                workers: (0..threads).map(|_| HessWorker::new(ocp, npu)).collect(),
                 x: Vec::new(),
                 data: vec![0.0; npts * nout * block],
                 objective: Vec::new(),
@@ -2382,6 +2624,7 @@ impl Transcription {
         cache.x.clear();
         let (nx, nu) = (self.nx, self.nu);
         let nv = nx + nu;
+        let (lm0, fiber_speed) = (2 * ocp.nq(), &self.fiber_speed[..]);
         let node = |k: usize| -> (&[f64], &[f64]) {
             if k == 0 {
                 (ocp.x0(), ocp.u0())
@@ -2400,16 +2643,18 @@ impl Transcription {
                     Point::Node(k) => {
                         let (x, u) = node(k);
                         w.x.copy_from_slice(x);
-                        w.u.copy_from_slice(u);
+                        w.u[..u.len()].copy_from_slice(u);
+                        w.u[u.len()..].fill(0.0);
                     }
                     Point::Mid(k) => {
-                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
-                        for j in 0..nx {
-                            w.x[j] = 0.5 * (xa[j] + xb[j]);
-                        }
-                        for j in 0..nu {
-                            w.u[j] = 0.5 * (ua[j] + ub[j]);
-                        }
+                        midpoint_inputs(
+                            node(k - 1),
+                            node(k),
+                            h,
+                            (lm0, fiber_speed),
+                            &mut w.x,
+                            &mut w.u,
+                        );
                     }
                     Point::Center(_) => {
                         return Err((first + i, "no Hessian at Hermite–Simpson centres".into()))
@@ -2543,6 +2788,24 @@ impl Transcription {
             return finite("hessian", h, |i| format!("element {e} entry {i}"));
         }
         self.refresh_hessian(x)?;
+        // A force balance's row, point input of v̄, Δl^M, t_f and v_max l_o.
+        let balance = match kind {
+            HessElement::Defect { group, k } => {
+                let g = &self.groups[group].1;
+                (g.len() == 1 && self.is_balance_row(g[0])).then(|| {
+                    let r = g[0];
+                    let i = r - 2 * self.ocp.nq();
+                    (
+                        r,
+                        self.nx + self.nu + i,
+                        self.node_state(x, k)[r] - self.node_state(x, k - 1)[r],
+                        x[self.final_time_index()],
+                        self.fiber_speed[i],
+                    )
+                })
+            }
+            _ => None,
+        };
         let (Some(plan), Some(cache)) = (self.hess_plan.as_ref(), self.hess.as_mut()) else {
             return Err(EvalError::new("hessian", "no Hessian data"));
         };
@@ -2565,6 +2828,22 @@ impl Transcription {
                     .map(|&r| (r, lambda[(k - 1) * nx + r]))
                     .collect();
                 let t = kk - 1;
+                if let Some((r, vcol, dl, tf, speed)) = balance {
+                    let p = self.interval_point[k - 1];
+                    balance_hessian(
+                        plan,
+                        data(p),
+                        (&rows, cols),
+                        (r, vcol),
+                        (hstep, tf, speed),
+                        (dl, nodes.len()),
+                        (&mut hw, &mut gw),
+                        h,
+                    );
+                    cache.hw = hw;
+                    cache.gw = gw;
+                    return finite("hessian", h, |i| format!("element {e} entry {i}"));
+                }
                 match self.options.scheme {
                     Scheme::MidpointEuler => {
                         let p = self.interval_point[k - 1];
@@ -2679,6 +2958,80 @@ impl Transcription {
     }
 }
 
+/// The Hessian (into `h`, row-major over the element's variables: the
+/// node columns `cols` of node k − 1 (if `nodes` is 2) and of node k, then
+/// t_f) of λ·R for the force balance R of state row `r` at the midpoint of
+/// interval k, whose inputs are the node means and the fibre velocity
+/// v̄ = Δ/(h·s), Δ = l^M_k − l^M_{k−1}, h = t_f/N, s = v_max l_o, at point
+/// input column `vcol`:
+///
+/// ```text
+///   ∇²(λR) = Jᵀ·∇²_p(λR)·J + λ·∂R/∂v̄·∇²v̄,
+///   ∂v̄/∂l^M_k = −∂v̄/∂l^M_{k−1} = 1/(h s),  ∂v̄/∂t_f = −v̄/t_f,
+///   ∂²v̄/∂l^M_k∂t_f = −∂²v̄/∂l^M_{k−1}∂t_f = −1/(h s t_f),  ∂²v̄/∂t_f² = 2v̄/t_f²,
+/// ```
+///
+/// with J the map from the element's variables to the point inputs
+/// (½ on each node column, the v̄ row above).
+#[allow(clippy::too_many_arguments)]
+fn balance_hessian(
+    plan: &HessPlan,
+    data: &[f64],
+    (rows, cols): (&[(usize, f64)], &[usize]),
+    (r, vcol): (usize, usize),
+    (hstep, tf, speed): (f64, f64, f64),
+    (dl, nodes): (f64, usize),
+    (hw, gw): (&mut Vec<f64>, &mut Vec<f64>),
+    h: &mut [f64],
+) {
+    let ks = cols.len();
+    let mut pcols = cols.to_vec();
+    pcols.push(vcol);
+    Transcription::weighted_block(plan, data, rows, &pcols, hw, gw);
+    let np = ks + 1;
+    let kk = nodes * ks + 1;
+    let t = kk - 1;
+    let own = cols.iter().position(|&c| c == r).unwrap_or(0);
+    let dv = 1.0 / (hstep * speed);
+    let vbar = dl * dv;
+    // J row by row: (element column, value) per point input; node k − 1
+    // (if present) first, then node k.
+    let sign = |bi: usize| if bi + 1 == nodes { 1.0 } else { -1.0 };
+    let mut jrows: Vec<Vec<(usize, f64)>> = (0..ks)
+        .map(|a| (0..nodes).map(|bi| (bi * ks + a, 0.5)).collect())
+        .collect();
+    let mut vrow: Vec<(usize, f64)> = (0..nodes).map(|bi| (bi * ks + own, sign(bi) * dv)).collect();
+    vrow.push((t, -vbar / tf));
+    jrows.push(vrow);
+    h.iter_mut().for_each(|v| *v = 0.0);
+    for a in 0..np {
+        for b in 0..np {
+            let w = hw[a * np + b];
+            if w == 0.0 {
+                continue;
+            }
+            for &(c1, j1) in &jrows[a] {
+                for &(c2, j2) in &jrows[b] {
+                    h[c1 * kk + c2] += j1 * w * j2;
+                }
+            }
+        }
+    }
+    let g = gw[ks];
+    for bi in 0..nodes {
+        let e = g * sign(bi) * (-dv / tf);
+        h[(bi * ks + own) * kk + t] += e;
+        h[t * kk + bi * ks + own] += e;
+    }
+    h[t * kk + t] += g * 2.0 * vbar / (tf * tf);
+    // Exactly symmetric (the sums above run in different orders).
+    for c1 in 0..kk {
+        for c2 in 0..c1 {
+            h[c1 * kk + c2] = h[c2 * kk + c1];
+        }
+    }
+}
+
 /// The gradient over (q, q̇) (into `g`) of output `which` of
 /// [`JumpOcp::jump_objective`] (0 Y_C, 1 Ẏ_C, 2 J) at `xk`, by dual numbers,
 /// in the caller's workspace `ws` and seed buffer `xd` (length of `xk`).
@@ -2737,7 +3090,7 @@ pub fn time_hessian_passes(
 ) -> Result<[f64; 3], String> {
     let plan = HessPlan::new(pattern, ocp.nq(), ocp.nm()).ok_or("no Hessian for this model")?;
     let n = ocp.nq();
-    let mut w = HessWorker::new(ocp);
+    let mut w = HessWorker::new(ocp, ocp.nu());
     let mut out = vec![0.0; (ocp.nx() + 2) * plan.block];
     let mut times = [vec![], vec![], vec![]];
     for _ in 0..reps.max(1) {

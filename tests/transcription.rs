@@ -1294,3 +1294,107 @@ fn hessian_diagnostic() {
         );
     }
 }
+
+/// Implicit fibre dynamics, 8 intervals (own pattern: the force balances
+/// depend on the fibre velocities).
+fn implicit_transcription() -> Transcription {
+    let (ocp, _, _) = setup();
+    Transcription::new(
+        ocp.clone(),
+        TranscriptionOptions {
+            num_mesh_intervals: 8,
+            fiber_dynamics: FiberDynamics::Implicit,
+            ..Default::default()
+        },
+    )
+    .unwrap()
+}
+
+/// The force-balance rows' Jacobian (node means, the fibre velocity
+/// (l^M_k − l^M_{k−1})/h and its t_f dependence) and element Hessians
+/// (chain rule through v̄, with its second derivatives in t_f) against
+/// finite differences, held to the explicit form's tolerances (see
+/// `jacobian_matches_finite_differences_midpoint` and
+/// `element_hessians_match_finite_differences`).
+#[test]
+fn implicit_fiber_dynamics_derivatives_match_finite_differences() {
+    let mut tr = implicit_transcription();
+    assert!(tr.has_hessian());
+    let (guess, _) = tr.bang_bang_guess().unwrap();
+    let xp = perturbed(&tr, &guess, 7);
+    let r = fd_check(&mut tr, &xp);
+    eprintln!("implicit, perturbed guess: {} entries, worst {:.2e} ({}), kinks {}, refined {}, row-scaled {}, outside {:.2e} ({})", r.entries, r.worst, r.worst_at, r.kinks, r.refined, r.row_scaled, r.outside, r.outside_at);
+    assert!(r.worst <= 1e-6, "{}", r.worst_at);
+    assert!(r.outside <= 1e-7, "{}", r.outside_at);
+    assert!(r.kinks <= r.entries / 1000, "{} kinks", r.kinks);
+    let lambda = random_multipliers(tr.num_constraints(), 11);
+    element_hessians_symmetric(&mut tr, &xp, &lambda);
+    let rep = hessian_fd_report(&mut tr, &xp, &lambda, 1e-6);
+    eprintln!("implicit perturbed point, best of steps: {:?}", rep.first());
+    assert!(rep.first().is_none_or(|r| r.0 < 5e-4), "{:?}", rep.first());
+}
+
+/// The two forms have the same solutions: where a fibre-length defect of
+/// the explicit form vanishes (l^M at node k solved for by the secant
+/// method, everything else at the guess), the implicit form's force balance
+/// vanishes too, and every other row is the same in both.
+#[test]
+fn implicit_and_explicit_fiber_rows_vanish_together() {
+    let mut imp = implicit_transcription();
+    let mut exp = transcription(TranscriptionOptions {
+        num_mesh_intervals: 8,
+        ..Default::default()
+    });
+    let (guess, _) = exp.bang_bang_guess().unwrap();
+    let x = perturbed(&exp, &guess, 3);
+    let m = exp.num_constraints();
+    let (mut ce, mut ci) = (vec![0.0; m], vec![0.0; m]);
+    exp.constraints(&x, &mut ce).unwrap();
+    imp.constraints(&x, &mut ci).unwrap();
+    let nx = exp.ocp.nx();
+    let lm0 = 2 * exp.ocp.nq();
+    for i in 0..m {
+        if !imp.is_balance_row(i % nx) || i >= 8 * nx {
+            assert_eq!(ce[i], ci[i], "{}", exp.constraint_name(i));
+        }
+    }
+    let mut checked = 0;
+    for k in [1, 4, 8] {
+        for mi in [0, 5, 15, 21] {
+            let r = lm0 + mi;
+            let row = (k - 1) * nx + r;
+            let col = exp.state_index(k, r).unwrap();
+            let resid = |tr: &mut Transcription, v: f64| {
+                let mut y = x.clone();
+                y[col] = v;
+                let mut c = vec![0.0; m];
+                tr.constraints(&y, &mut c).unwrap();
+                c[row]
+            };
+            // Secant on the explicit defect in l^M_k.
+            let (mut a, mut b) = (x[col], x[col] * (1.0 + 1e-3));
+            let (mut fa, mut fb) = (resid(&mut exp, a), resid(&mut exp, b));
+            for _ in 0..50 {
+                if fb.abs() < 1e-15 || fa == fb {
+                    break;
+                }
+                let c = b - fb * (b - a) / (fb - fa);
+                (a, fa) = (b, fb);
+                (b, fb) = (c, resid(&mut exp, c));
+            }
+            assert!(fb.abs() < 1e-13, "explicit defect {fb} not solved");
+            let balance = resid(&mut imp, b);
+            let away = resid(&mut imp, x[col]);
+            eprintln!(
+                "interval {k}, {}: balance {balance:.2e} at the root, {away:.2e} at the guess",
+                imp.constraint_name(row)
+            );
+            // The explicit root is good to ~1e-15 m; the balance's slope in
+            // l^M is at most ~1e5 F0/m (tendon stiffness) and h/(v_max l_o).
+            assert!(balance.abs() < 1e-8, "{}: {balance}", imp.constraint_name(row));
+            assert!(away.abs() > 1e3 * balance.abs().max(1e-12));
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 12);
+}
