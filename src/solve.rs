@@ -29,7 +29,7 @@ use crate::simulate::{
     SimulateOptions,
 };
 use crate::sqp::{SqpResult, SqpStatus};
-use crate::study::{scheme_name, ForwardCheck, GuessChoice, SolveConfig};
+use crate::study::{fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, SolveConfig};
 use crate::transcription::{MeshTrajectory, Scheme, Transcription, TranscriptionError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -139,6 +139,8 @@ pub struct SolveReport {
     pub guess_jump_height_m: Option<f64>,
     pub num_mesh_intervals: usize,
     pub scheme: &'static str,
+    /// "explicit" or "implicit" ([`crate::transcription::FiberDynamics`]).
+    pub fiber_dynamics: &'static str,
     pub hessian: crate::sqp::HessianMode,
     pub variables: usize,
     pub constraints: usize,
@@ -199,9 +201,10 @@ pub fn run(
     progress("static squat and jump problem");
     let ocp = Arc::new(JumpOcp::new(&model, options)?);
     progress(&format!(
-        "collocation: {} mesh intervals, {}",
+        "collocation: {} mesh intervals, {}, {} fibre dynamics",
         big_n,
-        scheme_name(config.transcription.scheme)
+        scheme_name(config.transcription.scheme),
+        fiber_dynamics_name(config.transcription.fiber_dynamics)
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let (guess, guess_name, guess_jump) = match &config.guess {
@@ -376,6 +379,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         guess_jump_height_m: None,
         num_mesh_intervals: tr.num_intervals(),
         scheme: scheme_name(tr.options().scheme),
+        fiber_dynamics: fiber_dynamics_name(tr.options().fiber_dynamics),
         hessian: r.hessian,
         variables: tr.num_variables(),
         constraints: tr.num_constraints(),
@@ -610,9 +614,10 @@ impl SolveReport {
             format!("{:.2e}", self.max_constraint_violation),
         ]);
         let mut s = format!(
-            "jump solve ({} mesh intervals, {}, {:?} Hessian): {} ({}){}\n{t}\n",
+            "jump solve ({} mesh intervals, {}, {} fibre dynamics, {:?} Hessian): {} ({}){}\n{t}\n",
             self.num_mesh_intervals,
             self.scheme,
+            self.fiber_dynamics,
             self.hessian,
             serde_json::to_value(self.status)
                 .ok()

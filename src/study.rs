@@ -298,6 +298,7 @@ impl SolveStudy {
             transcription.fiber_dynamics =
                 parse_fiber_dynamics(s).map_err(|r| err("mesh.fiber_dynamics", r))?;
         }
+        check_fiber_dynamics(&transcription).map_err(|r| err("mesh.fiber_dynamics", r))?;
 
         let guess = match self.guess.as_deref() {
             None | Some("bang-bang") => GuessChoice::BangBang,
@@ -478,6 +479,7 @@ impl SolveConfig {
             self.transcription.fiber_dynamics =
                 parse_fiber_dynamics(s).map_err(|r| err("--fiber-dynamics", r))?;
         }
+        check_fiber_dynamics(&self.transcription).map_err(|r| err("--fiber-dynamics", r))?;
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
@@ -582,6 +584,25 @@ pub fn parse_fiber_dynamics(s: &str) -> Result<FiberDynamics, String> {
     }
 }
 
+/// Implicit fibre dynamics are stated at the midpoints of midpoint Euler.
+fn check_fiber_dynamics(t: &TranscriptionOptions) -> Result<(), String> {
+    if t.fiber_dynamics == FiberDynamics::Implicit && t.scheme != Scheme::MidpointEuler {
+        return Err(format!(
+            "implicit fibre dynamics need the midpoint-euler scheme, not {}",
+            scheme_name(t.scheme)
+        ));
+    }
+    Ok(())
+}
+
+/// The name of a fibre dynamics form.
+pub fn fiber_dynamics_name(f: FiberDynamics) -> &'static str {
+    match f {
+        FiberDynamics::Explicit => "explicit",
+        FiberDynamics::Implicit => "implicit",
+    }
+}
+
 /// A scheme by name.
 pub fn parse_scheme(s: &str) -> Result<Scheme, String> {
     SCHEMES
@@ -674,6 +695,13 @@ mod tests {
         let (f, r) = field_error(r#"{"mesh": {"scheme": "euler"}}"#);
         assert_eq!(f, "mesh.scheme");
         assert!(r.contains("hermite-simpson"), "{r}");
+        let (f, r) = field_error(r#"{"mesh": {"fiber_dynamics": "semi"}}"#);
+        assert_eq!(f, "mesh.fiber_dynamics");
+        assert!(r.contains("explicit, implicit"), "{r}");
+        let (f, r) =
+            field_error(r#"{"mesh": {"fiber_dynamics": "implicit", "scheme": "trapezoidal"}}"#);
+        assert_eq!(f, "mesh.fiber_dynamics");
+        assert!(r.contains("midpoint-euler"), "{r}");
         let (f, r) = field_error(r#"{"tolerances": {"max_iteration": 3}}"#);
         assert_eq!(f, "tolerances.max_iteration");
         assert!(r.contains("max_iteration"), "{r}");

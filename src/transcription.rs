@@ -2017,8 +2017,7 @@ impl Nlp for Transcription {
                     speed,
                 } => {
                     let j = &self.point_jac[point * nnz..(point + 1) * nnz];
-                    entry.map_or(0.0, |e| 0.5 * j[e])
-                        + speed.map_or(0.0, |(e, s)| j[e] * s / h)
+                    entry.map_or(0.0, |e| 0.5 * j[e]) + speed.map_or(0.0, |(e, s)| j[e] * s / h)
                 }
                 Src::BalanceTf {
                     point,
@@ -3000,7 +2999,9 @@ fn balance_hessian(
     let mut jrows: Vec<Vec<(usize, f64)>> = (0..ks)
         .map(|a| (0..nodes).map(|bi| (bi * ks + a, 0.5)).collect())
         .collect();
-    let mut vrow: Vec<(usize, f64)> = (0..nodes).map(|bi| (bi * ks + own, sign(bi) * dv)).collect();
+    let mut vrow: Vec<(usize, f64)> = (0..nodes)
+        .map(|bi| (bi * ks + own, sign(bi) * dv))
+        .collect();
     vrow.push((t, -vbar / tf));
     jrows.push(vrow);
     h.iter_mut().for_each(|v| *v = 0.0);

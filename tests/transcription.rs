@@ -1391,7 +1391,11 @@ fn implicit_and_explicit_fiber_rows_vanish_together() {
             );
             // The explicit root is good to ~1e-15 m; the balance's slope in
             // l^M is at most ~1e5 F0/m (tendon stiffness) and h/(v_max l_o).
-            assert!(balance.abs() < 1e-8, "{}: {balance}", imp.constraint_name(row));
+            assert!(
+                balance.abs() < 1e-8,
+                "{}: {balance}",
+                imp.constraint_name(row)
+            );
             assert!(away.abs() > 1e3 * balance.abs().max(1e-12));
             checked += 1;
         }
