@@ -86,13 +86,14 @@ enum Command {
         /// "bang-bang" or a .sto file with every state and control column.
         #[arg(long)]
         guess: Option<String>,
-        /// midpoint-euler (default), trapezoidal, hermite-simpson or backward-euler.
+        /// midpoint-euler (default), trapezoidal, hermite-simpson or
+        /// backward-euler (the last three with explicit fibre dynamics).
         #[arg(long)]
         scheme: Option<String>,
-        /// explicit (default: fibre velocity from the inverted
-        /// force-velocity curve, the paper's form) or implicit (the
-        /// muscle-tendon force balance at the interval's fibre velocity;
-        /// midpoint-euler only).
+        /// implicit (default: the muscle-tendon force balance at the
+        /// interval's fibre velocity; midpoint-euler only) or explicit
+        /// (fibre velocity from the inverted force-velocity curve, the
+        /// paper's form).
         #[arg(long)]
         fiber_dynamics: Option<String>,
         /// exact (default: exact element Hessians, negative eigenvalues

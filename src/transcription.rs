@@ -17,6 +17,10 @@
 //!     d_k = x_k − x_{k−1} − h·f((x_{k−1} + x_k)/2, (u_{k−1} + u_k)/2);
 //!   - trapezoidal: d_k = x_k − x_{k−1} − (h/2)·(f(x_{k−1}, u_{k−1}) + f(x_k, u_k));
 //!   - Hermite–Simpson (compressed): d_k = x_k − x_{k−1} − (h/6)·(f_{k−1} + 4 f_c + f_k);
+//!   - with [`FiberDynamics::Implicit`] (midpoint Euler) the fibre-length
+//!     rows are the muscle-tendon force balances at the midpoint instead,
+//!     with the interval's fibre velocity (l^M_k − l^M_{k−1})/h as an input:
+//!     the same variables and solutions, a row smooth in the activation;
 //! - no countermovement (eq. 4), row j = 0..n_cm−1:
 //!   Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0 (Ÿ_C from q, q̇ and q̈ = f(x, u) at the node);
 //! - lift-off: F_y(t_f)/(m g) ≤ ε (or = ε), see [`crate::ocp::LiftOff`];

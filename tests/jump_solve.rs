@@ -44,7 +44,15 @@ fn solve_with(study: &str, tag: &str, overrides: Overrides) -> SolveReport {
 /// switch, jumping as high as predicted within issue 5's 1 cm.
 #[test]
 fn reduced_jump_is_solved_and_agrees_with_its_forward_simulation() {
-    let r = solve("models/jump_reduced.json", "reduced");
+    let r = solve_with(
+        "models/jump_reduced.json",
+        "reduced",
+        Overrides {
+            fiber_dynamics: Some("explicit".into()),
+            ..Default::default()
+        },
+    );
+    assert_eq!(r.fiber_dynamics, "explicit");
     assert_solved_and_forward_checked(&r);
 }
 
