@@ -144,18 +144,26 @@ impl Thelen {
         }
     }
 
-    /// The state derivatives and tendon force only (the hot path).
+    /// cos φ, the normalised fibre length and the tendon force multiplier
+    /// at fibre length `lm_state` (clamped to l_min) and muscle-tendon
+    /// length `lmt`.
     #[inline]
-    pub fn rates<S: Scalar>(&self, a: S, lm_state: S, lmt: S, u: S) -> MuscleRates<S> {
-        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+    fn fibre_and_tendon<S: Scalar>(&self, lm_state: S, lmt: S) -> (S, S, S) {
         let lm = if lm_state.re() < self.min_fiber_length {
             c(self.min_fiber_length)
         } else {
             lm_state
         };
         let (_, cos_phi) = self.pennation_sin_cos(lm);
-        let ln = lm / self.lopt;
         let fse = self.fse((lmt - lm * cos_phi) / self.lts - 1.0);
+        (cos_phi, lm / self.lopt, fse)
+    }
+
+    /// The state derivatives and tendon force only (the hot path).
+    #[inline]
+    pub fn rates<S: Scalar>(&self, a: S, lm_state: S, lmt: S, u: S) -> MuscleRates<S> {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let (cos_phi, ln, fse) = self.fibre_and_tendon(lm_state, lmt);
         let f = fse / cos_phi - self.fpe(ln);
         let mut vn = self.dlce_n(ac, self.fal(ln), f);
         if lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0 {
@@ -236,14 +244,7 @@ impl Thelen {
     /// same fibre dynamics; activation and fibre length clamped as there).
     pub fn force_balance<S: Scalar>(&self, a: S, lm_state: S, lmt: S, vn: S) -> S {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
-        let lm = if lm_state.re() < self.min_fiber_length {
-            c(self.min_fiber_length)
-        } else {
-            lm_state
-        };
-        let (_, cos_phi) = self.pennation_sin_cos(lm);
-        let ln = lm / self.lopt;
-        let fse = self.fse((lmt - lm * cos_phi) / self.lts - 1.0);
+        let (cos_phi, ln, fse) = self.fibre_and_tendon(lm_state, lmt);
         fse - (ac * self.fal(ln) * self.fv(ac, vn) + self.fpe(ln)) * cos_phi
     }
 

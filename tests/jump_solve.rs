@@ -44,32 +44,28 @@ fn solve_with(study: &str, tag: &str, overrides: Overrides) -> SolveReport {
 /// switch, jumping as high as predicted within issue 5's 1 cm.
 #[test]
 fn reduced_jump_is_solved_and_agrees_with_its_forward_simulation() {
-    let r = solve_with(
-        "models/jump_reduced.json",
-        "reduced",
-        Overrides {
-            fiber_dynamics: Some("explicit".into()),
-            ..Default::default()
-        },
-    );
-    assert_eq!(r.fiber_dynamics, "explicit");
-    assert_solved_and_forward_checked(&r);
+    assert_solved_and_forward_checked(&solve_reduced("explicit"));
 }
 
 /// The same with implicit fibre dynamics (the force balance in place of the
 /// inverted force–velocity curve): the same problem, so the same checks.
 #[test]
 fn reduced_jump_with_implicit_fibre_dynamics_is_solved_and_agrees() {
+    assert_solved_and_forward_checked(&solve_reduced("implicit"));
+}
+
+/// The reduced study with the given fibre dynamics.
+fn solve_reduced(fiber: &str) -> SolveReport {
     let r = solve_with(
         "models/jump_reduced.json",
-        "reduced_implicit",
+        &format!("reduced_{fiber}"),
         Overrides {
-            fiber_dynamics: Some("implicit".into()),
+            fiber_dynamics: Some(fiber.into()),
             ..Default::default()
         },
     );
-    assert_eq!(r.fiber_dynamics, "implicit");
-    assert_solved_and_forward_checked(&r);
+    assert_eq!(r.fiber_dynamics, fiber);
+    r
 }
 
 /// Solved within the paper's 1e-3, a jump, and the forward simulation of

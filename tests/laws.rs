@@ -31,20 +31,34 @@ fn close(a: f64, b: f64, floor: f64) -> bool {
     (a - b).abs() <= 2e-9 * b.abs().max(floor)
 }
 
-#[test]
-fn thelen_matches_opensim_46_tables() {
-    let data: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap())
-            .unwrap();
-    for set in ["defaults", "legacy"] {
-        let d = &data[set];
-        for row in d["rows"].as_array().unwrap() {
-            let r: Vec<f64> = row
-                .as_array()
+/// OpenSim 4.6's Thelen2003Muscle tables (model-equations.md §8).
+fn thelen_tables() -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap())
+        .unwrap()
+}
+
+/// The rows of table `key` of one parameter set, as numbers.
+fn rows_of(d: &serde_json::Value, key: &str) -> Vec<Vec<f64>> {
+    d[key]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|row| {
+            row.as_array()
                 .unwrap()
                 .iter()
                 .map(|v| v.as_f64().unwrap())
-                .collect();
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn thelen_matches_opensim_46_tables() {
+    let data = thelen_tables();
+    for set in ["defaults", "legacy"] {
+        let d = &data[set];
+        for r in rows_of(d, "rows") {
             let th = Thelen::new(&muscle(r[0], &d["params"]));
             let info = th.calc(r[4], r[3], r[1], r[2], r[5]);
             let ctx = format!("{set} {r:?}");
@@ -74,13 +88,7 @@ fn thelen_matches_opensim_46_tables() {
                 info.activation_rate
             );
         }
-        for row in d["equilibrium"].as_array().unwrap() {
-            let r: Vec<f64> = row
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
+        for r in rows_of(d, "equilibrium") {
             let th = Thelen::new(&muscle(r[0], &d["params"]));
             let lm = th.equilibrium_fiber_length(r[2], r[1]);
             // OpenSim's equilibrium solver stops at a force residual of
@@ -113,19 +121,11 @@ fn thelen_matches_opensim_46_tables() {
 /// back OpenSim's f_v.
 #[test]
 fn thelen_force_balance_vanishes_at_opensim_fibre_velocity() {
-    let data: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string("tests/data/thelen_opensim46.json").unwrap())
-            .unwrap();
+    let data = thelen_tables();
     let mut rows = 0;
     for set in ["defaults", "legacy"] {
         let d = &data[set];
-        for row in d["rows"].as_array().unwrap() {
-            let r: Vec<f64> = row
-                .as_array()
-                .unwrap()
-                .iter()
-                .map(|v| v.as_f64().unwrap())
-                .collect();
+        for r in rows_of(d, "rows") {
             let th = Thelen::new(&muscle(r[0], &d["params"]));
             let (lmt, lm, a) = (r[1], r[3], r[4]);
             let info = th.calc(a, lm, lmt, r[2], r[5]);
