@@ -781,9 +781,6 @@ pub struct Transcription {
     compiled: Compiled,
     nx: usize,
     nu: usize,
-    /// Point inputs u: the excitations, then with implicit fibre dynamics
-    /// the normalised fibre velocities ([`point_inputs`]).
-    npu: usize,
     /// v_max·l_o per carried muscle (m/s).
     fiber_speed: Vec<f64>,
     n_cm: usize,
@@ -1143,7 +1140,6 @@ impl Transcription {
             compiled,
             nx,
             nu,
-            npu,
             fiber_speed,
             n_cm,
             n_cv,
@@ -2612,7 +2608,8 @@ impl Transcription {
         let nout = self.nx + 2;
         let block = plan.block;
         let threads = self.options.threads;
-        let npu = self.npu;
+        // The point inputs (excitations, and implicit: fibre velocities).
+        let npu = self.pattern.nu;
         let h = v[self.final_time_index()] / self.num_intervals() as f64;
         let cache = self.hess.get_or_insert_with(|| {
             Box::new(HessCache {
