@@ -539,7 +539,15 @@ impl DeGroote {
     /// Force-velocity multiplier and its inverse.
     pub fn fv<S: Scalar>(&self, v: S) -> S {
         let t = v * DG_D[1] + DG_D[2];
-        (t + (t * t + 1.0).sqrt()).ln() * DG_D[0] + DG_D[3]
+        // asinh(t) = ln(t + √(t² + 1)), odd: for t < 0 the sum cancels
+        // (fast lengthening: t = −1e7 leaves a few digits), so −asinh(−t).
+        let asinh_pos = |t: S| (t + (t * t + 1.0).sqrt()).ln();
+        let asinh = if t.re() < 0.0 {
+            -asinh_pos(-t)
+        } else {
+            asinh_pos(t)
+        };
+        asinh * DG_D[0] + DG_D[3]
     }
     pub fn fv_inv<S: Scalar>(&self, f: S) -> S {
         (((f - DG_D[3]) / DG_D[0]).sinh() - DG_D[2]) / DG_D[1]

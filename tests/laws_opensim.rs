@@ -191,7 +191,8 @@ fn passive_torques_match_opensim() {
 
 /// DeGrooteFregly2016Muscle: at OpenSim's fibre length for its tendon-force
 /// state, leap's fibre-length formulation gives OpenSim's fibre velocity,
-/// tendon force, pennation and activation rate.
+/// tendon force, pennation and activation rate, and its force balance
+/// vanishes at OpenSim's fibre velocity.
 #[test]
 fn degroote_matches_opensim() {
     use leap::laws::DeGroote;
@@ -227,6 +228,10 @@ fn degroote_matches_opensim() {
                 1e-3,
             );
             check(&format!("tendon force {ctx}"), info.tendon_force, r[6], 1.0);
+            // The implicit form: the force balance vanishes at OpenSim's
+            // fibre velocity (units of F0; OpenSim's v_M carries 10 digits).
+            let balance = dg.force_balance(r[2], r[4], r[0], r[5] / (dg.vmax * dg.lopt));
+            assert!(balance.abs() < 1e-6, "force balance {balance} ({ctx})");
             check(
                 &format!("pennation {ctx}"),
                 info.pennation_angle,
