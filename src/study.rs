@@ -287,23 +287,15 @@ impl SolveStudy {
                 .ok_or_else(|| err("model", format!("the default model '{DEFAULT_MODEL}' is not found in the working directory; name one")))?,
         };
 
-        // Implicit fibre dynamics by default: the same variables and
-        // solutions as the paper's explicit rows, and on the default study
-        // every mesh of 24-30 intervals solved (112-829 iterations) where
-        // the explicit rows solved two of four (810 and 954 iterations;
-        // `leap bench solve --num-mesh-intervals 24,26,28,30`, README).
-        let mut transcription = TranscriptionOptions {
-            fiber_dynamics: FiberDynamics::Implicit,
-            ..Default::default()
-        };
+        let mut transcription = TranscriptionOptions::default();
         if let Some(n) = self.mesh.num_mesh_intervals {
             transcription.num_mesh_intervals =
                 check_mesh_intervals(n).map_err(|r| err("mesh.num_mesh_intervals", r))?;
         }
         if let Some(s) = &self.mesh.scheme {
             transcription.scheme = parse_scheme(s).map_err(|r| err("mesh.scheme", r))?;
-            transcription.fiber_dynamics = default_fiber_dynamics(transcription.scheme);
         }
+        transcription.fiber_dynamics = default_fiber_dynamics(transcription.scheme);
         if let Some(s) = &self.mesh.fiber_dynamics {
             transcription.fiber_dynamics =
                 parse_fiber_dynamics(s).map_err(|r| err("mesh.fiber_dynamics", r))?;
@@ -605,7 +597,11 @@ pub fn parse_fiber_dynamics(s: &str) -> Result<FiberDynamics, String> {
 
 /// The fibre dynamics a scheme gets unless the study names them: implicit
 /// for midpoint Euler, explicit for the others (implicit rows are stated at
-/// the midpoints).
+/// the midpoints). Implicit rows have the same variables and solutions as
+/// the paper's explicit ones, and on the default study every mesh of 24-30
+/// intervals solved (112-829 iterations) where the explicit rows solved two
+/// of four (810 and 954 iterations; `leap bench solve --num-mesh-intervals
+/// 24,26,28,30`, README).
 fn default_fiber_dynamics(scheme: Scheme) -> FiberDynamics {
     if scheme == Scheme::MidpointEuler {
         FiberDynamics::Implicit

@@ -514,8 +514,6 @@ impl Compiled {
 
 /// Buffers of one evaluation thread.
 struct Worker<const W: usize> {
-    /// The inputs u hold the fibre velocities after the excitations.
-    implicit: bool,
     ws: StateWorkspace<f64>,
     wd: StateWorkspace<DualSVec64<W>>,
     x: Vec<f64>,
@@ -532,7 +530,6 @@ impl<const W: usize> Worker<W> {
         let nx = ocp.nx();
         let z = DualSVec64::<W>::from(0.0);
         Worker {
-            implicit: nu > ocp.nu(),
             ws: ocp.eq.workspace(),
             wd: ocp.eq.workspace(),
             x: vec![0.0; nx],
@@ -554,12 +551,11 @@ fn point_inputs(ocp: &JumpOcp, fiber: FiberDynamics) -> usize {
     }
 }
 
-/// ẋ = f(x, u) into `xdot` and (Ÿ_C, F_y/(m g)), with `implicit` the
-/// fibre-length rows replaced by the force balances at the normalised fibre
-/// velocities u[n_u..] ([`FiberDynamics::Implicit`]).
+/// ẋ = f(x, u) into `xdot` and (Ÿ_C, F_y/(m g)); where u holds more than
+/// the excitations, the fibre-length rows are the force balances at the
+/// normalised fibre velocities u[n_u..] ([`FiberDynamics::Implicit`]).
 fn point_rates<S: crate::scalar::Scalar>(
     ocp: &JumpOcp,
-    implicit: bool,
     ws: &mut StateWorkspace<S>,
     x: &[S],
     u: &[S],
@@ -569,7 +565,7 @@ fn point_rates<S: crate::scalar::Scalar>(
     let out = ocp
         .state_rates(ws, x, &u[..nu], xdot)
         .map_err(|e| e.to_string())?;
-    if implicit {
+    if u.len() > nu {
         let (n, nm) = (ocp.nq(), ocp.nm());
         for k in 0..nm {
             let law = &ocp.laws.muscles[ocp.eq.muscles[k]];
@@ -587,7 +583,7 @@ fn eval_value<const W: usize>(
     out: &mut [f64],
 ) -> Result<(), String> {
     let nx = w.x.len();
-    let (ydd, fy) = point_rates(ocp, w.implicit, &mut w.ws, &w.x, &w.u, &mut w.xdot)?;
+    let (ydd, fy) = point_rates(ocp, &mut w.ws, &w.x, &w.u, &mut w.xdot)?;
     out[..nx].copy_from_slice(&w.xdot);
     out[nx] = ydd;
     out[nx + 1] = fy;
@@ -626,7 +622,7 @@ fn eval_jac<const W: usize>(
                 w.ud[c - nx] = DualSVec64::from_re(w.u[c - nx]).derivative(l);
             }
         }
-        let (ydd, fy) = point_rates(ocp, w.implicit, &mut w.wd, &w.xd, &w.ud, &mut w.xdotd)?;
+        let (ydd, fy) = point_rates(ocp, &mut w.wd, &w.xd, &w.ud, &mut w.xdotd)?;
         if s == 0 {
             for i in 0..nx {
                 out[i] = w.xdotd[i].re;
@@ -2393,7 +2389,6 @@ enum HessElement {
 
 /// Buffers of one second-order pass.
 struct PassBuf<const M: usize, const N: usize> {
-    implicit: bool,
     ws: StateWorkspace<HyperDualSVec64<M, N>>,
     xd: Vec<HyperDualSVec64<M, N>>,
     ud: Vec<HyperDualSVec64<M, N>>,
@@ -2405,7 +2400,6 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
         let nx = ocp.nx();
         let z = HyperDualSVec64::<M, N>::from_re(0.0);
         PassBuf {
-            implicit: nu > ocp.nu(),
             ws: ocp.eq.workspace(),
             xd: vec![z; nx],
             ud: vec![z; nu],
@@ -2445,14 +2439,7 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
                 self.ud[c - nx] = d;
             }
         }
-        let (ydd, fy) = point_rates(
-            ocp,
-            self.implicit,
-            &mut self.ws,
-            &self.xd,
-            &self.ud,
-            &mut self.xdotd,
-        )?;
+        let (ydd, fy) = point_rates(ocp, &mut self.ws, &self.xd, &self.ud, &mut self.xdotd)?;
         let (m1, n2, block) = (plan.m1, plan.n2, plan.block);
         for r in 0..nx + 2 {
             let d = if r < nx {
