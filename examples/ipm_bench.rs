@@ -4,10 +4,11 @@
 //! `cargo run --release --example ipm_bench -- DIR/*.json` (with
 //! `INERTIA=1` the solver's inertia correction is on, as in
 //! `--hessian exact-inertia-corrected`; `TOL` sets its tolerance, default
-//! 1e-10 as the SQP's).
+//! 1e-10 as the SQP's; `ORDERING=amd` orders the KKT matrix by AMD alone
+//! instead of the smaller factor of AMD and nested dissection).
 #[path = "common/qp_json.rs"]
 mod qp_json;
-use leap::sqp::ipm::Ipm;
+use leap::sqp::ipm::{Ipm, KktOrdering};
 use qp_json::csc;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -16,11 +17,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|s| s.parse().ok())
         .unwrap_or(3);
     let inertia = std::env::var_os("INERTIA").is_some();
+    let ordering = match std::env::var("ORDERING").as_deref() {
+        Ok("amd") => KktOrdering::Amd,
+        _ => KktOrdering::SmallerFactor,
+    };
     let tol: f64 = std::env::var("TOL")
         .ok()
         .and_then(|s| s.parse().ok())
         .unwrap_or(1e-10);
     let (mut total, mut total_it) = (0.0, 0);
+    let mut factor_size = None;
     for path in std::env::args().skip(1) {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)?;
         let (p, a) = (csc(&json["P"])?, csc(&json["A"])?);
@@ -30,7 +36,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut times = Vec::new();
         let (mut status, mut iterations, mut obj) = (None, 0, 0.0);
         for _ in 0..repeats.max(1) {
-            let mut s = Ipm::new(&p, &a, num_eq)?;
+            let mut s = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
             s.inertia_correction = inertia;
             let t = std::time::Instant::now();
             status = Some(s.solve(&p, &a, &q, &b, tol));
@@ -41,6 +47,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             obj = s.x.iter().zip(&px).map(|(x, y)| 0.5 * x * y).sum::<f64>()
                 + s.x.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
         }
+        if factor_size.is_none() {
+            let s = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
+            factor_size = Some(s.size());
+        }
         times.sort_by(f64::total_cmp);
         let median = times[times.len() / 2];
         total += median;
@@ -50,6 +60,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             1e3 * median,
             1e3 * median / iterations.max(1) as f64
         );
+    }
+    if let Some((kkt, factor)) = factor_size {
+        println!("KKT matrix {kkt} entries (upper triangle), factor {factor}");
     }
     println!("total {:.1} ms, {total_it} iterations", 1e3 * total);
     Ok(())

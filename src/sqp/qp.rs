@@ -13,7 +13,7 @@
 //! calls clarabel's in-place updates (presolve off, structural zeros kept),
 //! so the solver object is created once per solve.
 
-use super::ipm::{Ipm, IpmStatus};
+use super::ipm::{Ipm, IpmStatus, KktOrdering};
 use crate::nlp::{Element, INFINITE_BOUND};
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
@@ -431,7 +431,16 @@ impl Qp {
     /// or None where clarabel is to solve the QP.
     fn solve_ipm(&mut self) -> Result<Option<QpOutcome>, String> {
         if self.ipm.is_none() {
-            let mut ipm = Ipm::new(&self.p, &self.a, self.num_eq)?;
+            // The inertia correction pivots without interchanges: in
+            // nested-dissection order its solves lost their footing (all
+            // four meshes of the jump ended in numerical errors), so it
+            // keeps AMD's.
+            let ordering = if self.inertia_correction {
+                KktOrdering::Amd
+            } else {
+                KktOrdering::SmallerFactor
+            };
+            let mut ipm = Ipm::with_ordering(&self.p, &self.a, self.num_eq, ordering)?;
             ipm.inertia_correction = self.inertia_correction;
             self.ipm = Some(ipm);
         }
