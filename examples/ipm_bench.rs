@@ -42,14 +42,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             status = Some(s.solve(&p, &a, &q, &b, tol));
             times.push(t.elapsed().as_secs_f64());
             iterations = s.iterations;
+            factor_size = Some(s.size());
             let mut px = vec![0.0; q.len()];
             Ipm::p_mul(&p, &s.x, &mut px);
             obj = s.x.iter().zip(&px).map(|(x, y)| 0.5 * x * y).sum::<f64>()
                 + s.x.iter().zip(&q).map(|(x, y)| x * y).sum::<f64>();
-        }
-        if factor_size.is_none() {
-            let s = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
-            factor_size = Some(s.size());
         }
         times.sort_by(f64::total_cmp);
         let median = times[times.len() / 2];

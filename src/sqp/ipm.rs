@@ -79,7 +79,8 @@ fn nested_dissection(
     colptr: &[usize],
     rowind: &[usize],
 ) -> Option<(Vec<usize>, Vec<usize>)> {
-    if dim < 64 || dim > i32::MAX as usize / 2 {
+    // METIS's indices are i32: the adjacency lists both triangles.
+    if dim < 64 || 2 * rowind.len() >= i32::MAX as usize {
         return None;
     }
     // The adjacency of the graph of the pattern: both triangles, no diagonal.
