@@ -245,7 +245,33 @@ impl Thelen {
     pub fn force_balance<S: Scalar>(&self, a: S, lm_state: S, lmt: S, vn: S) -> S {
         let ac = clamp(a, MIN_ACTIVATION, 1.0);
         let (cos_phi, ln, fse) = self.fibre_and_tendon(lm_state, lmt);
+        self.balance(ac, cos_phi, ln, fse, vn)
+    }
+
+    /// f_se − (a·f_al·f_v + f_pe)·cos φ from the fibre and tendon state.
+    fn balance<S: Scalar>(&self, ac: S, cos_phi: S, ln: S, fse: S, vn: S) -> S {
         fse - (ac * self.fal(ln) * self.fv(ac, vn) + self.fpe(ln)) * cos_phi
+    }
+
+    /// [`Thelen::rates`] with the force balance at normalised fibre
+    /// velocity `vn` ([`Thelen::force_balance`]) in place of the fibre
+    /// velocity: the implicit fibre dynamics, without inverting the
+    /// force-velocity curve.
+    pub fn balance_rates<S: Scalar>(
+        &self,
+        a: S,
+        lm_state: S,
+        lmt: S,
+        u: S,
+        vn: S,
+    ) -> MuscleRates<S> {
+        let ac = clamp(a, MIN_ACTIVATION, 1.0);
+        let (cos_phi, ln, fse) = self.fibre_and_tendon(lm_state, lmt);
+        MuscleRates {
+            tendon_force: fse * self.f0,
+            fiber_velocity: self.balance(ac, cos_phi, ln, fse, vn),
+            activation_rate: self.activation_rate(a, u),
+        }
     }
 
     /// Activation rate (OpenSim 4.x: excitation not clamped; §1.1).
@@ -646,6 +672,22 @@ impl MuscleLaw {
             MuscleLaw::DeGroote(d) => d.force_balance(a, lm, lmt, vn),
         }
     }
+    /// The muscle's rates with the force balance at normalised fibre
+    /// velocity `vn` in place of the fibre velocity (implicit fibre
+    /// dynamics; see [`Thelen::balance_rates`]).
+    pub fn balance_rates<S: Scalar>(&self, a: S, lm: S, lmt: S, u: S, vn: S) -> MuscleRates<S> {
+        match self {
+            MuscleLaw::Thelen(t) => t.balance_rates(a, lm, lmt, u, vn),
+            MuscleLaw::DeGroote(d) => {
+                let info = d.calc(a, lm, lmt, u);
+                MuscleRates {
+                    tendon_force: info.tendon_force,
+                    fiber_velocity: d.force_balance(a, lm, lmt, vn),
+                    activation_rate: info.activation_rate,
+                }
+            }
+        }
+    }
     /// v_max·l_o (m/s): the fibre speed of a normalised velocity of 1.
     pub fn max_fiber_speed(&self) -> f64 {
         match self {
@@ -706,6 +748,63 @@ impl OpenSimLaws {
     }
 }
 
+/// `r`, or the error that names what turned non-finite.
+fn finite_rates<S: Scalar>(
+    r: MuscleRates<S>,
+    a: S,
+    lm: S,
+    lmt: S,
+) -> Result<MuscleRates<S>, String> {
+    if !r.fiber_velocity.re().is_finite() || !r.tendon_force.re().is_finite() {
+        return Err(format!(
+            "non-finite fibre velocity (or force balance) or tendon force (a = {}, l_M = {}, l_MT = {})",
+            a.re(),
+            lm.re(),
+            lmt.re()
+        ));
+    }
+    Ok(r)
+}
+
+/// OpenSim's laws with each muscle's fibre velocity replaced by its force
+/// balance at a given normalised fibre velocity (implicit fibre dynamics):
+/// `vn[slot[m]]` for model muscle m.
+pub struct BalanceLaws<'a, S> {
+    pub laws: &'a OpenSimLaws,
+    pub vn: &'a [S],
+    pub slot: &'a [usize],
+}
+
+impl<S: Scalar> ForceLaws<S> for BalanceLaws<'_, S>
+where
+    OpenSimLaws: ForceLaws<S>,
+{
+    fn muscle(
+        &self,
+        m: usize,
+        a: S,
+        lm: S,
+        lmt: S,
+        _vmt: S,
+        u: S,
+    ) -> Result<MuscleRates<S>, String> {
+        let vn = self
+            .slot
+            .get(m)
+            .and_then(|&k| self.vn.get(k))
+            .copied()
+            .ok_or_else(|| format!("muscle {m} has no fibre velocity among the inputs"))?;
+        let r = self.laws.muscles[m].balance_rates(a, lm, lmt, u, vn);
+        finite_rates(r, a, lm, lmt)
+    }
+    fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
+        self.laws.sphere(k, p, v)
+    }
+    fn ligament(&self, l: usize, q: S, qd: S) -> S {
+        self.laws.ligament(l, q, qd)
+    }
+}
+
 impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
     fn muscle(
         &self,
@@ -727,15 +826,7 @@ impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
                 }
             }
         };
-        if !r.fiber_velocity.re().is_finite() || !r.tendon_force.re().is_finite() {
-            return Err(format!(
-                "non-finite fibre velocity or tendon force (a = {}, l_M = {}, l_MT = {})",
-                a.re(),
-                lm.re(),
-                lmt.re()
-            ));
-        }
-        Ok(r)
+        finite_rates(r, a, lm, lmt)
     }
     fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
         match &self.contact {

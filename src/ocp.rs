@@ -172,6 +172,9 @@ pub enum OcpError {
 pub struct JumpOcp {
     pub eq: StateEquation,
     pub laws: OpenSimLaws,
+    /// For each model muscle, its index among the system's muscles
+    /// (`eq.muscles`; usize::MAX for a mirrored one).
+    pub muscle_slot: Vec<usize>,
     pub options: OcpOptions,
     /// The fixed initial node (states and excitations).
     pub squat: StaticSquat,
@@ -305,9 +308,14 @@ impl JumpOcp {
             }
         }
         let standing_com_height = crate::simulate::standing_com_height(&eq);
+        let mut muscle_slot = vec![usize::MAX; laws.muscles.len()];
+        for (k, &mi) in eq.muscles.iter().enumerate() {
+            muscle_slot[mi] = k;
+        }
         Ok(JumpOcp {
             eq,
             laws,
+            muscle_slot,
             options,
             squat,
             gravity,
@@ -368,8 +376,21 @@ impl JumpOcp {
     where
         OpenSimLaws: ForceLaws<S>,
     {
+        self.state_rates_with(&self.laws, ws, x, u, xdot)
+    }
+
+    /// [`JumpOcp::state_rates`] under other force laws (the implicit fibre
+    /// dynamics' [`crate::laws::BalanceLaws`]).
+    pub fn state_rates_with<S: Scalar, L: ForceLaws<S>>(
+        &self,
+        laws: &L,
+        ws: &mut StateWorkspace<S>,
+        x: &[S],
+        u: &[S],
+        xdot: &mut [S],
+    ) -> Result<(S, S), OdeError> {
         let n = self.nq();
-        self.eq.rhs(&self.laws, ws, x, u, xdot)?;
+        self.eq.rhs(laws, ws, x, u, xdot)?;
         let ydd = self.eq.multibody.com_acceleration(&ws.mb, &xdot[n..2 * n])[1];
         let mut fy = S::zero();
         for f in ws.sphere_force.iter() {

@@ -562,18 +562,17 @@ fn point_rates<S: crate::scalar::Scalar>(
     xdot: &mut [S],
 ) -> Result<(S, S), String> {
     let nu = ocp.nu();
-    let out = ocp
-        .state_rates(ws, x, &u[..nu], xdot)
-        .map_err(|e| e.to_string())?;
-    if u.len() > nu {
-        let (n, nm) = (ocp.nq(), ocp.nm());
-        for k in 0..nm {
-            let law = &ocp.laws.muscles[ocp.eq.muscles[k]];
-            xdot[2 * n + k] =
-                law.force_balance(x[2 * n + nm + k], x[2 * n + k], ws.mtu_length[k], u[nu + k]);
-        }
-    }
-    Ok(out)
+    let out = if u.len() > nu {
+        let laws = crate::laws::BalanceLaws {
+            laws: &ocp.laws,
+            vn: &u[nu..],
+            slot: &ocp.muscle_slot,
+        };
+        ocp.state_rates_with(&laws, ws, x, &u[..nu], xdot)
+    } else {
+        ocp.state_rates(ws, x, u, xdot)
+    };
+    out.map_err(|e| e.to_string())
 }
 
 /// g(x, u) = (f, Ÿ_C, F_y/(m g)) at the worker's (x, u) into `out`.
