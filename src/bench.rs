@@ -546,7 +546,7 @@ pub fn sqp_table(rows: &[SqpTestSetRow]) -> String {
 }
 
 /// One SQP iteration on the 29-node jump collocation problem (2,409
-/// variables, 1,736 defects), from the bang-bang guess.
+/// variables, 1,736 dynamics rows), from the bang-bang guess.
 #[derive(Debug, Clone, Serialize)]
 pub struct SqpJumpRow {
     pub iter: usize,
@@ -568,10 +568,16 @@ pub struct SqpJumpReport {
     pub jacobian_nnz: usize,
     pub hessian: crate::sqp::HessianMode,
     pub qp_equilibrate: bool,
+    /// The built-in study's choices that the iterations ran with.
+    pub fiber_dynamics: crate::transcription::FiberDynamics,
+    pub qp_solver: crate::sqp::QpSolver,
     pub rows: Vec<SqpJumpRow>,
 }
 
-/// Run `iterations` SQP iterations on the jump transcription of `model`.
+/// Run `iterations` SQP iterations on the jump transcription of `model`,
+/// with the built-in study's transcription and solver settings (those of
+/// `leap solve`: implicit fibre dynamics, the interior-point QP solver)
+/// and the Hessian mode and QP equilibration given.
 pub fn sqp_jump(
     model: &Model,
     iterations: usize,
@@ -579,19 +585,20 @@ pub fn sqp_jump(
     qp_equilibrate: bool,
 ) -> Result<SqpJumpReport, String> {
     use crate::nlp::Nlp;
+    let config = crate::study::SolveConfig::builtin().map_err(|e| e.to_string())?;
     let ocp = std::sync::Arc::new(
         crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?,
     );
-    let mut tr = crate::transcription::Transcription::new(ocp, Default::default())
+    let fiber_dynamics = config.transcription.fiber_dynamics;
+    let mut tr = crate::transcription::Transcription::new(ocp, config.transcription)
         .map_err(|e| e.to_string())?;
     let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
     let settings = crate::sqp::SqpSettings {
         hessian,
         max_iterations: iterations,
         qp_equilibrate,
-        scale_variables_using_bounds: true,
-        eigenvalue_floor: crate::study::JUMP_EIGENVALUE_FLOOR,
-        ..Default::default()
+        verbose: false,
+        ..config.settings
     };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
     let rows = r
@@ -616,6 +623,8 @@ pub fn sqp_jump(
         jacobian_nnz: tr.jacobian_nnz(),
         hessian,
         qp_equilibrate,
+        fiber_dynamics,
+        qp_solver: settings.qp_solver,
         rows,
     })
 }
@@ -647,7 +656,16 @@ impl SqpJumpReport {
                 format!("{:.2e}", r.inf_pr),
             ]);
         }
-        format!("jump collocation: {} variables, {} constraints, nnz(J) {}, Hessian {:?}, QP equilibration {}\n{t}", self.variables, self.constraints, self.jacobian_nnz, self.hessian, self.qp_equilibrate)
+        format!(
+            "jump collocation: {} variables, {} constraints, nnz(J) {}, {} fibre dynamics, Hessian {:?}, QP solver {:?}, QP equilibration {}\n{t}",
+            self.variables,
+            self.constraints,
+            self.jacobian_nnz,
+            crate::study::fiber_dynamics_name(self.fiber_dynamics),
+            self.hessian,
+            self.qp_solver,
+            self.qp_equilibrate
+        )
     }
 }
 
