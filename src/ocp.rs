@@ -174,7 +174,7 @@ pub struct JumpOcp {
     pub laws: OpenSimLaws,
     /// For each model muscle, its index among the system's muscles
     /// (`eq.muscles`; usize::MAX for a mirrored one).
-    pub muscle_slot: Vec<usize>,
+    pub(crate) muscle_slot: Vec<usize>,
     pub options: OcpOptions,
     /// The fixed initial node (states and excitations).
     pub squat: StaticSquat,
