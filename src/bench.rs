@@ -597,7 +597,6 @@ pub fn sqp_jump(
         hessian,
         max_iterations: iterations,
         qp_equilibrate,
-        verbose: false,
         ..config.settings
     };
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
