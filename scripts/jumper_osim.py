@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
-"""Export models/jumper.json to an OpenSim model (models/jumper.osim) and
-compute golden reference values with OpenSim 4.6 itself:
+"""Export models/jumper_gait2392.json to an OpenSim model
+(models/jumper_gait2392.osim) and compute golden reference values with
+OpenSim 4.6 itself:
 
 - muscle-tendon lengths, lengthening speeds and moment arms of all 48 muscle
   paths at the standing and squat poses and at random poses and speeds;
@@ -12,7 +13,9 @@ compares leap against. Needs `opensim==4.6` from PyPI, e.g.
     python3 -m venv .venv && .venv/bin/pip install opensim==4.6
     .venv/bin/python scripts/jumper_osim.py
 
-(run from the repository root).
+(run from the repository root). With a model file as argument it only exports
+that model beside it, e.g. `scripts/jumper_osim.py models/jumper.json` writes
+models/jumper.osim, leap's default model for OpenSim's GUI and tools.
 """
 import json
 import math
@@ -195,9 +198,16 @@ def build(model_json):
 
 
 def main():
-    model_json = json.loads((ROOT / "models" / "jumper.json").read_text())
+    if len(sys.argv) > 1:
+        src = pathlib.Path(sys.argv[1])
+        m = build(json.loads(src.read_text()))
+        m.printToXML(str(src.with_suffix(".osim")))
+        m.initSystem()
+        print(f"wrote {src.with_suffix('.osim')}")
+        return
+    model_json = json.loads((ROOT / "models" / "jumper_gait2392.json").read_text())
     m = build(model_json)
-    m.printToXML(str(ROOT / "models" / "jumper.osim"))
+    m.printToXML(str(ROOT / "models" / "jumper_gait2392.osim"))
     state = m.initSystem()
     cs = m.getCoordinateSet()
     names = [c["name"] for c in model_json["coordinates"]]
@@ -218,7 +228,7 @@ def main():
             q[c["name"]] = rng.uniform(lo, hi)
         u = {n: rng.uniform(-3.0, 3.0) for n in names}
         poses.append((f"random{k}", q, u))
-    out = {"opensim_version": osim.GetVersionAndDate(), "model": "models/jumper.json (exported to models/jumper.osim)",
+    out = {"opensim_version": osim.GetVersionAndDate(), "model": "models/jumper_gait2392.json (exported to models/jumper_gait2392.osim)",
            "poses": []}
     muscles = [mu["name"] for mu in model_json["forces"]["muscles"]]
     for label, q, u in poses:
@@ -253,7 +263,7 @@ def main():
     out["knee_r_splines"] = spl
     path = ROOT / "tests" / "data" / "opensim_paths.json"
     path.write_text(json.dumps(out, indent=1) + "\n")
-    print(f"wrote {path} and models/jumper.osim ({len(out['poses'])} poses, {len(muscles)} muscles)")
+    print(f"wrote {path} and models/jumper_gait2392.osim ({len(out['poses'])} poses, {len(muscles)} muscles)")
 
 
 if __name__ == "__main__":

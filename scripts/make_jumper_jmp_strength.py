@@ -1,25 +1,28 @@
 #!/usr/bin/env python3
-"""Write models/jumper_jmp_strength.json: models/jumper.json with the muscle
-strengths of the OpenSim Jumper (opensim-org/opensim-models,
+"""Write leap's default model, models/jumper.json, with --forces-only, or the
+sensitivity variant models/jumper_jmp_strength.json without it: both are
+models/jumper_gait2392.json (gait2392's muscles on the paper's skeleton) with
+muscle strengths of the OpenSim Jumper (opensim-org/opensim-models,
 Models/Jumper/DynamicJumperModel.osim), as listed in the last column of
-shared/reference/model-data.md §7.2, for the sensitivity study of issue 5
-point 8 ("how the OpenSim Jumper's stronger values change it").
+shared/reference/model-data.md §7.2 (issue 5 point 8: "how the OpenSim
+Jumper's stronger values change it").
 
-This is not leap's model: the default stays models/jumper.json (gait2392
-parameters). What changes, per side:
-  * muscles the Jumper shares with gait2392 take its max_isometric_force,
-    optimal_fiber_length and tendon_slack_length where they differ: bifemlh,
-    med_gas, soleus, tib_post, tib_ant;
+What changes, per side:
+  * muscles the Jumper shares with gait2392 take its max_isometric_force:
+    bifemlh, med_gas, soleus, tib_post, tib_ant;
   * the Jumper's single vas_int "stands for all vasti" (model-data.md §7.2)
     with 5000 N against gait2392's 1294 + 1365 + 1871 = 4530 N, so the three
     vasti keep their own fibre and tendon lengths and their forces are scaled
     by 5000 / 4530;
   * lat_gas, which the Jumper lacks, keeps its gait2392 values.
-With --forces-only it writes models/jumper_jmp_forces.json instead: the
-same max_isometric_force values, but every muscle keeps gait2392's
-optimal_fiber_length and tendon_slack_length, to separate strength from the
-Jumper's longer (hence faster: v_max = 10 l_opt/s) soleus and gastrocnemius
-fibres.
+With --forces-only (models/jumper.json, the default model) every muscle keeps
+gait2392's optimal_fiber_length and tendon_slack_length: those are fitted to
+gait2392's own muscle paths, which the model keeps, while a maximum isometric
+force is a scale that carries over between models. Without it
+(models/jumper_jmp_strength.json) the five shared muscles also take the
+Jumper's optimal_fiber_length and tendon_slack_length, fitted to the Jumper's
+paths (longer, hence faster, soleus and gastrocnemius fibres: v_max =
+10 l_opt/s).
 Run from the repository root:  python3 scripts/make_jumper_jmp_strength.py [--forces-only]
 """
 import json
@@ -27,9 +30,9 @@ import pathlib
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-SRC = ROOT / "models" / "jumper.json"
+SRC = ROOT / "models" / "jumper_gait2392.json"
 FORCES_ONLY = "--forces-only" in sys.argv[1:]
-NAME = "jumper_jmp_forces" if FORCES_ONLY else "jumper_jmp_strength"
+NAME = "jumper" if FORCES_ONLY else "jumper_jmp_strength"
 DST = ROOT / "models" / f"{NAME}.json"
 
 # model-data.md §7.2, last column: Fmax (N) / l_opt (m) / l_ts (m).
@@ -64,13 +67,18 @@ def main():
         if FORCES_ONLY
         else "max_isometric_force, optimal_fiber_length and tendon_slack_length"
     )
+    role = (
+        "leap's default model"
+        if FORCES_ONLY
+        else "a sensitivity study, not leap's default model"
+    )
     model["credits"] = model["credits"] + [
-        f"Variant for a sensitivity study, written by scripts/make_jumper_jmp_strength.py"
-        f"{' --forces-only' if FORCES_ONLY else ''}: "
+        f"Muscle strengths, written by scripts/make_jumper_jmp_strength.py"
+        f"{' --forces-only' if FORCES_ONLY else ''} ({role}): "
         "bifemlh, med_gas, soleus, tib_post and tib_ant take the OpenSim Jumper's "
         f"(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) {taken}, and the three "
         "vasti are scaled to the Jumper's lumped vas_int force of 5000 N "
-        "(shared/reference/model-data.md §7.2). Not leap's default model."
+        "(shared/reference/model-data.md §7.2)."
     ]
     DST.write_text(json.dumps(model, indent=1, ensure_ascii=False) + "\n")
     print(f"wrote {DST.relative_to(ROOT)}")

@@ -1,11 +1,16 @@
 #!/usr/bin/env python3
-"""Write models/jumper.json: the planar jumper skeleton of
+"""Write models/jumper_gait2392.json: the planar jumper skeleton of
 shared/reference/model-data.md §4-§6 and §8.2 (sole stations).
 
 Data: gait2392 (opensim-org/opensim-models, Models/Gait2392_Simbody/
 gait2392_thelen2003muscle.osim, CC BY 3.0, Delp et al. 1990; Anderson & Pandy
 1999; Yamaguchi & Zajac 1989) and its planar version gait10dof18musc.
 Run from the repository root:  python3 scripts/make_jumper_model.py
+
+This is the jumper with gait2392's muscle strengths unchanged: the model of
+the OpenSim reference data in tests/data. Leap's default model,
+models/jumper.json, is this one with the OpenSim Jumper's maximum isometric
+forces (scripts/make_jumper_jmp_strength.py --forces-only).
 
 Muscles (24 per side, §7), passive joint torques (§9) and the 8 contact
 spheres per foot (§8.2) are read from the tables of model-data.md, so the
@@ -215,7 +220,7 @@ def contact():
 
 def main():
     model = {
-        "name": "jumper",
+        "name": "jumper_gait2392",
         "credits": CREDITS,
         "gravity": [0.0, -9.80665, 0.0],
         "bodies": [
@@ -261,7 +266,7 @@ def main():
         "(parameters and paths of gait2392, CC BY 3.0). Passive joint torques: Anderson & Pandy 1999 "
         "coefficients from Falisse et al. 3dpredictsim (MIT). Contact: 8 spheres per foot, "
         "model-data.md §8.2, with the Falisse et al. subject-1 HuntCrossleyForce parameters.")
-    path = root / "models" / "jumper.json"
+    path = root / "models" / "jumper_gait2392.json"
     path.write_text(json.dumps(model, indent=1) + "\n")
     print(f"wrote {path}")
 

@@ -1,13 +1,13 @@
 #!/usr/bin/env python3
 """Write models/jumper_reduced.json: a 10-muscle-per-side version of
-models/jumper.json for the reduced jump instance that CI solves (issue 5,
+models/jumper_gait2392.json for the reduced jump instance that CI solves (issue 5,
 point 9). Not a model to predict with: leap's model is models/jumper.json.
 
 The muscle set is OpenSim's planar gait10dof18musc (opensim-org/
 opensim-models, gait10dof18musc.osim; shared/ref-models), nine muscles per
 side, plus the erector spinae for the lumbar joint, which gait10dof18musc
 locks. Each gait10dof18musc muscle is represented by one gait2392 muscle of
-models/jumper.json, whose path, fibre and tendon lengths it keeps (so path
+models/jumper_gait2392.json, whose path, fibre and tendon lengths it keeps (so path
 and fibre stay consistent), with the gait10dof18musc max_isometric_force:
 
     hamstrings  <- bifemlh     glut_max <- glut_max2   iliopsoas <- iliacus
@@ -21,7 +21,7 @@ import json
 import pathlib
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-SRC = ROOT / "models" / "jumper.json"
+SRC = ROOT / "models" / "jumper_gait2392.json"
 DST = ROOT / "models" / "jumper_reduced.json"
 
 # gait10dof18musc name: (gait2392 representative, gait10dof18musc Fmax in N).

@@ -203,7 +203,7 @@ def contacts():
 
 
 def ligaments():
-    model_json = json.loads((ROOT / "models" / "jumper.json").read_text())
+    model_json = json.loads((ROOT / "models" / "jumper_gait2392.json").read_text())
     out = []
     for lig in model_json["forces"]["ligaments"]:
         m = osim.Model()

@@ -14,7 +14,7 @@ use leap::path::PathSmoothing;
 use leap::simulate::{simulate_rust, standing_com_height};
 
 fn jumper() -> (leap::model::Model, StateEquation, OpenSimLaws, Vec<f64>) {
-    let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
     let laws = OpenSimLaws::new(&model).unwrap();
     let ocp = leap::ocp::JumpOcp::new(&model, Default::default()).unwrap();

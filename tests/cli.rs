@@ -9,7 +9,7 @@ fn crosscheck_json_reports_error_and_samples() {
         .args([
             "crosscheck",
             "--model",
-            "models/jumper.json",
+            "models/jumper_gait2392.json",
             "--samples",
             "10",
             "--json",
@@ -63,7 +63,7 @@ fn zero_samples_is_refused() {
 fn analyze_names_the_missing_or_bad_column() {
     let dir = std::env::temp_dir().join(format!("leap-cli-analyze-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = leap::ode::StateEquation::new(&model, true, leap::path::PathSmoothing::Exact).unwrap();
     let ocp = leap::ocp::JumpOcp::new(&model, Default::default()).unwrap();
     let mut table = leap::io::StoTable {

@@ -123,7 +123,7 @@ fn passive_simulation_conserves_energy_rust_native() {
         drift < 1e-8 * e0.abs().max(1.0),
         "double pendulum drift {drift} J (E0 {e0})"
     );
-    let j = Model::from_file("models/jumper.json").unwrap();
+    let j = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = j.system(true).unwrap();
     let q0 = sys.q_from_model(&j.poses["squat"]);
     let u0: Vec<f64> = (0..7).map(|i| 0.5 * (i as f64 - 3.0)).collect();
@@ -136,7 +136,7 @@ fn passive_simulation_conserves_energy_rust_native() {
 
 #[test]
 fn passive_simulation_conserves_energy_simbody() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = m.system(true).unwrap();
     let mut sb = SimbodyModel::new(&m, &sys).unwrap();
     let q0 = sys.q_from_model(&m.poses["squat"]);
@@ -167,7 +167,7 @@ fn passive_simulation_conserves_energy_simbody() {
 /// central finite differences, for every q and q̇ direction.
 #[test]
 fn dual_number_derivatives_match_central_differences() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = m.system(true).unwrap();
     let mb = Multibody::new(&m, &sys);
     let n = mb.nq();

@@ -174,7 +174,7 @@ fn contact_laws_match_opensim() {
 #[test]
 fn passive_torques_match_opensim() {
     let d = data();
-    let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
     for lig in d["ligaments"].as_array().unwrap() {
         let spec: &LigamentSpec = &model
             .ligaments

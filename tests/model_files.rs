@@ -6,7 +6,7 @@ use leap::spline::{SimmSpline, SplineData};
 
 #[test]
 fn jumper_loads_with_gait2392_masses_and_credits() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     // 12 gait2392 bodies (8 segments with the foot as talus+calcn+toes).
     assert_eq!(m.bodies.len(), 12);
     // gait2392 total mass, model-data.md §2 item 5: 75.1646 kg.
@@ -38,12 +38,87 @@ fn jumper_loads_with_gait2392_masses_and_credits() {
     assert_eq!(m.stations.len(), 16);
 }
 
+/// Leap's default model is the gait2392 jumper (the model of the OpenSim
+/// reference data) with the OpenSim Jumper's maximum isometric forces of
+/// model-data.md §7.2 (DynamicJumperModel.osim) and nothing else changed:
+/// bifemlh 2700, med_gas 2500, soleus 4000, tib_post 3600, tib_ant 3000 N,
+/// and the three vasti scaled together to the Jumper's lumped 5000 N. Its
+/// OpenSim export carries the same forces.
+#[test]
+fn default_model_is_gait2392_with_the_jumpers_forces() {
+    let read = |p: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+    };
+    let (mut default, gait2392) = (
+        read("models/jumper.json"),
+        read("models/jumper_gait2392.json"),
+    );
+    let jumper = [
+        ("bifemlh", 2700.0),
+        ("med_gas", 2500.0),
+        ("soleus", 4000.0),
+        ("tib_post", 3600.0),
+        ("tib_ant", 3000.0),
+    ];
+    let muscles = |v: &serde_json::Value| v["forces"]["muscles"].as_array().unwrap().clone();
+    let force = |m: &serde_json::Value| m["max_isometric_force"].as_f64().unwrap();
+    let (ours, theirs) = (muscles(&default), muscles(&gait2392));
+    assert_eq!(ours.len(), 48);
+    for side in ["r", "l"] {
+        let get = |list: &[serde_json::Value], name: &str| {
+            list.iter()
+                .find(|m| m["name"] == format!("{name}_{side}"))
+                .unwrap()
+                .clone()
+        };
+        for (name, f) in jumper {
+            assert_eq!(force(&get(&ours, name)), f, "{name}_{side}");
+        }
+        let vasti = ["vas_med", "vas_int", "vas_lat"];
+        let sum: f64 = vasti.iter().map(|v| force(&get(&ours, v))).sum();
+        assert!((sum - 5000.0).abs() < 1e-9, "vasti {sum} N");
+        let ratio = force(&get(&ours, "vas_int")) / force(&get(&theirs, "vas_int"));
+        for v in vasti {
+            let r = force(&get(&ours, v)) / force(&get(&theirs, v));
+            assert!((r - ratio).abs() < 1e-12, "{v}_{side} scaled by {r}");
+        }
+    }
+    // Everything else is gait2392's: put its forces back and compare.
+    for (m, g) in default["forces"]["muscles"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .zip(&theirs)
+    {
+        m["max_isometric_force"] = g["max_isometric_force"].clone();
+    }
+    default["name"] = gait2392["name"].clone();
+    default["credits"] = gait2392["credits"].clone();
+    assert_eq!(default, gait2392);
+    // The OpenSim export: each muscle's max_isometric_force as in the JSON.
+    let osim = std::fs::read_to_string("models/jumper.osim").unwrap();
+    for m in &ours {
+        let name = m["name"].as_str().unwrap();
+        let at = osim
+            .find(&format!("Muscle name=\"{name}\""))
+            .unwrap_or_else(|| panic!("{name} not in models/jumper.osim"));
+        let tag = "<max_isometric_force>";
+        let start = at + osim[at..].find(tag).unwrap() + tag.len();
+        let end = start + osim[start..].find('<').unwrap();
+        let f: f64 = osim[start..end].parse().unwrap();
+        assert!(
+            (f - force(m)).abs() <= 1e-9 * f,
+            "{name}: {f} N in the .osim"
+        );
+    }
+}
+
 /// model-data.md §6: at knee_angle = −1.3962634 the FMM SimmSpline gives
 /// tx = 0.00410999 and ty = −0.41105525 (and the OpenSim Jumper file stores
 /// tib_ty_r = −0.41105524), quoted to 8 decimals.
 #[test]
 fn knee_splines_match_model_data_check_values() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let knee = m.joints.iter().find(|j| j.name == "knee_r").unwrap();
     let leap::model::JointKind::TranslatingHinge {
         translation_x,

@@ -39,7 +39,7 @@ static GLOBAL: Counting = Counting;
 
 #[test]
 fn forward_dynamics_allocates_nothing() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = m.system(true).unwrap();
     let mb = Multibody::new(&m, &sys);
     let mut ws = mb.workspace::<f64>();
@@ -62,7 +62,7 @@ fn forward_dynamics_allocates_nothing() {
 
 #[test]
 fn state_equation_allocates_nothing() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq =
         leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Smooth { delta: 0.02 })
             .unwrap();

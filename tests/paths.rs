@@ -42,7 +42,7 @@ fn eval(
 
 #[test]
 fn lengths_and_moment_arms_match_the_check_table() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let data: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string("tests/data/path_check_values.json").unwrap(),
     )
@@ -91,7 +91,7 @@ fn lengths_and_moment_arms_match_the_check_table() {
 /// of the length and central differences, in both switching modes.
 #[test]
 fn moment_arms_are_minus_length_derivatives() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = model.system(false).unwrap();
     let mb = Multibody::new(&model, &sys);
     let mut qm: Vec<f64> = model.poses["squat"].clone();
@@ -146,7 +146,7 @@ fn moment_arms_are_minus_length_derivatives() {
 /// The lengthening speed is dL/dt = Σ ∂L/∂q q̇.
 #[test]
 fn lengthening_speed_is_the_time_derivative_of_length() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let sys = model.system(true).unwrap();
     let mb = Multibody::new(&model, &sys);
     let q0 = sys.q_from_model(&model.poses["squat"]);
@@ -200,7 +200,7 @@ fn lengthening_speed_is_the_time_derivative_of_length() {
 /// independently by the reference author, quoted to 0.01 mm or better).
 #[test]
 fn switch_jumps_match_model_data() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = leap::ode::StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
     let mut pose: Vec<f64> = vec![0.0; model.coordinates.len()];
     pose[model.coordinate_index("pelvis_ty").unwrap()] = 0.94387;

@@ -1,6 +1,6 @@
 //! The jumper's muscle paths and knee splines against OpenSim 4.6 itself
 //! (tests/data/opensim_paths.json, written by scripts/jumper_osim.py from an
-//! .osim export of models/jumper.json): lengths, lengthening speeds and
+//! .osim export of models/jumper_gait2392.json): lengths, lengthening speeds and
 //! moment arms of all 48 paths at 14 poses, and SimmSpline values and
 //! derivatives.
 
@@ -14,7 +14,7 @@ fn rel(a: f64, b: f64, floor: f64) -> f64 {
 
 #[test]
 fn paths_match_opensim() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let data: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string("tests/data/opensim_paths.json").unwrap())
             .unwrap();
@@ -85,7 +85,7 @@ fn paths_match_opensim() {
 
 #[test]
 fn knee_splines_match_opensim_simm_spline() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let data: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string("tests/data/opensim_paths.json").unwrap())
             .unwrap();

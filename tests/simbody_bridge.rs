@@ -51,7 +51,7 @@ fn wrong_lengths_and_bodies_are_refused() {
 
 #[test]
 fn rust_native_dynamics_match_simbody_on_the_jumper() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     let report = crosscheck::run(&m, 40, 7).unwrap();
     assert_eq!(
         report.comparisons.len(),
@@ -88,7 +88,7 @@ fn rust_native_dynamics_match_simbody_on_the_double_pendulum() {
 
 #[test]
 fn simbody_total_mass_equals_the_model_file() {
-    let m = Model::from_file("models/jumper.json").unwrap();
+    let m = Model::from_file("models/jumper_gait2392.json").unwrap();
     for symmetric in [false, true] {
         let sys = m.system(symmetric).unwrap();
         let mut sb = SimbodyModel::new(&m, &sys).unwrap();

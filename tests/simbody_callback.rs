@@ -11,7 +11,7 @@ use leap::simbody::{
 
 #[test]
 fn path_forces_through_the_callback_match_rust_native() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     for symmetric in [false, true] {
         let sys = model.system(symmetric).unwrap();
         let perm = simbody_q_order(&sys);

@@ -11,7 +11,7 @@ use leap::simulate::{
 
 #[test]
 fn bang_bang_jump_leaves_the_ground_and_reaches_its_apex() {
-    let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let laws = TestLaws(model.clone());
     let squat = model.poses["squat"].clone();

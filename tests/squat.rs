@@ -21,7 +21,7 @@ fn pelvis_shift(eq: &StateEquation, x0: &[f64], x1: &[f64]) -> f64 {
 
 #[test]
 fn static_squat_holds_in_both_backends() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let laws = OpenSimLaws::new(&model).unwrap();
     let sq = static_squat(&eq, &laws, &model.poses["squat"]).unwrap();

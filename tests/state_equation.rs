@@ -32,7 +32,7 @@ fn symmetric_state(eq: &StateEquation, k: usize) -> (Vec<f64>, Vec<f64>) {
 
 #[test]
 fn symmetric_system_equals_full_system_with_mirrored_states() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let laws = TestLaws(model.clone());
     let sym = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let full = StateEquation::new(&model, false, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
@@ -101,7 +101,7 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
 
 #[test]
 fn state_derivative_jacobian_matches_central_differences() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let laws = TestLaws(model.clone());
     let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
     let (x, u) = symmetric_state(&eq, 1);
@@ -144,7 +144,7 @@ fn state_derivative_jacobian_matches_central_differences() {
 
 #[test]
 fn wrong_lengths_are_errors() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     let eq = StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
     let laws = TestLaws(model.clone());
     let mut w = eq.workspace::<f64>();
@@ -159,7 +159,7 @@ fn wrong_lengths_are_errors() {
 
 #[test]
 fn simbody_state_equation_matches_rust_native() {
-    let model = Model::from_file("models/jumper.json").unwrap();
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
     for symmetric in [true, false] {
         let eq = Arc::new(
             StateEquation::new(&model, symmetric, PathSmoothing::Smooth { delta: 0.02 }).unwrap(),

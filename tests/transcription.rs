@@ -15,7 +15,7 @@ use std::sync::{Arc, OnceLock};
 fn setup() -> &'static (Arc<JumpOcp>, StatePattern, Vec<f64>) {
     static S: OnceLock<(Arc<JumpOcp>, StatePattern, Vec<f64>)> = OnceLock::new();
     S.get_or_init(|| {
-        let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+        let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
         let ocp = Arc::new(JumpOcp::new(&model, OcpOptions::default()).unwrap());
         let opts = TranscriptionOptions::default();
         let pattern = StatePattern::detect(&ocp, opts.pattern_samples, opts.pattern_seed).unwrap();
