@@ -592,7 +592,11 @@ pub fn sqp_jump(
     let fiber_dynamics = config.transcription.fiber_dynamics;
     let mut tr = crate::transcription::Transcription::new(ocp, config.transcription)
         .map_err(|e| e.to_string())?;
-    let (guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
+    let (mut guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
+    if config.guess == crate::study::GuessChoice::BangBang {
+        tr.integrate_on_mesh(&mut guess)
+            .map_err(|e| e.to_string())?;
+    }
     let settings = crate::sqp::SqpSettings {
         hessian,
         max_iterations: iterations,

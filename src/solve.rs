@@ -137,6 +137,8 @@ pub struct SolveReport {
     /// The initial guess and, for bang-bang, its jump height (m).
     pub guess: String,
     pub guess_jump_height_m: Option<f64>,
+    /// For the bang-bang guess: how its integration on the mesh went.
+    pub guess_mesh_integration: Option<crate::transcription::MeshIntegration>,
     pub num_mesh_intervals: usize,
     pub scheme: &'static str,
     /// "explicit" or "implicit" ([`crate::transcription::FiberDynamics`]).
@@ -207,11 +209,32 @@ pub fn run(
         fiber_dynamics_name(config.transcription.fiber_dynamics)
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
+    let mut mesh_integration = None;
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
-            progress("initial guess: the bang-bang jump");
-            let (v, s) = tr.bang_bang_guess()?;
+            progress("initial guess: the bang-bang jump, integrated on the mesh");
+            let (mut v, s) = tr.bang_bang_guess()?;
+            let m = tr
+                .integrate_on_mesh(&mut v)
+                .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
+            // "node k <state name>": the state's name.
+            let state = tr.variable_name(tr.state_index(1, m.worst_state).unwrap_or(0));
+            progress(&format!(
+                "initial guess: {} of {} intervals integrated to {:.0e}; largest defect left {:.2e} (interval {}, {})",
+                m.converged,
+                m.intervals,
+                crate::transcription::MESH_NEWTON_TOL,
+                m.worst_defect,
+                m.worst_interval,
+                state.splitn(3, ' ').nth(2).unwrap_or(&state)
+            ));
+            mesh_integration = Some(m);
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
+        }
+        GuessChoice::BangBangResampled => {
+            progress("initial guess: the bang-bang jump, resampled onto the mesh");
+            let (v, s) = tr.bang_bang_guess()?;
+            (v, "bang-bang-resampled".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) => {
             progress(&format!("initial guess: {}", p.display()));
@@ -235,6 +258,7 @@ pub fn run(
     let mut report = evaluate(&mut tr, &result);
     report.guess = guess_name;
     report.guess_jump_height_m = guess_jump;
+    report.guess_mesh_integration = mesh_integration;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
 
@@ -377,6 +401,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         forward_check: None,
         guess: String::new(),
         guess_jump_height_m: None,
+        guess_mesh_integration: None,
         num_mesh_intervals: tr.num_intervals(),
         scheme: scheme_name(tr.options().scheme),
         fiber_dynamics: fiber_dynamics_name(tr.options().fiber_dynamics),

@@ -89,8 +89,11 @@ pub struct SolveStudy {
     pub method: Option<String>,
     #[serde(default)]
     pub mesh: MeshSpec,
-    /// "bang-bang" (default: the bang-bang jump resampled onto the mesh,
-    /// t_f its lift-off time) or a `.sto` file with every state and control
+    /// "bang-bang" (default: the bang-bang jump's excitations integrated on
+    /// the mesh by the transcription's own scheme, t_f the continuous jump's
+    /// lift-off time), "bang-bang-resampled" (the continuous bang-bang jump
+    /// resampled onto the mesh, its states violating the defects by the
+    /// discretisation error) or a `.sto` file with every state and control
     /// column (a previous solution), resampled onto the mesh with t_f its
     /// last time.
     #[serde(default, alias = "guess_file")]
@@ -177,8 +180,26 @@ pub struct ForwardCheckSpec {
 /// Where the initial guess comes from.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub enum GuessChoice {
+    /// The bang-bang excitations integrated on the mesh
+    /// ([`crate::transcription::Transcription::integrate_on_mesh`]).
     BangBang,
+    /// The continuous bang-bang jump resampled onto the mesh.
+    BangBangResampled,
     File(PathBuf),
+}
+
+/// The guess named in a study file or on the command line: "bang-bang",
+/// "bang-bang-resampled", or else a file.
+fn parse_guess(g: &str, path: PathBuf) -> Result<GuessChoice, String> {
+    match g {
+        "bang-bang" => Ok(GuessChoice::BangBang),
+        "bang-bang-resampled" => Ok(GuessChoice::BangBangResampled),
+        _ if path.is_file() => Ok(GuessChoice::File(path)),
+        _ => Err(format!(
+            "guess file '{}' not found (use \"bang-bang\", \"bang-bang-resampled\" or a .sto file)",
+            path.display()
+        )),
+    }
 }
 
 /// The forward check, resolved.
@@ -303,20 +324,8 @@ impl SolveStudy {
         check_fiber_dynamics(&transcription).map_err(|r| err("mesh.fiber_dynamics", r))?;
 
         let guess = match self.guess.as_deref() {
-            None | Some("bang-bang") => GuessChoice::BangBang,
-            Some(f) => {
-                let p = rel(f);
-                if !p.is_file() {
-                    return Err(err(
-                        "guess",
-                        format!(
-                            "guess file '{}' not found (use \"bang-bang\" or a .sto file)",
-                            p.display()
-                        ),
-                    ));
-                }
-                GuessChoice::File(p)
-            }
+            None => GuessChoice::BangBang,
+            Some(g) => parse_guess(g, rel(g)).map_err(|r| err("guess", r))?,
         };
 
         // The jump's variables range from centimetres (fibre lengths) to
@@ -495,18 +504,7 @@ impl SolveConfig {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
         if let Some(g) = &o.guess {
-            self.guess = if g == "bang-bang" {
-                GuessChoice::BangBang
-            } else {
-                let p = PathBuf::from(g);
-                if !p.is_file() {
-                    return Err(err(
-                        "--guess",
-                        format!("guess file '{g}' not found (use bang-bang or a .sto file)"),
-                    ));
-                }
-                GuessChoice::File(p)
-            };
+            self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
         }
         if o.no_forward_check {
             self.forward_check = None;
@@ -708,6 +706,26 @@ mod tests {
         assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
         assert_eq!(c.transcription.fiber_dynamics, FiberDynamics::Implicit);
         assert_eq!(c.settings.qp_solver, QpSolver::InteriorPoint);
+    }
+
+    #[test]
+    fn guesses_parse_and_a_missing_file_names_the_field() {
+        let guess = |g: &str| {
+            SolveStudy::from_json_str(&format!(r#"{{"guess": "{g}"}}"#), "s.json")
+                .and_then(|s| s.resolve(None))
+                .map(|c| c.guess)
+        };
+        assert_eq!(guess("bang-bang").unwrap(), GuessChoice::BangBang);
+        assert_eq!(
+            guess("bang-bang-resampled").unwrap(),
+            GuessChoice::BangBangResampled
+        );
+        let (f, r) = field_error(r#"{"guess": "no_such_solution.sto"}"#);
+        assert_eq!(f, "guess");
+        assert!(
+            r.contains("no_such_solution.sto") && r.contains("bang-bang-resampled"),
+            "{r}"
+        );
     }
 
     #[test]

@@ -903,6 +903,73 @@ fn bang_bang_guess_follows_the_forward_jump() {
     assert_eq!(&v, guess);
 }
 
+/// `integrate_on_mesh`: the bang-bang excitations integrated by the mesh's
+/// own scheme. Every interval it reports converged meets its defects (the
+/// constraint evaluation itself is the judge); the largest defect left is
+/// the one reported; the controls and t_f are untouched; and the mesh
+/// solutions converge, at first order: the excitations are the bang-bang
+/// steps sampled at the nodes (linear between them), an O(h) error of the
+/// input that hides the midpoint rule's second order. On 14, 28 and 56
+/// intervals the state at t_f/2 moves about half as much from 28 to 56 as
+/// from 14 to 28.
+#[test]
+fn bang_bang_guess_integrated_on_the_mesh() {
+    let (_, _, guess28) = setup();
+    let mut mid_states = Vec::new();
+    for n in [14, 28, 56] {
+        let mut tr = transcription(TranscriptionOptions {
+            num_mesh_intervals: n,
+            ..Default::default()
+        });
+        let (resampled, _) = tr.bang_bang_guess().unwrap();
+        if n == 28 {
+            assert_eq!(&resampled, guess28);
+        }
+        let mut v = resampled.clone();
+        let report = tr.integrate_on_mesh(&mut v).unwrap();
+        assert_eq!(report.intervals, n);
+        let mut c = vec![0.0; tr.num_constraints()];
+        tr.constraints(&v, &mut c).unwrap();
+        let nx = 62;
+        let mut converged = 0;
+        let mut worst = 0.0f64;
+        for k in 1..=n {
+            let d = c[(k - 1) * nx..k * nx]
+                .iter()
+                .fold(0.0f64, |a, b| a.max(b.abs()));
+            converged += usize::from(d <= MESH_NEWTON_TOL);
+            worst = worst.max(d);
+        }
+        assert_eq!(converged, report.converged, "{n} intervals: {report:?}");
+        assert!(report.converged * 10 >= 9 * n, "{n} intervals: {report:?}");
+        assert_eq!(worst, report.worst_defect);
+        // Only states move.
+        for k in 0..=n {
+            assert_eq!(tr.node_control(&v, k), tr.node_control(&resampled, k));
+        }
+        assert_eq!(tr.final_time(&v), tr.final_time(&resampled));
+        assert_eq!(tr.node_state(&v, 0), tr.node_state(&resampled, 0));
+        mid_states.push(tr.node_state(&v, n / 2).to_vec());
+    }
+    let dist = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .fold(0.0f64, |m, (x, y)| m.max((x - y).abs()))
+    };
+    let (coarse, fine) = (
+        dist(&mid_states[0], &mid_states[1]),
+        dist(&mid_states[1], &mid_states[2]),
+    );
+    let ratio = coarse / fine;
+    assert!(
+        (1.5..3.0).contains(&ratio),
+        "successive differences {coarse:e}, {fine:e}: ratio {ratio}"
+    );
+    // A guess of the wrong size is an error, not a panic.
+    let mut tr = transcription(TranscriptionOptions::default());
+    assert!(tr.integrate_on_mesh(&mut [0.0; 3]).is_err());
+}
+
 /// Timings of the full 29-node problem (run with
 /// `cargo test --release --test integration -- --ignored --nocapture transcription::timing`).
 #[test]
