@@ -83,7 +83,8 @@ enum Command {
         /// SQP iteration limit.
         #[arg(long, allow_negative_numbers = true)]
         max_iterations: Option<i64>,
-        /// "bang-bang" or a .sto file with every state and control column.
+        /// "bang-bang" (integrated on the mesh), "bang-bang-resampled" or a
+        /// .sto file with every state and control column.
         #[arg(long)]
         guess: Option<String>,
         /// midpoint-euler (default), trapezoidal, hermite-simpson or

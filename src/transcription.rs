@@ -1508,9 +1508,10 @@ impl Transcription {
         };
         let norm = |c: &[f64], k: usize| norm_inf(&c[(k - 1) * nx..k * nx]);
         for k in 1..=big_n {
-            let cols: Vec<usize> = (0..nx)
-                .map(|i| self.state_index(k, i).unwrap_or(usize::MAX))
-                .collect();
+            let cols = (0..nx)
+                .map(|i| self.state_index(k, i))
+                .collect::<Option<Vec<usize>>>()
+                .ok_or_else(|| EvalError::new("guess", format!("node {k} has no state variables")))?;
             self.constraints(v, &mut c)?;
             let mut res = norm(&c, k);
             let mut converged = false;
@@ -1553,7 +1554,6 @@ impl Transcription {
                     break;
                 }
             }
-            // The constraint values of the point kept, for the next node.
             if !converged {
                 converged = res <= MESH_NEWTON_TOL;
             }
