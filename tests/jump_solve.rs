@@ -107,7 +107,7 @@ fn assert_solved_and_forward_checked(r: &SolveReport) {
 /// Table 2's metrics inside the experimental ranges, forward check within
 /// 1 cm.
 #[test]
-#[ignore = "the full 29-node solve takes about 3 minutes; scripts/full_solve.sh"]
+#[ignore = "the full 29-node solve takes about 2 minutes; scripts/full_solve.sh"]
 fn full_jump_meets_the_papers_ranges() {
     let r = solve("models/jump_collocation.json", "full");
     let mut failed = Vec::new();
