@@ -5,7 +5,10 @@
 //! `INERTIA=1` the solver's inertia correction is on, as in
 //! `--hessian exact-inertia-corrected`; `TOL` sets its tolerance, default
 //! 1e-10 as the SQP's; `ORDERING=amd` orders the KKT matrix by AMD alone
-//! instead of the smaller factor of AMD and nested dissection).
+//! instead of the smaller factor of AMD and nested dissection; `CHAIN=1`
+//! solves the files in the order given with one solver, each QP
+//! warm-started from the last, as the SQP does: consecutive QPs of one
+//! solve, with REPEATS=1).
 #[path = "common/qp_json.rs"]
 mod qp_json;
 use leap::sqp::ipm::{Ipm, KktOrdering};
@@ -27,6 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or(1e-10);
     let (mut total, mut total_it) = (0.0, 0);
     let mut factor_size = None;
+    let mut chain: Option<Ipm> = None;
     for path in std::env::args().skip(1) {
         let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&path)?)?;
         let (p, a) = (csc(&json["P"])?, csc(&json["A"])?);
@@ -36,8 +40,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut times = Vec::new();
         let (mut status, mut iterations, mut obj) = (None, 0, 0.0);
         for _ in 0..repeats.max(1) {
-            let mut s = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
+            let mut fresh;
+            let s: &mut Ipm = if std::env::var_os("CHAIN").is_some() {
+                if chain.is_none() {
+                    chain = Some(Ipm::with_ordering(&p, &a, num_eq, ordering)?);
+                }
+                chain.as_mut().unwrap()
+            } else {
+                fresh = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
+                &mut fresh
+            };
             s.inertia_correction = inertia;
+            s.warm_start = std::env::var_os("CHAIN").is_some();
             let t = std::time::Instant::now();
             status = Some(s.solve(&p, &a, &q, &b, tol));
             times.push(t.elapsed().as_secs_f64());

@@ -1511,7 +1511,9 @@ impl Transcription {
             let cols = (0..nx)
                 .map(|i| self.state_index(k, i))
                 .collect::<Option<Vec<usize>>>()
-                .ok_or_else(|| EvalError::new("guess", format!("node {k} has no state variables")))?;
+                .ok_or_else(|| {
+                    EvalError::new("guess", format!("node {k} has no state variables"))
+                })?;
             self.constraints(v, &mut c)?;
             let mut res = norm(&c, k);
             let mut converged = false;

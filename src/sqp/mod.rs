@@ -189,6 +189,12 @@ pub struct SqpSettings {
     /// Clarabel's Ruiz equilibration of each QP (computed from the first
     /// QP and kept through the in-place updates).
     pub qp_equilibrate: bool,
+    /// Leap's interior-point QP solver starts each QP from the last one's
+    /// multipliers (slacks from the new bounds), and from its cold start
+    /// again where that does not solve; not with the inertia correction.
+    /// Default on: the default jump took 25% fewer interior-point
+    /// iterations on its consecutive QPs (see README, "Speed").
+    pub qp_warm_start: bool,
     /// Which solver solves the QPs first ([`QpSolver`]; default clarabel,
     /// see there).
     pub qp_solver: QpSolver,
@@ -257,6 +263,7 @@ impl Default for SqpSettings {
             unbounded_objective: -1e20,
             qp_tolerance: 1e-10,
             qp_equilibrate: true,
+            qp_warm_start: true,
             qp_solver: QpSolver::Clarabel,
             second_order_correction: true,
             verbose: false,
@@ -1320,7 +1327,7 @@ impl<'s> Solver<'s> {
         } = self;
         let slot = if elastic { qp_elastic } else { qp };
         let qp = slot.get_or_insert_with(|| {
-            let qp = Qp::new(
+            let mut qp = Qp::new(
                 &pb.xl,
                 &pb.xu,
                 &pb.cl,
@@ -1334,6 +1341,7 @@ impl<'s> Solver<'s> {
                 settings.hessian == HessianMode::ExactConvexified
                     && settings.convexification == Convexification::InertiaCorrection,
             );
+            qp.set_warm_start(settings.qp_warm_start);
             if settings.verbose {
                 let (nv, rows, nnz_p, nnz_a) = qp.size();
                 eprintln!(

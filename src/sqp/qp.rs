@@ -100,6 +100,9 @@ pub(crate) struct Qp {
     /// Whether this is the elastic QP (slack columns), which always has a
     /// solution.
     elastic: bool,
+    /// The interior-point solver starts from its last answer
+    /// ([`Ipm::warm_start`]).
+    warm_start: bool,
 }
 
 /// Sparse matrix from entries (row, col), returning the nz index of each.
@@ -328,6 +331,16 @@ impl Qp {
             fallback_seconds: 0.0,
             stalls_taken_infeasible: 0,
             elastic,
+            warm_start: false,
+        }
+    }
+
+    /// Whether the interior-point solver starts each QP from the last
+    /// one's answer ([`Ipm::warm_start`]; off by default).
+    pub fn set_warm_start(&mut self, on: bool) {
+        self.warm_start = on;
+        if let Some(ipm) = &mut self.ipm {
+            ipm.warm_start = on;
         }
     }
 
@@ -442,6 +455,7 @@ impl Qp {
             };
             let mut ipm = Ipm::with_ordering(&self.p, &self.a, self.num_eq, ordering)?;
             ipm.inertia_correction = self.inertia_correction;
+            ipm.warm_start = self.warm_start;
             self.ipm = Some(ipm);
         }
         let ipm = self.ipm.as_mut().expect("created above");
