@@ -1380,6 +1380,29 @@ mod tests {
         (p, a, ne, r)
     }
 
+    /// A linear term q in [−q_max, q_max] and the right-hand side b of
+    /// [`stage_qp`]: equality rows in [−0.1, 0.1], the bounds x ≤ 1.
+    fn stage_vectors(
+        rng: &mut rand_chacha::ChaCha8Rng,
+        n: usize,
+        ne: usize,
+        r: usize,
+        q_max: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        use rand::Rng;
+        let q = (0..n).map(|_| rng.random_range(-q_max..q_max)).collect();
+        let b = (0..r)
+            .map(|k| {
+                if k < ne {
+                    rng.random_range(-0.1..0.1)
+                } else {
+                    1.0
+                }
+            })
+            .collect();
+        (q, b)
+    }
+
     /// The loop solve over faer's supernodal layout against faer's own
     /// solve, on a stage-structured KKT system ([`stage_qp`]).
     #[test]
@@ -1450,16 +1473,7 @@ mod tests {
         use rand::{Rng, SeedableRng};
         let (p, a, ne, r) = stage_qp(7);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(8);
-        let q0: Vec<f64> = (0..p.n).map(|_| rng.random_range(-8.0..8.0)).collect();
-        let b0: Vec<f64> = (0..r)
-            .map(|k| {
-                if k < ne {
-                    rng.random_range(-0.1..0.1)
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let (q0, b0) = stage_vectors(&mut rng, p.n, ne, r, 8.0);
         let mut warm = Ipm::new(&p, &a, ne).unwrap();
         warm.warm_start = true;
         assert_eq!(warm.solve(&p, &a, &q0, &b0, 1e-10), IpmStatus::Solved);
@@ -1501,7 +1515,7 @@ mod tests {
     /// orderings reach the same answer (the stage QP with a linear term).
     #[test]
     fn nested_dissection_and_amd_solve_alike() {
-        use rand::{Rng, SeedableRng};
+        use rand::SeedableRng;
         let (p, a, ne, r) = stage_qp(5);
         let amd = Ipm::with_ordering(&p, &a, ne, KktOrdering::Amd).unwrap();
         let (fwd, inv) = nested_dissection(amd.diag.len(), &amd.colptr, &amd.rowind)
@@ -1513,16 +1527,7 @@ mod tests {
             seen[f] = true;
         }
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(6);
-        let q: Vec<f64> = (0..p.n).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let b: Vec<f64> = (0..r)
-            .map(|k| {
-                if k < ne {
-                    rng.random_range(-0.1..0.1)
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let (q, b) = stage_vectors(&mut rng, p.n, ne, r, 1.0);
         let mut answers = Vec::new();
         for ordering in [KktOrdering::Amd, KktOrdering::SmallerFactor] {
             let mut ipm = Ipm::with_ordering(&p, &a, ne, ordering).unwrap();
