@@ -214,16 +214,18 @@ pub fn run(
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
             let (mut v, s) = tr.bang_bang_guess()?;
+            let started = std::time::Instant::now();
             let m = tr
                 .integrate_on_mesh(&mut v)
                 .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
             // "node k <state name>": the state's name.
             let state = tr.variable_name(tr.state_index(1, m.worst_state).unwrap_or(0));
             progress(&format!(
-                "initial guess: {} of {} intervals integrated to {:.0e}; largest defect left {:.2e} (interval {}, {})",
+                "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
                 m.converged,
                 m.intervals,
                 crate::transcription::MESH_NEWTON_TOL,
+                started.elapsed().as_secs_f64(),
                 m.worst_defect,
                 m.worst_interval,
                 state.splitn(3, ' ').nth(2).unwrap_or(&state)
