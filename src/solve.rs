@@ -218,8 +218,6 @@ pub fn run(
             let m = tr
                 .integrate_on_mesh(&mut v)
                 .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
-            // "node k <state name>": the state's name.
-            let state = tr.variable_name(tr.state_index(1, m.worst_state).unwrap_or(0));
             progress(&format!(
                 "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
                 m.converged,
@@ -228,7 +226,10 @@ pub fn run(
                 started.elapsed().as_secs_f64(),
                 m.worst_defect,
                 m.worst_interval,
-                state.splitn(3, ' ').nth(2).unwrap_or(&state)
+                ocp.eq
+                    .state_names()
+                    .get(m.worst_state)
+                    .map_or("?", |s| s.as_str())
             ));
             mesh_integration = Some(m);
             (v, "bang-bang".to_string(), Some(s.jump_height_m))

@@ -742,10 +742,6 @@ pub const MESH_NEWTON_TOL: f64 = 1e-10;
 const MESH_NEWTON_ITERATIONS: usize = 30;
 const MESH_NEWTON_BACKTRACKS: usize = 12;
 
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0f64, |a, &b| a.max(b.abs()))
-}
-
 /// Jacobian sizes.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct JacobianStats {
@@ -1460,6 +1456,13 @@ impl Transcription {
         Ok((v, summary))
     }
 
+    /// The node (1-based) of variable i and its column in the node (states,
+    /// then excitations); None for t_f and beyond.
+    fn node_column(&self, i: usize) -> Option<(usize, usize)> {
+        let nv = self.node_size();
+        (i < self.final_time_index()).then(|| (i / nv + 1, i % nv))
+    }
+
     /// Integrate a guess's excitations on the mesh, by the transcription's
     /// own scheme: node by node, the states of node k are solved from the
     /// defect rows of interval k with node k−1, the excitations and t_f
@@ -1484,13 +1487,9 @@ impl Transcription {
         self.variable_bounds(&mut lo, &mut hi);
         // Per interval: the Jacobian entries of its rows in node k's states.
         let mut block_entries: Vec<Vec<(usize, usize, usize)>> = vec![Vec::new(); big_n];
-        let state_col = |c: usize| -> Option<(usize, usize)> {
-            let nv = self.node_size();
-            (c < self.final_time_index() && c % nv < nx).then(|| (c / nv + 1, c % nv))
-        };
         for (e, &(r, c)) in self.structure.iter().enumerate() {
             if r < big_n * nx {
-                if let Some((k, i)) = state_col(c) {
+                if let Some((k, i)) = self.node_column(c).filter(|&(_, i)| i < nx) {
                     if k == r / nx + 1 {
                         block_entries[k - 1].push((e, r % nx, i));
                     }
@@ -1506,7 +1505,7 @@ impl Transcription {
             worst_interval: 0,
             worst_state: 0,
         };
-        let norm = |c: &[f64], k: usize| norm_inf(&c[(k - 1) * nx..k * nx]);
+        let norm = |c: &[f64], k: usize| crate::sqp::norm_inf(&c[(k - 1) * nx..k * nx]);
         for k in 1..=big_n {
             let cols = (0..nx)
                 .map(|i| self.state_index(k, i))
@@ -1516,10 +1515,8 @@ impl Transcription {
                 })?;
             self.constraints(v, &mut c)?;
             let mut res = norm(&c, k);
-            let mut converged = false;
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
-                    converged = true;
                     break;
                 }
                 self.jacobian_values(v, &mut jv)?;
@@ -1556,10 +1553,7 @@ impl Transcription {
                     break;
                 }
             }
-            if !converged {
-                converged = res <= MESH_NEWTON_TOL;
-            }
-            report.converged += usize::from(converged);
+            report.converged += usize::from(res <= MESH_NEWTON_TOL);
             if res > report.worst_defect {
                 self.constraints(v, &mut c)?;
                 let rows = &c[(k - 1) * nx..k * nx];
@@ -2315,8 +2309,9 @@ impl Nlp for Transcription {
         if i == self.final_time_index() {
             return "t_f".into();
         }
-        let nv = self.node_size();
-        let (k, c) = (i / nv + 1, i % nv);
+        let Some((k, c)) = self.node_column(i) else {
+            return format!("variable {i}");
+        };
         if c < self.nx {
             format!("node {k} {}", self.ocp.eq.state_names()[c])
         } else {

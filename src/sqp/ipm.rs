@@ -44,6 +44,7 @@
 //! constraints (IPOPT's rule for τ), reading the inertia off the LDLᵀ
 //! factor's D.
 
+use super::norm_inf;
 use clarabel::algebra::CscMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltParams, LdltRegularization};
@@ -362,10 +363,6 @@ const WARM_START_FLOOR: f64 = 1e-2;
 /// jump's KKT system: its supernodes are small).
 fn par() -> Par {
     Par::Seq
-}
-
-fn norm_inf(v: &[f64]) -> f64 {
-    v.iter().fold(0.0f64, |a, &b| a.max(b.abs()))
 }
 
 // `!(a > b)` is meant: it is true for NaN as well.
@@ -891,8 +888,9 @@ impl Ipm {
         let warm: Option<Vec<f64>> =
             (self.warm_start && self.last_solved && !self.inertia_correction && self.z.len() == m)
                 .then(|| self.z.iter().zip(&ev).map(|(z, e)| z / e).collect());
-        let mut status = self.solve_scaled(&ps, &as_, &qs, &bs, tol, warm.as_deref());
-        if warm.is_some() && status != IpmStatus::Solved {
+        let warm_started = warm.is_some();
+        let mut status = self.solve_scaled(&ps, &as_, &qs, &bs, tol, warm);
+        if warm_started && status != IpmStatus::Solved {
             let warm_iterations = self.iterations;
             status = self.solve_scaled(&ps, &as_, &qs, &bs, tol, None);
             self.iterations += warm_iterations;
@@ -926,7 +924,7 @@ impl Ipm {
         q: &[f64],
         b: &[f64],
         tol: f64,
-        warm: Option<&[f64]>,
+        warm: Option<Vec<f64>>,
     ) -> IpmStatus {
         let (n, m, ne) = (self.n, self.m, self.num_eq);
         let m_in = (m - ne).max(1) as f64;
@@ -938,7 +936,7 @@ impl Ipm {
             // inequality rows and the last answer's multipliers, both kept
             // WARM_START_FLOOR from zero.
             x = vec![0.0; n];
-            z = zw.to_vec();
+            z = zw;
             s = vec![0.0; m];
             for r in ne..m {
                 s[r] = b[r].max(WARM_START_FLOOR);

@@ -884,7 +884,8 @@ fn qp_failure(outcome: &Result<QpOutcome, String>) -> Option<String> {
     }
 }
 
-fn norm_inf(v: &[f64]) -> f64 {
+/// max |v_i| (0 for an empty slice).
+pub(crate) fn norm_inf(v: &[f64]) -> f64 {
     v.iter().fold(0.0, |a, x| a.max(x.abs()))
 }
 
