@@ -14,6 +14,7 @@ pub mod analyze;
 pub mod bench;
 pub mod crosscheck;
 pub mod eval;
+pub mod hyperdual;
 pub mod integrator;
 pub mod io;
 pub mod laws;

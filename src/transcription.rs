@@ -59,12 +59,13 @@
 //! nodes of the path rows) are split between [`TranscriptionOptions::threads`]
 //! scoped threads; constraint values run on the calling thread.
 
+use crate::hyperdual::HyperDualS;
 use crate::nlp::{Element, EvalError, Nlp};
 use crate::ocp::JumpOcp;
 use crate::ode::StateWorkspace;
 use crate::scalar::Dual64;
 use crate::simulate::{JumpSummary, SimulationFailure};
-use num_dual::{DualSVec64, HyperDual64, HyperDualSVec64};
+use num_dual::{DualSVec64, HyperDual64};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::sync::Arc;
@@ -2375,7 +2376,7 @@ pub fn time_point_jacobian<const W: usize>(
 // ---------------------------------------------------------------------------
 // Exact element Hessians of the Lagrangian (midpoint Euler and trapezoidal).
 
-/// The second-order passes over the state equation (HyperDualSVec64<M, N>:
+/// The second-order passes over the state equation (HyperDualS<M, N>:
 /// M eps1 and N eps2 directions; the cost of an operation grows with M·N):
 /// 1. eps1 = q, eps2 = (q, q̇): every output's (q, q̇) × q block;
 /// 2. eps1 = q̇, eps2 = q̇: the q̇ × q̇ block (position-level work stays f64);
@@ -2520,16 +2521,16 @@ enum HessElement {
 
 /// Buffers of one second-order pass.
 struct PassBuf<const M: usize, const N: usize> {
-    ws: StateWorkspace<HyperDualSVec64<M, N>>,
-    xd: Vec<HyperDualSVec64<M, N>>,
-    ud: Vec<HyperDualSVec64<M, N>>,
-    xdotd: Vec<HyperDualSVec64<M, N>>,
+    ws: StateWorkspace<HyperDualS<M, N>>,
+    xd: Vec<HyperDualS<M, N>>,
+    ud: Vec<HyperDualS<M, N>>,
+    xdotd: Vec<HyperDualS<M, N>>,
 }
 
 impl<const M: usize, const N: usize> PassBuf<M, N> {
     fn new(ocp: &JumpOcp, nu: usize) -> Self {
         let nx = ocp.nx();
-        let z = HyperDualSVec64::<M, N>::from_re(0.0);
+        let z = HyperDualS::<M, N>::from_re(0.0);
         PassBuf {
             ws: ocp.eq.workspace(),
             xd: vec![z; nx],
@@ -2557,7 +2558,7 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
         let nx = x.len();
         for c in 0..nx + u.len() {
             let v = if c < nx { x[c] } else { u[c - nx] };
-            let mut d = HyperDualSVec64::<M, N>::from_re(v);
+            let mut d = HyperDualS::<M, N>::from_re(v);
             if let Some(i) = s1(c) {
                 d = d.derivative1(i);
             }
@@ -2581,16 +2582,16 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
                 &fy
             };
             let o = &mut out[r * block..(r + 1) * block];
-            if let Some(g) = &d.eps1.0 {
+            if let Some(g) = &d.eps1 {
                 for i in 0..m {
                     o[row0 + i] = g[i];
                 }
             }
-            if let Some(hm) = &d.eps1eps2.0 {
+            if let Some(hm) = &d.eps1eps2 {
                 for i in 0..m {
                     let base = m1 + (row0 + i) * n2 + col0;
                     for j in 0..n {
-                        o[base + j] = hm[(i, j)];
+                        o[base + j] = hm[i][j];
                     }
                 }
             }
