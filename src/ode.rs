@@ -95,6 +95,23 @@ pub struct StateWorkspace<S: Scalar> {
     pub ligament_torque: Vec<S>,
     tau_unit: Vec<S>,
     wrench: Vec<[S; 3]>,
+    /// Muscle paths computed elsewhere (see [`GivenPaths`]); `rhs` uses
+    /// them instead of walking the paths while this is set.
+    pub given_paths: Option<GivenPaths<S>>,
+}
+
+/// What `rhs` needs of the carried muscles' paths at one (q, q̇): per
+/// muscle its length, lengthening speed and the generalised force of a unit
+/// tension (n per muscle, in the order of q). The paths depend on (q, q̇)
+/// alone, so where a dual-number evaluation seeds derivatives of other
+/// inputs, or derivatives of (q, q̇) only to first order, these can be
+/// computed once with a cheaper number type and lifted (the exact
+/// Hessian's passes in the transcription).
+#[derive(Debug, Clone)]
+pub struct GivenPaths<S: Scalar> {
+    pub length: Vec<S>,
+    pub speed: Vec<S>,
+    pub unit: Vec<S>,
 }
 
 impl StateEquation {
@@ -230,7 +247,65 @@ impl StateEquation {
             ligament_torque: vec![z; self.model.ligaments.len()],
             tau_unit: vec![z; n],
             wrench: vec![[z; 3]; self.multibody.num_composite_bodies()],
+            given_paths: None,
         }
+    }
+
+    /// The carried muscles' path lengths, lengthening speeds and unit-
+    /// tension generalised forces at (q, q̇), into `out` (see [`GivenPaths`];
+    /// `out.unit` holds n values per muscle).
+    pub fn path_values<S: Scalar>(
+        &self,
+        ws: &mut StateWorkspace<S>,
+        q: &[S],
+        qd: &[S],
+        out: &mut GivenPaths<S>,
+    ) -> Result<(), OdeError> {
+        let (n, nm) = (self.nq(), self.nm());
+        for (what, got, want) in [("q", q.len(), n), ("qdot", qd.len(), n)] {
+            if got != want {
+                return Err(OdeError::Length { what, got, want });
+            }
+        }
+        out.length.resize(nm, S::zero());
+        out.speed.resize(nm, S::zero());
+        out.unit.resize(nm * n, S::zero());
+        self.multibody.set_state(&mut ws.mb, q, qd);
+        let q_of = &self.system.q_of_model_coordinate;
+        let view = ModelView {
+            mb: &self.multibody,
+            ws: &ws.mb,
+            q_of,
+        };
+        let mut unit = crate::multibody::UnitGeneralizedForces {
+            mb: &self.multibody,
+            ws: &ws.mb,
+            q_of,
+            tau: &mut ws.tau_unit,
+            wrench: &mut ws.wrench,
+            touched: all_bodies(self.multibody.num_composite_bodies()),
+        };
+        for (k, &mi) in self.muscles.iter().enumerate() {
+            use crate::path::UnitForces;
+            unit.clear();
+            let pv = self.model.muscles[mi].path.calc(
+                &view,
+                self.smoothing,
+                Some((S::one(), &mut unit)),
+            );
+            out.length[k] = pv.length;
+            out.speed[k] = pv.lengthening_speed;
+            let g = &mut out.unit[k * n..(k + 1) * n];
+            g.iter_mut().for_each(|v| *v = S::zero());
+            let mut sink = GeneralizedForces {
+                mb: &self.multibody,
+                ws: &ws.mb,
+                q_of,
+                tau: g,
+            };
+            unit.apply_scaled(S::one(), &mut sink);
+        }
+        Ok(())
     }
 
     /// ẋ = f(x, u): writes `xdot` (length [`Self::nx`]).
@@ -292,6 +367,7 @@ impl StateEquation {
                 wrench: &mut ws.wrench,
                 touched: all_bodies(self.multibody.num_composite_bodies()),
             };
+            let given = ws.given_paths.as_ref();
             self.apply_forces(
                 laws,
                 &view,
@@ -308,7 +384,16 @@ impl StateEquation {
                     ligament_torque: &mut ws.ligament_torque,
                 },
                 &mut unit,
+                given,
             )?;
+            if let Some(g) = given {
+                for (k, (&f, &m)) in ws.tendon_force.iter().zip(&self.multiplicity).enumerate() {
+                    let t = f * m;
+                    for (tau, &gk) in ws.tau.iter_mut().zip(&g.unit[k * n..(k + 1) * n]) {
+                        *tau += gk * t;
+                    }
+                }
+            }
         }
         self.multibody
             .forward_dynamics(&mut ws.mb, &ws.tau, &mut ws.qdd)?;
@@ -337,6 +422,7 @@ impl StateEquation {
         zdot: &mut [S],
         out: Outputs<'_, S>,
         unit: &mut U,
+        given: Option<&GivenPaths<S>>,
     ) -> Result<(), OdeError> {
         let nm = self.nm();
         // Passive joint torques.
@@ -371,10 +457,19 @@ impl StateEquation {
         // forces of a unit tension, replayed scaled by the tendon force.
         for (k, &mi) in self.muscles.iter().enumerate() {
             let muscle = &self.model.muscles[mi];
-            unit.clear();
-            let pv = muscle
-                .path
-                .calc(view, self.smoothing, Some((S::one(), &mut *unit)));
+            // Given paths: their forces are added by the caller.
+            let pv = match given {
+                Some(g) => crate::path::PathValue {
+                    length: g.length[k],
+                    lengthening_speed: g.speed[k],
+                },
+                None => {
+                    unit.clear();
+                    muscle
+                        .path
+                        .calc(view, self.smoothing, Some((S::one(), &mut *unit)))
+                }
+            };
             let rates = laws
                 .muscle(mi, act[k], lm[k], pv.length, pv.lengthening_speed, u[k])
                 .map_err(|reason| OdeError::Muscle {
@@ -386,7 +481,9 @@ impl StateEquation {
             out.tendon_force[k] = rates.tendon_force;
             zdot[k] = rates.fiber_velocity;
             zdot[nm + k] = rates.activation_rate;
-            unit.apply_scaled(rates.tendon_force * self.multiplicity[k], sink);
+            if given.is_none() {
+                unit.apply_scaled(rates.tendon_force * self.multiplicity[k], sink);
+            }
         }
         Ok(())
     }
@@ -566,6 +663,7 @@ impl SimbodyStateEquation {
                         ligament_torque: &mut o5,
                     },
                     &mut unit,
+                    None,
                 )
                 .map_err(|e| e.to_string())?;
                 if let Some(e) = kin.error.into_inner() {

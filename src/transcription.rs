@@ -62,7 +62,7 @@
 use crate::hyperdual::HyperDualS;
 use crate::nlp::{Element, EvalError, Nlp};
 use crate::ocp::JumpOcp;
-use crate::ode::StateWorkspace;
+use crate::ode::{GivenPaths, StateWorkspace};
 use crate::scalar::Dual64;
 use crate::simulate::{JumpSummary, SimulationFailure};
 use num_dual::{DualSVec64, HyperDual64};
@@ -2600,11 +2600,105 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
     }
 }
 
+/// The muscle paths at one point to first order in (q, q̇), for the passes
+/// that need no more of them (see [`GivenPaths`]): pass 2 seeds q̇ alone,
+/// in which the paths are linear (lengths and unit forces do not depend on
+/// q̇, speeds are linear in it), and pass 3 seeds q and q̇ in eps2 alone.
+/// Walking the paths in those passes' hyper-dual numbers cost about as
+/// much as the rest of the state equation.
+struct PathPass {
+    ws: StateWorkspace<DualSVec64<{ 2 * HESS_Q }>>,
+    q: Vec<DualSVec64<{ 2 * HESS_Q }>>,
+    qd: Vec<DualSVec64<{ 2 * HESS_Q }>>,
+    out: GivenPaths<DualSVec64<{ 2 * HESS_Q }>>,
+}
+
+impl PathPass {
+    fn new(ocp: &JumpOcp) -> Self {
+        let n = ocp.nq();
+        let z = DualSVec64::<{ 2 * HESS_Q }>::from(0.0);
+        PathPass {
+            ws: ocp.eq.workspace(),
+            q: vec![z; n],
+            qd: vec![z; n],
+            out: GivenPaths {
+                length: Vec::new(),
+                speed: Vec::new(),
+                unit: Vec::new(),
+            },
+        }
+    }
+
+    /// The paths at the (q, q̇) of `x`, q_i seeded in direction i and q̇_i
+    /// in direction n + i.
+    fn run(&mut self, ocp: &JumpOcp, x: &[f64]) -> Result<(), String> {
+        let n = ocp.nq();
+        for i in 0..n {
+            self.q[i] = DualSVec64::from_re(x[i]).derivative(i);
+            self.qd[i] = DualSVec64::from_re(x[n + i]).derivative(n + i);
+        }
+        ocp.eq
+            .path_values(&mut self.ws, &self.q, &self.qd, &mut self.out)
+            .map_err(|e| e.to_string())
+    }
+
+    /// The paths lifted into a pass's numbers: direction c of (q, q̇) goes
+    /// to eps1 direction `s1(c)` and eps2 direction `s2(c)`; no second
+    /// derivatives (exact where the pass's seeds enter the paths at most
+    /// linearly, or in eps2 alone).
+    fn lift<const M: usize, const N: usize>(
+        &self,
+        s1: impl Fn(usize) -> Option<usize>,
+        s2: impl Fn(usize) -> Option<usize>,
+        to: &mut Option<GivenPaths<HyperDualS<M, N>>>,
+    ) {
+        let dirs = 2 * self.q.len();
+        let one = |d: &DualSVec64<{ 2 * HESS_Q }>| {
+            let mut h = HyperDualS::<M, N>::from_re(d.re);
+            if let Some(e) = &d.eps.0 {
+                let mut e1 = [0.0; M];
+                let mut e2 = [0.0; N];
+                let (mut any1, mut any2) = (false, false);
+                for c in 0..dirs {
+                    if e[c] == 0.0 {
+                        continue;
+                    }
+                    if let Some(i) = s1(c) {
+                        e1[i] = e[c];
+                        any1 = true;
+                    }
+                    if let Some(j) = s2(c) {
+                        e2[j] = e[c];
+                        any2 = true;
+                    }
+                }
+                h.eps1 = any1.then_some(e1);
+                h.eps2 = any2.then_some(e2);
+            }
+            h
+        };
+        let to = to.get_or_insert_with(|| GivenPaths {
+            length: Vec::new(),
+            speed: Vec::new(),
+            unit: Vec::new(),
+        });
+        for (dst, src) in [
+            (&mut to.length, &self.out.length),
+            (&mut to.speed, &self.out.speed),
+            (&mut to.unit, &self.out.unit),
+        ] {
+            dst.clear();
+            dst.extend(src.iter().map(one));
+        }
+    }
+}
+
 /// Buffers of one second-order evaluation thread.
 struct HessWorker {
     a: PassBuf<HESS_Q, { 2 * HESS_Q }>,
     b: PassBuf<HESS_Q, HESS_Q>,
     c: PassBuf<HESS_B, HESS_N>,
+    paths: PathPass,
     x: Vec<f64>,
     u: Vec<f64>,
 }
@@ -2616,6 +2710,7 @@ impl HessWorker {
             a: PassBuf::new(ocp, nu),
             b: PassBuf::new(ocp, nu),
             c: PassBuf::new(ocp, nu),
+            paths: PathPass::new(ocp),
             x: vec![0.0; ocp.nx()],
             u: vec![0.0; nu],
         }
@@ -2660,6 +2755,15 @@ fn eval_hess_point(
         (0, n, 0, 2 * n),
         out,
     )?;
+    // The paths for passes 2 and 3.
+    w.paths.run(ocp, x)?;
+    w.paths.lift(
+        |c| (n..2 * n).contains(&c).then(|| c - n),
+        |c| (n..2 * n).contains(&c).then(|| c - n),
+        &mut w.b.ws.given_paths,
+    );
+    w.paths
+        .lift(|_| None, |c| Some(plan.e2[c]), &mut w.c.ws.given_paths);
     // 2. q̇ × q̇.
     w.b.run(
         ocp,

@@ -818,7 +818,12 @@ fn convexify_blocks(
 /// many threads as the machine has where the eigenvalue work is large
 /// (on the jump: 28 blocks of 86 × 86, about 20 ms per SQP iteration on
 /// one thread); the elements go to the threads in turn.
-fn convexify_elements(elements: &[Element], blocks: &mut [Vec<f64>], floor: f64, how: Convexification) {
+fn convexify_elements(
+    elements: &[Element],
+    blocks: &mut [Vec<f64>],
+    floor: f64,
+    how: Convexification,
+) {
     let one = |el: &Element, b: &mut Vec<f64>| {
         let k = el.variables.len();
         if el.blocks.is_empty() {
@@ -831,7 +836,9 @@ fn convexify_elements(elements: &[Element], blocks: &mut [Vec<f64>], floor: f64,
     let threads = if work < 1_000_000 {
         1
     } else {
-        std::thread::available_parallelism().map_or(1, |n| n.get()).min(elements.len())
+        std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .min(elements.len())
     };
     if threads <= 1 {
         for (el, b) in elements.iter().zip(blocks.iter_mut()) {
