@@ -210,24 +210,38 @@ impl FactorLayout {
     /// supernodes of a transcription's KKT system are mostly a column or
     /// two wide, where plain loops beat faer's dense kernels (measured:
     /// LEAP's QP set, `examples/ipm_bench`).
-    fn solve(&self, values: &[f64], x: &mut [f64]) {
+    fn solve(&self, values: &[f64], x: &mut [f64], work: &mut Vec<f64>) {
         let ns = self.begin.len() - 1;
+        // The rows below a supernode's diagonal block are gathered into
+        // (backward) or accumulated in (forward) the contiguous `work`, so
+        // that the inner loops run over contiguous memory (the jump's
+        // widest supernodes have 100-170 columns over as many rows).
         for s in 0..ns {
             let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
             let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
             let nr = nc + below.len();
             let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
+            let (xs, _) = x[start..].split_at_mut(nc);
+            work.clear();
+            work.resize(below.len(), 0.0);
+            let mut any = false;
             for j in 0..nc {
                 let col = &block[j * nr..(j + 1) * nr];
-                let xj = x[start + j];
+                let xj = xs[j];
                 if xj == 0.0 {
                     continue;
                 }
-                for i in j + 1..nc {
-                    x[start + i] -= col[i] * xj;
+                any = true;
+                for (xi, l) in xs[j + 1..].iter_mut().zip(&col[j + 1..nc]) {
+                    *xi -= l * xj;
                 }
-                for (l, &r) in col[nc..].iter().zip(below) {
-                    x[r] -= l * xj;
+                for (w, l) in work.iter_mut().zip(&col[nc..]) {
+                    *w += l * xj;
+                }
+            }
+            if any {
+                for (&r, w) in below.iter().zip(work.iter()) {
+                    x[r] -= w;
                 }
             }
         }
@@ -244,19 +258,37 @@ impl FactorLayout {
             let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
             let nr = nc + below.len();
             let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
+            work.clear();
+            work.extend(below.iter().map(|&r| x[r]));
+            let xs = &mut x[start..start + nc];
             for j in (0..nc).rev() {
                 let col = &block[j * nr..(j + 1) * nr];
-                let mut acc = 0.0;
-                for i in j + 1..nc {
-                    acc += col[i] * x[start + i];
-                }
-                for (l, &r) in col[nc..].iter().zip(below) {
-                    acc += l * x[r];
-                }
-                x[start + j] -= acc;
+                xs[j] -= dot(&col[nc..], work) + dot(&col[j + 1..nc], &xs[j + 1..]);
             }
         }
     }
+}
+
+/// Σ a_i b_i over the shorter of the two, in four independent sums (a
+/// single running sum waits on each addition's latency).
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0; 4];
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ac
+        .remainder()
+        .iter()
+        .zip(bc.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ac.zip(bc) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// The interior-point solver of one fixed-pattern QP.
@@ -287,6 +319,8 @@ pub struct Ipm {
     layout: Option<FactorLayout>,
     /// Permuted right-hand side of a solve.
     perm_work: Vec<f64>,
+    /// Scratch of the triangular solves.
+    solve_work: Vec<f64>,
     l_values: Vec<f64>,
     work: MemBuffer,
     /// Inertia correction (IPOPT's, Wächter & Biegler 2006 §3.1): P may be
@@ -320,7 +354,10 @@ pub struct Ipm {
 
 /// Static regularisation of the KKT diagonal, and the iterative
 /// refinement that removes it (clarabel's rule: up to 3 steps, each kept
-/// only when it cuts the residual of the unregularised system 5-fold).
+/// only when it cuts the residual of the unregularised system 5-fold,
+/// until the residual is within clarabel's default tolerances,
+/// REFINE_ABS_TOL + REFINE_TOL·‖rhs‖∞; with 1e-13·(1 + ‖rhs‖∞) instead,
+/// 4% more time on the jump's QPs for the same interior-point iterations).
 /// Measured on the jump's first 25 QPs (`IPM=1 examples/qp_replay`) and
 /// the Hock–Schittkowski set: 1e-11 with one step saves a quarter of the
 /// time per iteration, but stalls the dual residual of near-degenerate
@@ -328,6 +365,7 @@ pub struct Ipm {
 const STATIC_REG: f64 = 1e-9;
 const REFINE_STEPS: usize = 3;
 const REFINE_TOL: f64 = 1e-13;
+const REFINE_ABS_TOL: f64 = 1e-12;
 const REFINE_STOP_RATIO: f64 = 5.0;
 const MAX_ITER: u32 = 80;
 const STALL_WINDOW: u32 = 8;
@@ -489,6 +527,7 @@ impl Ipm {
         Ok(Ipm {
             layout,
             perm_work: vec![0.0; dim],
+            solve_work: Vec::new(),
             n,
             m,
             num_eq,
@@ -669,7 +708,7 @@ impl Ipm {
         // pays: each step must cut the residual REFINE_STOP_RATIO-fold, or
         // it is undone (clarabel's rule).
         let mut res = vec![0.0; n + nk];
-        let bound_res = REFINE_TOL * (1.0 + norm_inf(&rhs));
+        let bound_res = REFINE_ABS_TOL + REFINE_TOL * norm_inf(&rhs);
         let residual = |this: &Self, sol: &[f64], res: &mut [f64]| {
             this.kkt_mul(sol, res);
             let mut worst = 0.0f64;
@@ -709,12 +748,12 @@ impl Ipm {
                     for (w, &f) in self.perm_work.iter_mut().zip(fwd) {
                         *w = v[f];
                     }
-                    layout.solve(&self.l_values, &mut self.perm_work);
+                    layout.solve(&self.l_values, &mut self.perm_work, &mut self.solve_work);
                     for (&w, &f) in self.perm_work.iter().zip(fwd) {
                         v[f] = w;
                     }
                 }
-                None => layout.solve(&self.l_values, v),
+                None => layout.solve(&self.l_values, v, &mut self.solve_work),
             }
             return;
         }
