@@ -3,7 +3,8 @@
 //! Everything on the hot path of the state equation (kinematics, muscles,
 //! contact, ligaments) is written once for any `S: Scalar`: `f64` for plain
 //! evaluation and forward-mode dual numbers from `num-dual` (`Dual64`,
-//! `DualVec64<N>`, `HyperDual64`) for exact derivatives.
+//! `DualVec64<N>`, `HyperDual64`, and leap's own [`crate::hyperdual::HyperDualS`] in
+//! the exact Hessian's passes) for exact derivatives.
 
 pub use num_dual::{Dual64, DualNum, DualStruct};
 

@@ -2385,6 +2385,8 @@ pub fn time_point_jacobian<const W: usize>(
 ///    they carry eps2 alone (first order); the second-order work is the
 ///    muscle forces and the dynamics.
 ///
+/// Passes 2 and 3 take the muscle paths from one first-order evaluation
+/// per point ([`PathPass`]) instead of walking them in their own numbers.
 /// Pass 3 runs in chunks of [`HESS_B`] eps1 directions. Models with more
 /// than [`HESS_Q`] coordinates have no exact Hessian.
 const HESS_Q: usize = 7;
