@@ -769,6 +769,29 @@ pub struct UnitGeneralizedForces<'a, S: Scalar> {
     pub touched: u64,
 }
 
+impl<'a, S: Scalar> UnitGeneralizedForces<'a, S> {
+    /// A sink over `mb`'s bodies at the state `ws` holds, whose first
+    /// `clear` zeroes every body's wrench (`tau` and `wrench`: scratch of
+    /// n and [`Multibody::num_composite_bodies`] entries).
+    pub fn new(
+        mb: &'a Multibody,
+        ws: &'a Workspace<S>,
+        q_of: &'a [usize],
+        tau: &'a mut [S],
+        wrench: &'a mut [[S; 3]],
+    ) -> Self {
+        let n = mb.num_composite_bodies();
+        UnitGeneralizedForces {
+            mb,
+            ws,
+            q_of,
+            tau,
+            wrench,
+            touched: if n >= 64 { u64::MAX } else { (1u64 << n) - 1 },
+        }
+    }
+}
+
 impl<'a, S: Scalar> crate::path::ForceSink<S> for UnitGeneralizedForces<'a, S> {
     #[inline]
     fn add_point_force(&mut self, body: usize, loc: [S; 3], force: [S; 3]) {

@@ -63,6 +63,8 @@ pub enum OdeError {
         got: usize,
         want: usize,
     },
+    #[error("the workspace's given muscle paths belong to another (q, q̇)")]
+    StaleGivenPaths,
 }
 
 /// The state equation of a model's full or symmetric system.
@@ -109,6 +111,8 @@ pub struct StateWorkspace<S: Scalar> {
 /// Hessian's passes in the transcription).
 #[derive(Debug, Clone)]
 pub struct GivenPaths<S: Scalar> {
+    /// The values of (q, q̇) they belong to: `rhs` refuses others.
+    pub at: Vec<f64>,
     pub length: Vec<S>,
     pub speed: Vec<S>,
     pub unit: Vec<S>,
@@ -267,6 +271,8 @@ impl StateEquation {
                 return Err(OdeError::Length { what, got, want });
             }
         }
+        out.at.clear();
+        out.at.extend(q.iter().chain(qd).map(|v| v.re()));
         out.length.resize(nm, S::zero());
         out.speed.resize(nm, S::zero());
         out.unit.resize(nm * n, S::zero());
@@ -277,14 +283,13 @@ impl StateEquation {
             ws: &ws.mb,
             q_of,
         };
-        let mut unit = crate::multibody::UnitGeneralizedForces {
-            mb: &self.multibody,
-            ws: &ws.mb,
+        let mut unit = crate::multibody::UnitGeneralizedForces::new(
+            &self.multibody,
+            &ws.mb,
             q_of,
-            tau: &mut ws.tau_unit,
-            wrench: &mut ws.wrench,
-            touched: all_bodies(self.multibody.num_composite_bodies()),
-        };
+            &mut ws.tau_unit,
+            &mut ws.wrench,
+        );
         for (k, &mi) in self.muscles.iter().enumerate() {
             use crate::path::UnitForces;
             unit.clear();
@@ -342,6 +347,11 @@ impl StateEquation {
         let (q, rest) = x.split_at(n);
         let (qd, rest) = rest.split_at(n);
         let (lm, act) = rest.split_at(nm);
+        if let Some(g) = &ws.given_paths {
+            if g.at.len() != 2 * n || g.at.iter().zip(&x[..2 * n]).any(|(a, b)| *a != b.re()) {
+                return Err(OdeError::StaleGivenPaths);
+            }
+        }
         self.multibody.set_state(&mut ws.mb, q, qd);
         for t in ws.tau.iter_mut() {
             *t = S::zero();
@@ -359,14 +369,13 @@ impl StateEquation {
                 q_of,
                 tau: &mut ws.tau,
             };
-            let mut unit = crate::multibody::UnitGeneralizedForces {
-                mb: &self.multibody,
-                ws: &ws.mb,
+            let mut unit = crate::multibody::UnitGeneralizedForces::new(
+                &self.multibody,
+                &ws.mb,
                 q_of,
-                tau: &mut ws.tau_unit,
-                wrench: &mut ws.wrench,
-                touched: all_bodies(self.multibody.num_composite_bodies()),
-            };
+                &mut ws.tau_unit,
+                &mut ws.wrench,
+            );
             let given = ws.given_paths.as_ref();
             self.apply_forces(
                 laws,
@@ -486,15 +495,6 @@ impl StateEquation {
             }
         }
         Ok(())
-    }
-}
-
-/// Bit mask of the first `n` (≤ 64) bodies.
-fn all_bodies(n: usize) -> u64 {
-    if n >= 64 {
-        u64::MAX
-    } else {
-        (1u64 << n) - 1
     }
 }
 

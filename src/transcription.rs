@@ -2624,6 +2624,7 @@ impl PathPass {
             q: vec![z; n],
             qd: vec![z; n],
             out: GivenPaths {
+                at: Vec::new(),
                 length: Vec::new(),
                 speed: Vec::new(),
                 unit: Vec::new(),
@@ -2680,10 +2681,12 @@ impl PathPass {
             h
         };
         let to = to.get_or_insert_with(|| GivenPaths {
+            at: Vec::new(),
             length: Vec::new(),
             speed: Vec::new(),
             unit: Vec::new(),
         });
+        to.at.clone_from(&self.out.at);
         for (dst, src) in [
             (&mut to.length, &self.out.length),
             (&mut to.speed, &self.out.speed),

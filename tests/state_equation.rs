@@ -142,6 +142,67 @@ fn state_derivative_jacobian_matches_central_differences() {
     }
 }
 
+/// Muscle paths computed once (`path_values`) and given to `rhs` give the
+/// state derivative of the walked paths, values and first derivatives;
+/// given paths of another (q, q̇) are refused.
+#[test]
+fn given_paths_reproduce_the_walked_paths() {
+    use leap::ode::{GivenPaths, OdeError};
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
+    let laws = TestLaws(model.clone());
+    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let (x, u) = symmetric_state(&eq, 2);
+    let (n, nx) = (eq.nq(), eq.nx());
+    let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
+    // Seeded along a coordinate, a speed and a fibre length in turn.
+    for dir in [2, n + 4, 2 * n + 3] {
+        let xd: Vec<Dual64> = x
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let d = Dual64::from(v);
+                if i == dir {
+                    d.derivative()
+                } else {
+                    d
+                }
+            })
+            .collect();
+        let mut walked = vec![Dual64::from(0.0); nx];
+        let mut w = eq.workspace::<Dual64>();
+        eq.rhs(&laws, &mut w, &xd, &ud, &mut walked).unwrap();
+        let mut given = GivenPaths {
+            at: vec![],
+            length: vec![],
+            speed: vec![],
+            unit: vec![],
+        };
+        eq.path_values(&mut w, &xd[..n], &xd[n..2 * n], &mut given)
+            .unwrap();
+        assert!(given.unit.iter().any(|g| g.re != 0.0));
+        w.given_paths = Some(given);
+        let mut fast = vec![Dual64::from(0.0); nx];
+        eq.rhs(&laws, &mut w, &xd, &ud, &mut fast).unwrap();
+        for i in 0..nx {
+            for (what, a, b) in [
+                ("value", fast[i].re, walked[i].re),
+                ("derivative", fast[i].eps, walked[i].eps),
+            ] {
+                assert!(
+                    (a - b).abs() <= 1e-12 * (1.0 + b.abs()),
+                    "f[{i}] {what} along x[{dir}]: given paths {a}, walked {b}"
+                );
+            }
+        }
+        let mut other = xd.clone();
+        other[1] = other[1] + 1e-9;
+        assert!(matches!(
+            eq.rhs(&laws, &mut w, &other, &ud, &mut fast),
+            Err(OdeError::StaleGivenPaths)
+        ));
+    }
+}
+
 #[test]
 fn wrong_lengths_are_errors() {
     let model = Model::from_file("models/jumper_gait2392.json").unwrap();
