@@ -280,7 +280,7 @@ impl<const M: usize, const N: usize> Rem for HyperDualS<M, N> {
     type Output = Self;
     #[inline]
     fn rem(self, o: Self) -> Self {
-        self % &o
+        Rem::<&Self>::rem(self, &o)
     }
 }
 
@@ -865,7 +865,8 @@ mod tests {
                 for n in [-1.5, 0.0, 1.0, 2.0, 0.5, 3.7] {
                     assert_same(&format!("powf {n}"), &a.powf(n), &ta.powf(n));
                 }
-                let unary: [(&str, fn(&Ours) -> Ours, fn(&Theirs) -> Theirs); 24] = [
+                type Pair = (&'static str, fn(&Ours) -> Ours, fn(&Theirs) -> Theirs);
+                let unary: [Pair; 24] = [
                     ("sqrt", |x| x.sqrt(), |x| x.sqrt()),
                     ("cbrt", |x| x.cbrt(), |x| x.cbrt()),
                     ("exp", |x| x.exp(), |x| x.exp()),

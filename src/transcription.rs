@@ -2585,16 +2585,12 @@ impl<const M: usize, const N: usize> PassBuf<M, N> {
             };
             let o = &mut out[r * block..(r + 1) * block];
             if let Some(g) = &d.eps1 {
-                for i in 0..m {
-                    o[row0 + i] = g[i];
-                }
+                o[row0..row0 + m].copy_from_slice(&g[..m]);
             }
             if let Some(hm) = &d.eps1eps2 {
                 for i in 0..m {
                     let base = m1 + (row0 + i) * n2 + col0;
-                    for j in 0..n {
-                        o[base + j] = hm[i][j];
-                    }
+                    o[base..base + n].copy_from_slice(&hm[i][..n]);
                 }
             }
         }

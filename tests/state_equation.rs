@@ -195,7 +195,7 @@ fn given_paths_reproduce_the_walked_paths() {
             }
         }
         let mut other = xd.clone();
-        other[1] = other[1] + 1e-9;
+        other[1] += 1e-9;
         assert!(matches!(
             eq.rhs(&laws, &mut w, &other, &ud, &mut fast),
             Err(OdeError::StaleGivenPaths)
