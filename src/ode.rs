@@ -63,7 +63,7 @@ pub enum OdeError {
         got: usize,
         want: usize,
     },
-    #[error("the workspace's given muscle paths belong to another (q, q̇)")]
+    #[error("the workspace's given muscle paths belong to another (q, q̇) or system")]
     StaleGivenPaths,
 }
 
@@ -348,7 +348,11 @@ impl StateEquation {
         let (qd, rest) = rest.split_at(n);
         let (lm, act) = rest.split_at(nm);
         if let Some(g) = &ws.given_paths {
-            if g.at.len() != 2 * n || g.at.iter().zip(&x[..2 * n]).any(|(a, b)| *a != b.re()) {
+            let sizes = g.length.len() == nm && g.speed.len() == nm && g.unit.len() == nm * n;
+            if !sizes
+                || g.at.len() != 2 * n
+                || g.at.iter().zip(&x[..2 * n]).any(|(a, b)| *a != b.re())
+            {
                 return Err(OdeError::StaleGivenPaths);
             }
         }

@@ -215,7 +215,7 @@ impl FactorLayout {
         // The rows below a supernode's diagonal block are gathered into
         // (backward) or accumulated in (forward) the contiguous `work`, so
         // that the inner loops run over contiguous memory (the jump's
-        // widest supernodes have 100-170 columns over as many rows).
+        // widest supernode has 172 columns).
         for s in 0..ns {
             let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
             let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];

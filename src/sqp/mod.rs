@@ -1846,8 +1846,11 @@ impl<'s> Solver<'s> {
             // nor a higher ρ can change the verdict (and the step is not
             // stationary). On the jump this skips two of the three extra QPs
             // of every elastic iteration.
-            let first_got = viol1 - self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum);
-            if elastic && viol1 > st.optim_constraint_tolerance && first_got < 0.1 * viol1 {
+            let fair_share_taken = || {
+                let slack = self.qp_elastic.as_ref().map_or(viol1, |q| q.slack_sum);
+                viol1 - slack >= 0.1 * viol1
+            };
+            if elastic && viol1 > st.optim_constraint_tolerance && !fair_share_taken() {
                 let t = Instant::now();
                 let zero = vec![0.0; n];
                 let feas = self.solve_qp(true, &p, &p.c, Some(&zero), delta, 1.0, false);
