@@ -321,6 +321,8 @@ pub struct Ipm {
     perm_work: Vec<f64>,
     /// Scratch of the triangular solves.
     solve_work: Vec<f64>,
+    /// Scratch of `solve_kkt`: right-hand side, solution, residual, trial.
+    kkt_scratch: [Vec<f64>; 4],
     l_values: Vec<f64>,
     work: MemBuffer,
     /// Inertia correction (IPOPT's, Wächter & Biegler 2006 §3.1): P may be
@@ -528,6 +530,7 @@ impl Ipm {
             layout,
             perm_work: vec![0.0; dim],
             solve_work: Vec::new(),
+            kkt_scratch: Default::default(),
             n,
             m,
             num_eq,
@@ -691,8 +694,14 @@ impl Ipm {
         dz: &mut [f64],
     ) {
         let (n, nk) = (self.n, self.kept.len());
+        // The vectors of this solve, kept between calls.
+        let mut scratch = std::mem::take(&mut self.kkt_scratch);
+        let [rhs, sol, res, trial] = &mut scratch;
+        for v in [&mut *rhs, &mut *res] {
+            v.clear();
+            v.resize(n + nk, 0.0);
+        }
         // Reduced right-hand side: eliminated rows fold into rx.
-        let mut rhs = vec![0.0; n + nk];
         rhs[..n].copy_from_slice(rx);
         for (r, b) in self.bound.iter().enumerate() {
             if let Some((k, j)) = *b {
@@ -702,34 +711,34 @@ impl Ipm {
         for (k, &r) in self.kept.iter().enumerate() {
             rhs[n + k] = rr[r];
         }
-        let mut sol = rhs.clone();
-        self.ldlt_solve(&mut sol);
+        sol.clone_from(rhs);
+        self.ldlt_solve(sol);
         // Iterative refinement against the true reduced system, while it
         // pays: each step must cut the residual REFINE_STOP_RATIO-fold, or
         // it is undone (clarabel's rule).
-        let mut res = vec![0.0; n + nk];
-        let bound_res = REFINE_ABS_TOL + REFINE_TOL * norm_inf(&rhs);
+        let bound_res = REFINE_ABS_TOL + REFINE_TOL * norm_inf(rhs);
         let residual = |this: &Self, sol: &[f64], res: &mut [f64]| {
             this.kkt_mul(sol, res);
             let mut worst = 0.0f64;
-            for (r, h) in res.iter_mut().zip(&rhs) {
+            for (r, h) in res.iter_mut().zip(rhs.iter()) {
                 *r = h - *r;
                 worst = worst.max(r.abs());
             }
             worst
         };
-        let mut worst = residual(self, &sol, &mut res);
+        let mut worst = residual(self, sol, res);
         for _ in 0..REFINE_STEPS {
             if worst <= bound_res {
                 break;
             }
-            self.ldlt_solve(&mut res);
-            let trial: Vec<f64> = sol.iter().zip(&res).map(|(s, r)| s + r).collect();
-            let w = residual(self, &trial, &mut res);
+            self.ldlt_solve(res);
+            trial.clear();
+            trial.extend(sol.iter().zip(res.iter()).map(|(s, r)| s + r));
+            let w = residual(self, trial, res);
             if !(w * REFINE_STOP_RATIO <= worst) {
                 break;
             }
-            sol = trial;
+            std::mem::swap(sol, trial);
             worst = w;
         }
         dx.copy_from_slice(&sol[..n]);
@@ -739,6 +748,7 @@ impl Ipm {
                 None => sol[n + self.kept_pos[r]],
             };
         }
+        self.kkt_scratch = scratch;
     }
 
     fn ldlt_solve(&mut self, v: &mut [f64]) {
