@@ -118,6 +118,17 @@ pub struct GivenPaths<S: Scalar> {
     pub unit: Vec<S>,
 }
 
+impl<S: Scalar> Default for GivenPaths<S> {
+    fn default() -> Self {
+        GivenPaths {
+            at: Vec::new(),
+            length: Vec::new(),
+            speed: Vec::new(),
+            unit: Vec::new(),
+        }
+    }
+}
+
 impl StateEquation {
     /// The state equation of `model`'s symmetric (or full) system.
     pub fn new(model: &Model, symmetric: bool, smoothing: PathSmoothing) -> Result<Self, OdeError> {

@@ -2619,12 +2619,7 @@ impl PathPass {
             ws: ocp.eq.workspace(),
             q: vec![z; n],
             qd: vec![z; n],
-            out: GivenPaths {
-                at: Vec::new(),
-                length: Vec::new(),
-                speed: Vec::new(),
-                unit: Vec::new(),
-            },
+            out: GivenPaths::default(),
         }
     }
 
@@ -2676,12 +2671,7 @@ impl PathPass {
             }
             h
         };
-        let to = to.get_or_insert_with(|| GivenPaths {
-            at: Vec::new(),
-            length: Vec::new(),
-            speed: Vec::new(),
-            unit: Vec::new(),
-        });
+        let to = to.get_or_insert_with(GivenPaths::default);
         to.at.clone_from(&self.out.at);
         for (dst, src) in [
             (&mut to.length, &self.out.length),
@@ -2732,16 +2722,31 @@ struct HessCache {
     gw: Vec<f64>,
 }
 
+/// Pass 1's seeding: q_i in eps1 direction i, (q, q̇) in eps2.
+fn pass1_seeds(
+    n: usize,
+) -> (
+    impl Fn(usize) -> Option<usize>,
+    impl Fn(usize) -> Option<usize>,
+) {
+    (
+        move |c| (c < n).then_some(c),
+        move |c| (c < 2 * n).then_some(c),
+    )
+}
+
+/// Pass 2's seeding: q̇_i in eps1 and eps2 direction i.
+fn pass2_seed(n: usize) -> impl Fn(usize) -> Option<usize> + Copy {
+    move |c| (n..2 * n).contains(&c).then(|| c - n)
+}
+
 /// The muscle paths of passes 2 and 3 at the worker's (q, q̇) (see
 /// [`PathPass`]).
 fn given_paths(ocp: &JumpOcp, plan: &HessPlan, w: &mut HessWorker) -> Result<(), String> {
     let n = ocp.nq();
     w.paths.run(ocp, &w.x)?;
-    w.paths.lift(
-        |c| (n..2 * n).contains(&c).then(|| c - n),
-        |c| (n..2 * n).contains(&c).then(|| c - n),
-        &mut w.b.ws.given_paths,
-    );
+    w.paths
+        .lift(pass2_seed(n), pass2_seed(n), &mut w.b.ws.given_paths);
     w.paths
         .lift(|_| None, |c| Some(plan.e2[c]), &mut w.c.ws.given_paths);
     Ok(())
@@ -2762,24 +2767,16 @@ fn eval_hess_point(
     given_paths(ocp, plan, w)?;
     let (x, u) = (&w.x[..], &w.u[..]);
     // 1. q × (q, q̇).
-    w.a.run(
-        ocp,
-        plan,
-        x,
-        u,
-        |c| (c < n).then_some(c),
-        |c| (c < 2 * n).then_some(c),
-        (0, n, 0, 2 * n),
-        out,
-    )?;
+    let (s1, s2) = pass1_seeds(n);
+    w.a.run(ocp, plan, x, u, s1, s2, (0, n, 0, 2 * n), out)?;
     // 2. q̇ × q̇.
     w.b.run(
         ocp,
         plan,
         x,
         u,
-        |c| (n..2 * n).contains(&c).then(|| c - n),
-        |c| (n..2 * n).contains(&c).then(|| c - n),
+        pass2_seed(n),
+        pass2_seed(n),
         (n, n, n, n),
         out,
     )?;
@@ -3330,17 +3327,9 @@ pub fn time_hessian_passes(
     w.x.copy_from_slice(x);
     w.u.copy_from_slice(u);
     for _ in 0..reps.max(1) {
+        let (s1, s2) = pass1_seeds(n);
         let t = std::time::Instant::now();
-        w.a.run(
-            ocp,
-            &plan,
-            x,
-            u,
-            |c| (c < n).then_some(c),
-            |c| (c < 2 * n).then_some(c),
-            (0, n, 0, 2 * n),
-            &mut out,
-        )?;
+        w.a.run(ocp, &plan, x, u, s1, s2, (0, n, 0, 2 * n), &mut out)?;
         times[0].push(t.elapsed().as_secs_f64());
         let t = std::time::Instant::now();
         given_paths(ocp, &plan, &mut w)?;
@@ -3349,8 +3338,8 @@ pub fn time_hessian_passes(
             &plan,
             x,
             u,
-            |c| (n..2 * n).contains(&c).then(|| c - n),
-            |c| (n..2 * n).contains(&c).then(|| c - n),
+            pass2_seed(n),
+            pass2_seed(n),
             (n, n, n, n),
             &mut out,
         )?;

@@ -171,12 +171,7 @@ fn given_paths_reproduce_the_walked_paths() {
         let mut walked = vec![Dual64::from(0.0); nx];
         let mut w = eq.workspace::<Dual64>();
         eq.rhs(&laws, &mut w, &xd, &ud, &mut walked).unwrap();
-        let mut given = GivenPaths {
-            at: vec![],
-            length: vec![],
-            speed: vec![],
-            unit: vec![],
-        };
+        let mut given = GivenPaths::default();
         eq.path_values(&mut w, &xd[..n], &xd[n..2 * n], &mut given)
             .unwrap();
         assert!(given.unit.iter().any(|g| g.re != 0.0));

@@ -979,14 +979,13 @@ impl Ipm {
         let m_in = (m - ne).max(1) as f64;
         self.iterations = 0;
         let mut d = vec![0.0; m];
-        let (mut x, mut z, mut s);
+        let (mut x, mut s) = (vec![0.0; n], vec![0.0; m]);
+        let mut z;
         if let Some(zw) = warm {
             // x = 0 (the step of a new QP), the slacks b − A·0 = b of the
             // inequality rows and the last answer's multipliers, both kept
             // WARM_START_FLOOR from zero.
-            x = vec![0.0; n];
             z = zw;
-            s = vec![0.0; m];
             for r in ne..m {
                 s[r] = b[r].max(WARM_START_FLOOR);
                 z[r] = z[r].max(WARM_START_FLOOR);
@@ -1000,10 +999,8 @@ impl Ipm {
                 return IpmStatus::Failed;
             }
             let mq: Vec<f64> = q.iter().map(|v| -v).collect();
-            x = vec![0.0; n];
             z = vec![0.0; m];
             self.solve_kkt(a, &d, &mq, b, &mut x, &mut z);
-            s = vec![0.0; m];
             for r in ne..m {
                 s[r] = -z[r];
             }
