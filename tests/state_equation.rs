@@ -99,28 +99,39 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
     }
 }
 
+/// x as dual numbers with x[dir] seeded.
+fn seeded(x: &[f64], dir: usize) -> Vec<Dual64> {
+    x.iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            let d = Dual64::from(v);
+            if i == dir {
+                d.derivative()
+            } else {
+                d
+            }
+        })
+        .collect()
+}
+
+/// The default jumper's symmetric state equation with smoothed path points,
+/// and test laws.
+fn smooth_symmetric() -> (StateEquation, TestLaws) {
+    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
+    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    (eq, TestLaws(model))
+}
+
 #[test]
 fn state_derivative_jacobian_matches_central_differences() {
-    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
-    let laws = TestLaws(model.clone());
-    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let (eq, laws) = smooth_symmetric();
     let (x, u) = symmetric_state(&eq, 1);
     let nx = eq.nx();
     let mut wd = eq.workspace::<Dual64>();
     let mut w = eq.workspace::<f64>();
     let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
     for dir in (0..nx).step_by(5) {
-        let xd: Vec<Dual64> = x
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| {
-                if i == dir {
-                    Dual64::from(v).derivative()
-                } else {
-                    Dual64::from(v)
-                }
-            })
-            .collect();
+        let xd = seeded(&x, dir);
         let mut fd = vec![Dual64::from(0.0); nx];
         eq.rhs(&laws, &mut wd, &xd, &ud, &mut fd).unwrap();
         let h = 1e-6;
@@ -148,26 +159,13 @@ fn state_derivative_jacobian_matches_central_differences() {
 #[test]
 fn given_paths_reproduce_the_walked_paths() {
     use leap::ode::{GivenPaths, OdeError};
-    let model = Model::from_file("models/jumper_gait2392.json").unwrap();
-    let laws = TestLaws(model.clone());
-    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let (eq, laws) = smooth_symmetric();
     let (x, u) = symmetric_state(&eq, 2);
     let (n, nx) = (eq.nq(), eq.nx());
     let ud: Vec<Dual64> = u.iter().map(|&v| Dual64::from(v)).collect();
     // Seeded along a coordinate, a speed and a fibre length in turn.
     for dir in [2, n + 4, 2 * n + 3] {
-        let xd: Vec<Dual64> = x
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| {
-                let d = Dual64::from(v);
-                if i == dir {
-                    d.derivative()
-                } else {
-                    d
-                }
-            })
-            .collect();
+        let xd = seeded(&x, dir);
         let mut walked = vec![Dual64::from(0.0); nx];
         let mut w = eq.workspace::<Dual64>();
         eq.rhs(&laws, &mut w, &xd, &ud, &mut walked).unwrap();
