@@ -365,6 +365,10 @@ pub struct Ipm {
 /// time per iteration, but stalls the dual residual of near-degenerate
 /// QPs (hs039, hs046, the jump's first QP) until clarabel takes over.
 const STATIC_REG: f64 = 1e-9;
+/// Bounds of the cumulative Ruiz scaling of a variable or row (clarabel's
+/// `equilibrate_min_scaling` and `equilibrate_max_scaling`).
+const EQUILIBRATION_MIN: f64 = 1e-4;
+const EQUILIBRATION_MAX: f64 = 1e4;
 const REFINE_STEPS: usize = 3;
 const REFINE_TOL: f64 = 1e-13;
 const REFINE_ABS_TOL: f64 = 1e-12;
@@ -863,8 +867,8 @@ impl Ipm {
         b: &[f64],
         tol: f64,
     ) -> IpmStatus {
-        // Ruiz equilibration of [P, Aᵀ; A, 0] (10 passes, factors within
-        // [1e-4, 1e4], as clarabel does, but for every QP): x = D x̂, rows
+        // Ruiz equilibration of [P, Aᵀ; A, 0] (10 passes, cumulative factors
+        // within [1e-4, 1e4], as clarabel does, but for every QP): x = D x̂, rows
         // scaled by E; the tolerances apply to the scaled QP. Without it
         // the SQP on the reduced jump took another path in its first
         // iterations and ended at 12.3 cm (418 iterations); with it, 28.9 cm
@@ -886,15 +890,20 @@ impl Ipm {
                     rn[r] = rn[r].max(v);
                 }
             }
-            let f = |v: f64| {
+            // The cumulative factor stays within [1e-4, 1e4]: a row of
+            // entries near zero (a constraint whose linearisation vanishes,
+            // 1e-29 on the jump with smooth contact) would otherwise be
+            // scaled up by 1e4 per pass, its right-hand side with it (to
+            // 1e26 in ten passes), and the start would be lost.
+            let f = |v: f64, cum: f64| {
                 if v > 0.0 {
-                    (1.0 / v.sqrt()).clamp(1e-4, 1e4)
+                    (1.0 / v.sqrt()).clamp(EQUILIBRATION_MIN / cum, EQUILIBRATION_MAX / cum)
                 } else {
                     1.0
                 }
             };
-            let cs: Vec<f64> = cn.iter().map(|&v| f(v)).collect();
-            let rs: Vec<f64> = rn.iter().map(|&v| f(v)).collect();
+            let cs: Vec<f64> = cn.iter().zip(&dv).map(|(&v, &c)| f(v, c)).collect();
+            let rs: Vec<f64> = rn.iter().zip(&ev).map(|(&v, &c)| f(v, c)).collect();
             for j in 0..n {
                 for k in ps.colptr[j]..ps.colptr[j + 1] {
                     ps.nzval[k] *= cs[ps.rowval[k]] * cs[j];
@@ -1251,6 +1260,37 @@ mod tests {
         assert!((ipm.z[0] - 0.2).abs() < 1e-7);
         assert!((ipm.z[2] - 0.6).abs() < 1e-7);
         assert!(ipm.z[1].abs() < 1e-7 && ipm.z[3].abs() < 1e-7);
+    }
+
+    /// The QP above with an inactive row whose entries nearly vanish
+    /// (1e-29·(x0 + x1) ≤ 0.01, as a constraint whose linearisation vanishes
+    /// writes it): the same answer. Equilibration bounded per pass only
+    /// scaled that row, and its right-hand side, by 1e4 in each of its ten
+    /// passes, and the start was lost (clarabel bounds the cumulative
+    /// scaling, and so does leap).
+    #[test]
+    fn vanishing_row_keeps_the_kkt_solution() {
+        let p = CscMatrix::new(2, 2, vec![0, 1, 2], vec![0, 1], vec![1.0, 1.0]);
+        let a = dense_csc(
+            5,
+            2,
+            &[
+                (0, 0, 1.0),
+                (0, 1, 1.0),
+                (1, 0, -1.0),
+                (2, 0, 1.0),
+                (3, 0, 1.0),
+                (3, 1, 2.0),
+                (4, 0, 1e-29),
+                (4, 1, 1e-29),
+            ],
+        );
+        let mut ipm = Ipm::new(&p, &a, 1).unwrap();
+        let st = ipm.solve(&p, &a, &[-1.0, -1.0], &[1.0, 0.0, 0.2, 10.0, 0.01], 1e-10);
+        assert_eq!(st, IpmStatus::Solved);
+        assert!((ipm.x[0] - 0.2).abs() < 1e-8 && (ipm.x[1] - 0.8).abs() < 1e-8);
+        assert!((ipm.z[0] - 0.2).abs() < 1e-7 && (ipm.z[2] - 0.6).abs() < 1e-7);
+        assert!(ipm.z[4].abs() < 1e-7);
     }
 
     /// Random feasible convex QPs with equality rows, general inequality
