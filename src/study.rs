@@ -222,6 +222,9 @@ pub struct SolveConfig {
     pub output_directory: PathBuf,
     /// None: skipped.
     pub forward_check: Option<ForwardCheck>,
+    /// Where the Hessian mode was named (origin and field, for errors);
+    /// None where it is the default.
+    pub hessian_named_by: Option<(String, String)>,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -441,7 +444,7 @@ impl SolveStudy {
             None
         };
 
-        Ok(SolveConfig {
+        let mut config = SolveConfig {
             study_file: file.map(Path::to_path_buf),
             name,
             model,
@@ -450,7 +453,13 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
-        })
+            hessian_named_by: self
+                .hessian
+                .as_ref()
+                .map(|_| (origin.clone(), "hessian".to_string())),
+        };
+        config.settle_hessian()?;
+        Ok(config)
     }
 }
 
@@ -502,6 +511,7 @@ impl SolveConfig {
         check_fiber_dynamics(&self.transcription).map_err(|r| err("--fiber-dynamics", r))?;
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
+            self.hessian_named_by = Some(("command line".into(), "--hessian".into()));
         }
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
@@ -513,7 +523,33 @@ impl SolveConfig {
             self.settings.qp_dump_dir = Some(self.output_directory.join("qps"));
             self.settings.qp_dump_every = true;
         }
-        Ok(())
+        self.settle_hessian()
+    }
+
+    /// Hermite–Simpson has no exact element Hessians (the centre state
+    /// depends on the dynamics at both nodes): where the Hessian mode is the
+    /// default it becomes partitioned BFGS; an exact mode named for it is
+    /// an error naming where it was named.
+    fn settle_hessian(&mut self) -> Result<(), StudyError> {
+        if self.transcription.scheme != Scheme::HermiteSimpson
+            || self.settings.hessian != HessianMode::ExactConvexified
+        {
+            return Ok(());
+        }
+        match &self.hessian_named_by {
+            Some((origin, field)) => Err(StudyError::Field {
+                origin: origin.clone(),
+                field: field.clone(),
+                reason: "the exact Hessian exists for the midpoint-euler, trapezoidal and backward-euler schemes, not for hermite-simpson; name 'bfgs' (partitioned BFGS)".into(),
+            }),
+            None => apply_hessian(&mut self.settings, "bfgs").map_err(|reason| {
+                StudyError::Field {
+                    origin: "built-in default".into(),
+                    field: "hessian".into(),
+                    reason,
+                }
+            }),
+        }
     }
 }
 
@@ -706,6 +742,42 @@ mod tests {
         assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
         assert_eq!(c.transcription.fiber_dynamics, FiberDynamics::Implicit);
         assert_eq!(c.settings.qp_solver, QpSolver::InteriorPoint);
+    }
+
+    #[test]
+    fn hermite_simpson_takes_bfgs_unless_an_exact_hessian_is_named() {
+        let c = SolveStudy::from_json_str(r#"{"mesh": {"scheme": "hermite-simpson"}}"#, "s.json")
+            .and_then(|s| s.resolve(None))
+            .unwrap();
+        assert_eq!(c.settings.hessian, HessianMode::PartitionedBfgs);
+        for h in ["exact", "exact-block-diagonal", "exact-inertia-corrected"] {
+            let (f, r) = field_error(&format!(
+                r#"{{"mesh": {{"scheme": "hermite-simpson"}}, "hessian": "{h}"}}"#
+            ));
+            assert_eq!(f, "hessian");
+            assert!(r.contains("hermite-simpson") && r.contains("'bfgs'"), "{r}");
+        }
+        // The built-in study's default with the scheme from the command
+        // line; the exact Hessian named there is refused by its option.
+        let scheme = |hessian: Option<&str>| {
+            let mut c = SolveConfig::builtin().unwrap();
+            c.apply(&Overrides {
+                scheme: Some("hermite-simpson".into()),
+                hessian: hessian.map(Into::into),
+                ..Default::default()
+            })
+            .map(|()| c.settings.hessian)
+        };
+        assert_eq!(scheme(None).unwrap(), HessianMode::PartitionedBfgs);
+        match scheme(Some("exact")) {
+            Err(StudyError::Field { field, .. }) => assert_eq!(field, "--hessian"),
+            other => panic!("expected a field error, got {other:?}"),
+        }
+        // Trapezoidal keeps the exact Hessian.
+        let c = SolveStudy::from_json_str(r#"{"mesh": {"scheme": "trapezoidal"}}"#, "s.json")
+            .and_then(|s| s.resolve(None))
+            .unwrap();
+        assert_eq!(c.settings.hessian, HessianMode::ExactConvexified);
     }
 
     #[test]

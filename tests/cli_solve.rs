@@ -281,6 +281,50 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     }
 }
 
+/// Hermite–Simpson has no exact element Hessians. By default its solve
+/// takes partitioned BFGS and runs (with the study's exact default it
+/// stopped before its first iteration, status "invalid_problem"); an exact
+/// Hessian named for it is refused, naming the option.
+#[test]
+fn hermite_simpson_takes_bfgs_and_refuses_an_exact_hessian() {
+    let cwd = fresh_dir("hs_cwd");
+    let out = fresh_dir("hs_out");
+    let (_, v) = small_solve(
+        &cwd,
+        &out,
+        &[
+            "--scheme",
+            "hermite-simpson",
+            "--max-iterations",
+            "2",
+            "--no-forward-check",
+        ],
+    );
+    assert_eq!(v["scheme"].as_str(), Some("hermite-simpson"), "{v}");
+    assert_eq!(v["hessian"].as_str(), Some("partitioned_bfgs"), "{v}");
+    assert_ne!(v["status"].as_str(), Some("invalid_problem"), "{v}");
+    assert!(v["iterations"].as_u64().unwrap() >= 1, "{v}");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .current_dir(&cwd)
+        .args([
+            "solve",
+            "--scheme",
+            "hermite-simpson",
+            "--hessian",
+            "exact",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--hessian") && err.contains("bfgs"), "{err}");
+    let _ = std::fs::remove_dir_all(&cwd);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn study_file_settings_reach_the_solve() {
     // tests/data/studies/small.json: 4 intervals, trapezoidal, 3 iterations,
