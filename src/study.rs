@@ -526,12 +526,12 @@ impl SolveConfig {
         self.settle_hessian()
     }
 
-    /// Hermite–Simpson has no exact element Hessians (the centre state
-    /// depends on the dynamics at both nodes): where the Hessian mode is the
-    /// default it becomes partitioned BFGS; an exact mode named for it is
-    /// an error naming where it was named.
+    /// A scheme without exact element Hessians (Hermite–Simpson,
+    /// [`Scheme::has_exact_hessian`]) takes partitioned BFGS where the
+    /// Hessian mode is the default; an exact mode named for it is an error
+    /// naming where it was named.
     fn settle_hessian(&mut self) -> Result<(), StudyError> {
-        if self.transcription.scheme != Scheme::HermiteSimpson
+        if self.transcription.scheme.has_exact_hessian()
             || self.settings.hessian != HessianMode::ExactConvexified
         {
             return Ok(());
@@ -542,13 +542,12 @@ impl SolveConfig {
                 field: field.clone(),
                 reason: "the exact Hessian exists for the midpoint-euler, trapezoidal and backward-euler schemes, not for hermite-simpson; name 'bfgs' (partitioned BFGS)".into(),
             }),
-            None => apply_hessian(&mut self.settings, "bfgs").map_err(|reason| {
-                StudyError::Field {
-                    origin: "built-in default".into(),
-                    field: "hessian".into(),
-                    reason,
-                }
-            }),
+            None => {
+                // The default settings of the exact modes (clipping, the
+                // ratio test) are BFGS's as well.
+                self.settings.hessian = HessianMode::PartitionedBfgs;
+                Ok(())
+            }
         }
     }
 }

@@ -94,6 +94,17 @@ pub enum Scheme {
     BackwardEuler,
 }
 
+impl Scheme {
+    /// Whether the transcription can provide exact element Hessians of the
+    /// Lagrangian with this scheme (the model's point passes must separate
+    /// too, see `HessPlan`). Hermite–Simpson cannot: its centre
+    /// state depends on the dynamics at both nodes, whose second
+    /// derivatives the point passes do not compose.
+    pub fn has_exact_hessian(self) -> bool {
+        self != Scheme::HermiteSimpson
+    }
+}
+
 /// How the defects state the fibre dynamics of the muscles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum FiberDynamics {
@@ -1190,7 +1201,7 @@ impl Transcription {
             cols.dedup();
             me.final_cols = cols;
         }
-        if me.options.scheme != Scheme::HermiteSimpson {
+        if me.options.scheme.has_exact_hessian() {
             me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
             for g in 0..me.groups.len() {
                 for k in 1..=big_n {

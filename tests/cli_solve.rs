@@ -86,15 +86,22 @@ fn bad_command_line_values_name_the_option() {
         (vec!["solve", "--guess", "no_such_guess.sto"], "--guess"),
         (vec!["solve", "no_such_study.json"], "no_such_study.json"),
     ] {
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .args(&args)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        let err = refused(&args);
         assert!(err.contains(what), "{args:?}: {err}");
     }
+}
+
+/// `leap ARGS` from the crate's directory must exit 2 (bad input): its
+/// standard error.
+fn refused(args: &[&str]) -> String {
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(args)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+    err
 }
 
 /// The keys the `--json` object must have.
@@ -130,6 +137,15 @@ fn small_solve(cwd: &Path, out: &Path, args: &[&str]) -> (std::process::Output, 
     let v: serde_json::Value = serde_json::from_slice(&o.stdout)
         .unwrap_or_else(|e| panic!("{e}: {}", String::from_utf8_lossy(&o.stdout)));
     (o, v)
+}
+
+/// [`small_solve`] from a fresh working directory into a fresh output
+/// directory (`<tag>_cwd`, `<tag>_out`): both, and the JSON.
+fn small_solve_in_fresh_dirs(tag: &str, args: &[&str]) -> (PathBuf, PathBuf, serde_json::Value) {
+    let cwd = fresh_dir(&format!("{tag}_cwd"));
+    let out = fresh_dir(&format!("{tag}_out"));
+    let (_, v) = small_solve(&cwd, &out, args);
+    (cwd, out, v)
 }
 
 #[test]
@@ -287,11 +303,8 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
 /// Hessian named for it is refused, naming the option.
 #[test]
 fn hermite_simpson_takes_bfgs_and_refuses_an_exact_hessian() {
-    let cwd = fresh_dir("hs_cwd");
-    let out = fresh_dir("hs_out");
-    let (_, v) = small_solve(
-        &cwd,
-        &out,
+    let (cwd, out, v) = small_solve_in_fresh_dirs(
+        "hs",
         &[
             "--scheme",
             "hermite-simpson",
@@ -304,22 +317,15 @@ fn hermite_simpson_takes_bfgs_and_refuses_an_exact_hessian() {
     assert_eq!(v["hessian"].as_str(), Some("partitioned_bfgs"), "{v}");
     assert_ne!(v["status"].as_str(), Some("invalid_problem"), "{v}");
     assert!(v["iterations"].as_u64().unwrap() >= 1, "{v}");
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .current_dir(&cwd)
-        .args([
-            "solve",
-            "--scheme",
-            "hermite-simpson",
-            "--hessian",
-            "exact",
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused(&[
+        "solve",
+        "--scheme",
+        "hermite-simpson",
+        "--hessian",
+        "exact",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(err.contains("--hessian") && err.contains("bfgs"), "{err}");
     let _ = std::fs::remove_dir_all(&cwd);
     let _ = std::fs::remove_dir_all(&out);
@@ -358,21 +364,15 @@ fn study_file_settings_reach_the_solve() {
 fn a_guess_without_state_columns_is_refused_naming_file_and_column() {
     let out = fresh_dir("guess");
     let guess = "tests/data/controls/jumper_missing_soleus.sto";
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args([
-            "solve",
-            "--num-mesh-intervals",
-            "4",
-            "--guess",
-            guess,
-            "--out",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused(&[
+        "solve",
+        "--num-mesh-intervals",
+        "4",
+        "--guess",
+        guess,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(
         err.contains(guess) && err.contains("/jointset/") && err.contains("missing"),
         "{err}"
@@ -434,11 +434,8 @@ fn bench_solve_reports_iterations_and_time_split() {
 #[test]
 fn dump_qps_writes_each_iteration_qp_into_out() {
     use clarabel::solver::SolverStatus;
-    let cwd = fresh_dir("dump_cwd");
-    let out = fresh_dir("dump_out");
-    let (_, v) = small_solve(
-        &cwd,
-        &out,
+    let (cwd, out, v) = small_solve_in_fresh_dirs(
+        "dump",
         &["--max-iterations", "2", "--no-forward-check", "--dump-qps"],
     );
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
