@@ -28,7 +28,7 @@ use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
 };
-use crate::sqp::{SqpResult, SqpStatus};
+use crate::sqp::{HessianMode, SqpResult, SqpStatus};
 use crate::study::{fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, SolveConfig};
 use crate::transcription::{MeshTrajectory, Scheme, Transcription, TranscriptionError};
 use serde::Serialize;
@@ -143,7 +143,7 @@ pub struct SolveReport {
     pub scheme: &'static str,
     /// "explicit" or "implicit" ([`crate::transcription::FiberDynamics`]).
     pub fiber_dynamics: &'static str,
-    pub hessian: crate::sqp::HessianMode,
+    pub hessian: HessianMode,
     pub variables: usize,
     pub constraints: usize,
     pub time_split: crate::sqp::TimeSplit,
@@ -251,8 +251,15 @@ pub fn run(
     })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
+    let hessian = match settings.hessian {
+        HessianMode::ExactConvexified => "exact element Hessians",
+        HessianMode::PartitionedBfgs if config.transcription.scheme.has_exact_hessian() => {
+            "partitioned BFGS"
+        }
+        HessianMode::PartitionedBfgs => "partitioned BFGS (hermite-simpson has no exact Hessian)",
+    };
     progress(&format!(
-        "SQP: {} variables, {} constraints, at most {} iterations",
+        "SQP: {} variables, {} constraints, at most {} iterations, {hessian}",
         tr.num_variables(),
         tr.num_constraints(),
         settings.max_iterations
