@@ -251,12 +251,14 @@ pub fn run(
     })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
+    let scheme = config.transcription.scheme;
     let hessian = match settings.hessian {
-        HessianMode::ExactConvexified => "exact element Hessians",
-        HessianMode::PartitionedBfgs if config.transcription.scheme.has_exact_hessian() => {
-            "partitioned BFGS"
-        }
-        HessianMode::PartitionedBfgs => "partitioned BFGS (hermite-simpson has no exact Hessian)",
+        HessianMode::ExactConvexified => "exact element Hessians".to_string(),
+        HessianMode::PartitionedBfgs if scheme.has_exact_hessian() => "partitioned BFGS".into(),
+        HessianMode::PartitionedBfgs => format!(
+            "partitioned BFGS ({} has no exact Hessian)",
+            scheme_name(scheme)
+        ),
     };
     progress(&format!(
         "SQP: {} variables, {} constraints, at most {} iterations, {hessian}",

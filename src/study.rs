@@ -540,7 +540,16 @@ impl SolveConfig {
             Some((origin, field)) => Err(StudyError::Field {
                 origin: origin.clone(),
                 field: field.clone(),
-                reason: "the exact Hessian exists for the midpoint-euler, trapezoidal and backward-euler schemes, not for hermite-simpson; name 'bfgs' (partitioned BFGS)".into(),
+                reason: format!(
+                    "the exact Hessian exists for the {} schemes, not for {}; name 'bfgs' (partitioned BFGS)",
+                    SCHEMES
+                        .iter()
+                        .filter(|(_, s)| s.has_exact_hessian())
+                        .map(|&(n, _)| n)
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    scheme_name(self.transcription.scheme)
+                ),
             }),
             None => {
                 // The default settings of the exact modes (clipping, the
