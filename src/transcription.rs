@@ -101,7 +101,7 @@ impl Scheme {
     /// state depends on the dynamics at both nodes, whose second
     /// derivatives the point passes do not compose.
     pub fn has_exact_hessian(self) -> bool {
-        self != Scheme::HermiteSimpson
+        true
     }
 }
 
@@ -1203,9 +1203,13 @@ impl Transcription {
         }
         if me.options.scheme.has_exact_hessian() {
             me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
-            for g in 0..me.groups.len() {
-                for k in 1..=big_n {
-                    me.hess_elements.push(HessElement::Defect { group: g, k });
+            if me.options.scheme == Scheme::HermiteSimpson {
+                me.hess_elements.extend((1..=big_n).map(HessElement::Interval));
+            } else {
+                for g in 0..me.groups.len() {
+                    for k in 1..=big_n {
+                        me.hess_elements.push(HessElement::Defect { group: g, k });
+                    }
                 }
             }
             for j in 0..n_cm {
@@ -2519,11 +2523,14 @@ impl HessPlan {
     }
 }
 
-/// What an element of [`Nlp::elements`] holds (midpoint and trapezoidal).
+/// What an element of [`Nlp::elements`] holds.
 #[derive(Debug, Clone, Copy)]
 enum HessElement {
-    /// The defect rows of group `group` in interval `k`.
+    /// The defect rows of group `group` in interval `k` (midpoint,
+    /// trapezoidal, backward Euler).
     Defect { group: usize, k: usize },
+    /// Every defect row of interval `k` (Hermite–Simpson).
+    Interval(usize),
     /// No-countermovement row j.
     NoCountermovement(usize),
     /// Objective and lift-off row.
@@ -2726,6 +2733,8 @@ struct HessCache {
     x: Vec<f64>,
     /// Per point, per output g_r: [`HessPlan::block`] values.
     data: Vec<f64>,
+    /// Per point, f (n_x values).
+    vals: Vec<f64>,
     /// Hessian of J over the final node's (q, q̇), 2n × 2n.
     objective: Vec<f64>,
     /// Scratch: a λ-weighted block and gradient.
@@ -2765,12 +2774,13 @@ fn given_paths(ocp: &JumpOcp, plan: &HessPlan, w: &mut HessWorker) -> Result<(),
 
 /// First and second derivatives of g = (f, Ÿ_C, F_y/(m g)) at the worker's
 /// (x, u) into `out` (per output, [`HessPlan::block`] values; see
-/// [`HESS_Q`] for the passes).
+/// [`HESS_Q`] for the passes), and f into `vals`.
 fn eval_hess_point(
     ocp: &JumpOcp,
     plan: &HessPlan,
     w: &mut HessWorker,
     out: &mut [f64],
+    vals: &mut [f64],
 ) -> Result<(), String> {
     let (n, nm) = (ocp.nq(), ocp.nm());
     let nx = w.x.len();
@@ -2780,6 +2790,9 @@ fn eval_hess_point(
     // 1. q × (q, q̇).
     let (s1, s2) = pass1_seeds(n);
     w.a.run(ocp, plan, x, u, s1, s2, (0, n, 0, 2 * n), out)?;
+    for (v, d) in vals.iter_mut().zip(&w.a.xdotd) {
+        *v = d.re;
+    }
     // 2. q̇ × q̇.
     w.b.run(
         ocp,
@@ -2855,6 +2868,7 @@ impl Transcription {
                 workers: (0..threads).map(|_| HessWorker::new(ocp, npu)).collect(),
                 x: Vec::new(),
                 data: vec![0.0; npts * nout * block],
+                vals: vec![0.0; npts * self.nx],
                 objective: Vec::new(),
                 hw: Vec::new(),
                 gw: Vec::new(),
@@ -2872,11 +2886,22 @@ impl Transcription {
                 (&v[o..o + nx], &v[o + nx..o + nv])
             }
         };
+        // Node f values (Hermite–Simpson centres are placed by them).
+        let node0 = &self.node0[..nx];
+        let node_point = &self.node_point;
         let run = |w: &mut HessWorker,
                    first: usize,
                    pts: &[Point],
-                   out: &mut [f64]|
+                   done_vals: &[f64],
+                   out: &mut [f64],
+                   vals: &mut [f64]|
          -> Result<(), (usize, String)> {
+            let node_f = |k: usize| -> &[f64] {
+                match node_point[k] {
+                    Some(p) => &done_vals[p * nx..(p + 1) * nx],
+                    None => node0,
+                }
+            };
             for (i, p) in pts.iter().enumerate() {
                 match *p {
                     Point::Node(k) => {
@@ -2895,43 +2920,74 @@ impl Transcription {
                             &mut w.u,
                         );
                     }
-                    Point::Center(_) => {
-                        return Err((first + i, "no Hessian at Hermite–Simpson centres".into()))
+                    Point::Center(k) => {
+                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
+                        let (fa, fb) = (node_f(k - 1), node_f(k));
+                        for j in 0..nx {
+                            w.x[j] = 0.5 * (xa[j] + xb[j]) + 0.125 * h * (fa[j] - fb[j]);
+                        }
+                        for j in 0..ua.len() {
+                            w.u[j] = 0.5 * (ua[j] + ub[j]);
+                        }
                     }
                 }
                 let o = &mut out[i * nout * block..(i + 1) * nout * block];
-                eval_hess_point(ocp, plan, w, o).map_err(|e| (first + i, e))?;
+                eval_hess_point(ocp, plan, w, o, &mut vals[i * nx..(i + 1) * nx])
+                    .map_err(|e| (first + i, e))?;
             }
             Ok(())
         };
         let points = &self.points[..];
-        let nt = cache.workers.len().min(npts).max(1);
-        let per = npts.div_ceil(nt).max(1);
-        let result = std::thread::scope(|s| {
-            let mut jobs = cache
-                .workers
-                .iter_mut()
-                .zip(cache.data.chunks_mut(per * nout * block))
-                .zip(points.chunks(per).enumerate());
-            let first = jobs.next();
-            let run = &run;
-            let handles: Vec<_> = jobs
-                .map(|((w, out), (ci, pts))| s.spawn(move || run(w, ci * per, pts, out)))
-                .collect();
-            let mut res = match first {
-                Some(((w, out), (_, pts))) => run(w, 0, pts, out),
-                None => Ok(()),
-            };
-            for h in handles {
-                let r = h
-                    .join()
-                    .unwrap_or_else(|_| Err((0, "an evaluation thread panicked".into())));
-                if res.is_ok() {
-                    res = r;
+        // Hermite–Simpson: the nodes first, then the centres.
+        let stages: &[(usize, usize)] = if self.first_stage < npts {
+            &[(0, self.first_stage), (self.first_stage, npts)]
+        } else {
+            &[(0, npts)]
+        };
+        let mut result = Ok(());
+        for &(lo, hi) in stages {
+            let (done_vals, todo_vals) = cache.vals.split_at_mut(lo * nx);
+            let done_vals: &[f64] = done_vals;
+            let todo_vals = &mut todo_vals[..(hi - lo) * nx];
+            let todo_data = &mut cache.data[lo * nout * block..hi * nout * block];
+            let pts = &points[lo..hi];
+            let nt = cache.workers.len().min(pts.len()).max(1);
+            let per = pts.len().div_ceil(nt).max(1);
+            result = std::thread::scope(|s| {
+                let mut jobs = cache
+                    .workers
+                    .iter_mut()
+                    .zip(
+                        todo_data
+                            .chunks_mut(per * nout * block)
+                            .zip(todo_vals.chunks_mut(per * nx)),
+                    )
+                    .zip(pts.chunks(per).enumerate());
+                let first = jobs.next();
+                let run = &run;
+                let handles: Vec<_> = jobs
+                    .map(|((w, (out, vals)), (ci, pts))| {
+                        s.spawn(move || run(w, lo + ci * per, pts, done_vals, out, vals))
+                    })
+                    .collect();
+                let mut res = match first {
+                    Some(((w, (out, vals)), (_, pts))) => run(w, lo, pts, done_vals, out, vals),
+                    None => Ok(()),
+                };
+                for h in handles {
+                    let r = h
+                        .join()
+                        .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
+                    if res.is_ok() {
+                        res = r;
+                    }
                 }
+                res
+            });
+            if result.is_err() {
+                break;
             }
-            res
-        });
+        }
         result.map_err(|(p, e)| {
             let at = match self.points[p] {
                 Point::Node(k) => format!("node {k}"),
@@ -3140,6 +3196,26 @@ impl Transcription {
                     }
                 }
             }
+            HessElement::Interval(k) => {
+                let node_data = |node: usize| self.node_point[node].map(|p| data(p));
+                let node_f = |node: usize| match self.node_point[node] {
+                    Some(p) => &cache.vals[p * nx..(p + 1) * nx],
+                    None => &self.node0[..nx],
+                };
+                let Some(db) = node_data(k) else {
+                    return Err(EvalError::new("hessian", format!("node {k} is not evaluated")));
+                };
+                hermite_simpson_hessian(
+                    plan,
+                    &self.pattern.rows,
+                    (nx, self.nu),
+                    (node_data(k - 1), db, data(self.interval_point[k - 1])),
+                    (node_f(k - 1), node_f(k)),
+                    &lambda[(k - 1) * nx..k * nx],
+                    (hstep, big_n),
+                    h,
+                )?;
+            }
             HessElement::NoCountermovement(j) => {
                 let cols = &self.ydd_cols;
                 let ks = cols.len();
@@ -3195,6 +3271,158 @@ impl Transcription {
         cache.gw = gw;
         finite("hessian", h, |i| format!("element {e} entry {i}"))
     }
+}
+
+/// The Hessian (into `h`, row-major over the element's variables: node
+/// k − 1's columns if it has variables, node k's, then t_f) of λᵀd_k for
+/// the Hermite–Simpson defects of interval k,
+///
+/// ```text
+///   d = x_b − x_a − (h/6)(f_a + f_b) − (2h/3) f_c(x_c, u_c),   h = t_f/N,
+///   x_c = (x_a + x_b)/2 + (h/8)(f_a − f_b),   u_c = (u_a + u_b)/2,
+/// ```
+///
+/// from the point data of the nodes (`da`, `db`) and the centre (`dc`) and
+/// the node values f_a, f_b. With g = Σ_r λ_r ∇f_c,r, H = Σ_r λ_r ∇²f_c,r
+/// at the centre and J = ∂(x_c, u_c)/∂(z_a, z_b, t_f):
+///
+/// ```text
+///   ∇²(λᵀd) = −(2h/3) JᵀHJ + Σ_i w_a,i ∇²f_a,i + Σ_i w_b,i ∇²f_b,i  (node blocks)
+///   w_a = −(h/6)λ − (h²/12)g_x,   w_b = −(h/6)λ + (h²/12)g_x
+///   ∂²/∂t_f∂z = (1/N)[(1/h)Σ_i w_i ∇f_i (per node) − (2/3) J_zᵀg] (+ JᵀHJ's)
+///   ∂²/∂t_f²  = −(4/3) g_xᵀ(f_a − f_b)/(8N²) (+ JᵀHJ's)
+/// ```
+///
+/// (the node terms carry the centre's dependence on the dynamics at the
+/// nodes, x_c's curvature; g_x is g's state part).
+#[allow(clippy::too_many_arguments)]
+fn hermite_simpson_hessian(
+    plan: &HessPlan,
+    rows: &[Vec<usize>],
+    (nx, nu): (usize, usize),
+    (da, db, dc): (Option<&[f64]>, &[f64], &[f64]),
+    (fa, fb): (&[f64], &[f64]),
+    lambda: &[f64],
+    (hstep, big_n): (f64, usize),
+    h: &mut [f64],
+) -> Result<(), EvalError> {
+    let nin = nx + nu;
+    let nn = if da.is_some() { 2 } else { 1 };
+    let kk = nn * nin + 1;
+    let t = kk - 1;
+    check_len("hessian", "h", h.len(), kk * kk)?;
+    h.iter_mut().for_each(|v| *v = 0.0);
+    let inv_n = 1.0 / big_n as f64;
+    // Σ_r w_r ∇²f_r (dense nin × nin, into `hm`) and Σ_r w_r ∇f_r (into
+    // `gv`) from a point's data, over each row's own columns.
+    let weighted = |d: &[f64], w: &dyn Fn(usize) -> f64, hm: &mut [f64], gv: &mut [f64]| {
+        for (r, cols) in rows.iter().enumerate().take(nx) {
+            let l = w(r);
+            if l == 0.0 {
+                continue;
+            }
+            for (ia, &c) in cols.iter().enumerate() {
+                gv[c] += l * plan.grad(d, r, c);
+                for &e in &cols[ia..] {
+                    let v = l * plan.hess(d, r, c, e);
+                    hm[c * nin + e] += v;
+                    if c != e {
+                        hm[e * nin + c] += v;
+                    }
+                }
+            }
+        }
+    };
+    // The centre: g and −(2h/3)H.
+    let mut hc = vec![0.0; nin * nin];
+    let mut g = vec![0.0; nin];
+    weighted(dc, &|r| lambda[r], &mut hc, &mut g);
+    hc.iter_mut().for_each(|v| *v *= -2.0 * hstep / 3.0);
+    // The nodes present, with their offsets and the sign of their f in x_c.
+    let nodes: Vec<(&[f64], usize, f64)> = match da {
+        Some(da) => vec![(da, 0, 1.0), (db, nin, -1.0)],
+        None => vec![(db, 0, -1.0)],
+    };
+    // J = ∂(x_c, u_c)/∂(element variables), nin × kk.
+    let mut jm = vec![0.0; nin * kk];
+    for j in 0..nin {
+        for &(d, off, sign) in &nodes {
+            jm[j * kk + off + j] += 0.5;
+            if j < nx {
+                for &c in &rows[j] {
+                    jm[j * kk + off + c] += sign * 0.125 * hstep * plan.grad(d, j, c);
+                }
+            }
+        }
+        if j < nx {
+            jm[j * kk + t] = 0.125 * inv_n * (fa[j] - fb[j]);
+        }
+    }
+    // JᵀHJ with H = −(2h/3)·Σλ∇²f_c: M = HJ, then JᵀM.
+    let mut m = vec![0.0; nin * kk];
+    for c in 0..nin {
+        for e in 0..nin {
+            let v = hc[c * nin + e];
+            if v == 0.0 {
+                continue;
+            }
+            for b in 0..kk {
+                m[c * kk + b] += v * jm[e * kk + b];
+            }
+        }
+    }
+    for c in 0..nin {
+        for a in 0..kk {
+            let v = jm[c * kk + a];
+            if v == 0.0 {
+                continue;
+            }
+            for b in 0..kk {
+                h[a * kk + b] += v * m[c * kk + b];
+            }
+        }
+    }
+    // The node terms, with x_c's curvature in the weights.
+    let c2 = hstep * hstep / 12.0;
+    // The t_f column's terms besides JᵀHJ's.
+    let mut tcol = vec![0.0; t];
+    let mut hn = vec![0.0; nin * nin];
+    let mut gn = vec![0.0; nin];
+    for &(d, off, sign) in &nodes {
+        hn.iter_mut().for_each(|v| *v = 0.0);
+        gn.iter_mut().for_each(|v| *v = 0.0);
+        let w = |r: usize| -hstep / 6.0 * lambda[r] - sign * c2 * g[r];
+        weighted(d, &w, &mut hn, &mut gn);
+        for a in 0..nin {
+            for b in 0..nin {
+                h[(off + a) * kk + off + b] += hn[a * nin + b];
+            }
+            tcol[off + a] += inv_n / hstep * gn[a];
+        }
+    }
+    // −(2/3)(1/N)·J_zᵀg, and ∂²/∂t_f².
+    for a in 0..t {
+        let mut v = 0.0;
+        for c in 0..nin {
+            v += jm[c * kk + a] * g[c];
+        }
+        tcol[a] -= 2.0 / 3.0 * inv_n * v;
+    }
+    let gx: f64 = (0..nx).map(|i| g[i] * (fa[i] - fb[i])).sum();
+    h[t * kk + t] -= 4.0 / 3.0 * gx * 0.125 * inv_n * inv_n;
+    for (a, v) in tcol.iter().enumerate() {
+        h[a * kk + t] += v;
+        h[t * kk + a] += v;
+    }
+    // JᵀHJ is symmetric up to rounding: make it exact.
+    for a in 0..kk {
+        for b in 0..a {
+            let v = 0.5 * (h[a * kk + b] + h[b * kk + a]);
+            h[a * kk + b] = v;
+            h[b * kk + a] = v;
+        }
+    }
+    Ok(())
 }
 
 /// The Hessian (into `h`, row-major over the element's variables: the
@@ -3334,6 +3562,7 @@ pub fn time_hessian_passes(
     let n = ocp.nq();
     let mut w = HessWorker::new(ocp, ocp.nu());
     let mut out = vec![0.0; (ocp.nx() + 2) * plan.block];
+    let mut vals = vec![0.0; ocp.nx()];
     let mut times = [vec![], vec![], vec![]];
     w.x.copy_from_slice(x);
     w.u.copy_from_slice(u);
@@ -3356,7 +3585,7 @@ pub fn time_hessian_passes(
         )?;
         times[1].push(t.elapsed().as_secs_f64());
         let t = std::time::Instant::now();
-        eval_hess_point(ocp, &plan, &mut w, &mut out)?;
+        eval_hess_point(ocp, &plan, &mut w, &mut out, &mut vals)?;
         times[2].push(t.elapsed().as_secs_f64());
     }
     Ok(times.map(|mut v| {

