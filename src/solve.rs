@@ -251,14 +251,9 @@ pub fn run(
     })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
-    let scheme = config.transcription.scheme;
     let hessian = match settings.hessian {
-        HessianMode::ExactConvexified => "exact element Hessians".to_string(),
-        HessianMode::PartitionedBfgs if scheme.has_exact_hessian() => "partitioned BFGS".into(),
-        HessianMode::PartitionedBfgs => format!(
-            "partitioned BFGS ({} has no exact Hessian)",
-            scheme_name(scheme)
-        ),
+        HessianMode::ExactConvexified => "exact element Hessians",
+        HessianMode::PartitionedBfgs => "partitioned BFGS",
     };
     progress(&format!(
         "SQP: {} variables, {} constraints, at most {} iterations, {hessian}",

@@ -222,9 +222,6 @@ pub struct SolveConfig {
     pub output_directory: PathBuf,
     /// None: skipped.
     pub forward_check: Option<ForwardCheck>,
-    /// Where the Hessian mode was named (origin and field, for errors);
-    /// None where it is the default.
-    pub hessian_named_by: Option<(String, String)>,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -444,7 +441,7 @@ impl SolveStudy {
             None
         };
 
-        let mut config = SolveConfig {
+        let config = SolveConfig {
             study_file: file.map(Path::to_path_buf),
             name,
             model,
@@ -453,12 +450,7 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
-            hessian_named_by: self
-                .hessian
-                .as_ref()
-                .map(|_| (origin.clone(), "hessian".to_string())),
         };
-        config.settle_hessian()?;
         Ok(config)
     }
 }
@@ -511,7 +503,6 @@ impl SolveConfig {
         check_fiber_dynamics(&self.transcription).map_err(|r| err("--fiber-dynamics", r))?;
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
-            self.hessian_named_by = Some(("command line".into(), "--hessian".into()));
         }
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
@@ -523,41 +514,7 @@ impl SolveConfig {
             self.settings.qp_dump_dir = Some(self.output_directory.join("qps"));
             self.settings.qp_dump_every = true;
         }
-        self.settle_hessian()
-    }
-
-    /// A scheme without exact element Hessians (Hermite–Simpson,
-    /// [`Scheme::has_exact_hessian`]) takes partitioned BFGS where the
-    /// Hessian mode is the default; an exact mode named for it is an error
-    /// naming where it was named.
-    fn settle_hessian(&mut self) -> Result<(), StudyError> {
-        if self.transcription.scheme.has_exact_hessian()
-            || self.settings.hessian != HessianMode::ExactConvexified
-        {
-            return Ok(());
-        }
-        match &self.hessian_named_by {
-            Some((origin, field)) => Err(StudyError::Field {
-                origin: origin.clone(),
-                field: field.clone(),
-                reason: format!(
-                    "the exact Hessian exists for the {} schemes, not for {}; name 'bfgs' (partitioned BFGS)",
-                    SCHEMES
-                        .iter()
-                        .filter(|(_, s)| s.has_exact_hessian())
-                        .map(|&(n, _)| n)
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    scheme_name(self.transcription.scheme)
-                ),
-            }),
-            None => {
-                // The default settings of the exact modes (clipping, the
-                // ratio test) are BFGS's as well.
-                self.settings.hessian = HessianMode::PartitionedBfgs;
-                Ok(())
-            }
-        }
+        Ok(())
     }
 }
 
@@ -750,42 +707,6 @@ mod tests {
         assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
         assert_eq!(c.transcription.fiber_dynamics, FiberDynamics::Implicit);
         assert_eq!(c.settings.qp_solver, QpSolver::InteriorPoint);
-    }
-
-    #[test]
-    fn hermite_simpson_takes_bfgs_unless_an_exact_hessian_is_named() {
-        let c = SolveStudy::from_json_str(r#"{"mesh": {"scheme": "hermite-simpson"}}"#, "s.json")
-            .and_then(|s| s.resolve(None))
-            .unwrap();
-        assert_eq!(c.settings.hessian, HessianMode::PartitionedBfgs);
-        for h in ["exact", "exact-block-diagonal", "exact-inertia-corrected"] {
-            let (f, r) = field_error(&format!(
-                r#"{{"mesh": {{"scheme": "hermite-simpson"}}, "hessian": "{h}"}}"#
-            ));
-            assert_eq!(f, "hessian");
-            assert!(r.contains("hermite-simpson") && r.contains("'bfgs'"), "{r}");
-        }
-        // The built-in study's default with the scheme from the command
-        // line; the exact Hessian named there is refused by its option.
-        let scheme = |hessian: Option<&str>| {
-            let mut c = SolveConfig::builtin().unwrap();
-            c.apply(&Overrides {
-                scheme: Some("hermite-simpson".into()),
-                hessian: hessian.map(Into::into),
-                ..Default::default()
-            })
-            .map(|()| c.settings.hessian)
-        };
-        assert_eq!(scheme(None).unwrap(), HessianMode::PartitionedBfgs);
-        match scheme(Some("exact")) {
-            Err(StudyError::Field { field, .. }) => assert_eq!(field, "--hessian"),
-            other => panic!("expected a field error, got {other:?}"),
-        }
-        // Trapezoidal keeps the exact Hessian.
-        let c = SolveStudy::from_json_str(r#"{"mesh": {"scheme": "trapezoidal"}}"#, "s.json")
-            .and_then(|s| s.resolve(None))
-            .unwrap();
-        assert_eq!(c.settings.hessian, HessianMode::ExactConvexified);
     }
 
     #[test]

@@ -55,6 +55,12 @@
 //! since the q̈ rows need q, q̇ and l^M apart while every a_i and u_i fits
 //! beside them.
 //!
+//! **Hessians.** Exact element Hessians of the Lagrangian from hyper-dual
+//! passes at the same points (see `HESS_Q`): per group of defect rows
+//! with the same node columns (midpoint, trapezoidal, backward Euler), per
+//! interval for Hermite–Simpson, whose centre state couples every row to
+//! the dynamics at both nodes (`hermite_simpson_hessian`).
+//!
 //! **Threads.** The Jacobian's point evaluations (28 midpoints plus the
 //! nodes of the path rows) are split between [`TranscriptionOptions::threads`]
 //! scoped threads; constraint values run on the calling thread.
@@ -92,17 +98,6 @@ pub enum Scheme {
     /// cannot ring from node to node, and the dynamics, ground force and
     /// lift-off condition all hold at the nodes that are reported.
     BackwardEuler,
-}
-
-impl Scheme {
-    /// Whether the transcription can provide exact element Hessians of the
-    /// Lagrangian with this scheme (the model's point passes must separate
-    /// too, see `HessPlan`). Hermite–Simpson cannot: its centre
-    /// state depends on the dynamics at both nodes, whose second
-    /// derivatives the point passes do not compose.
-    pub fn has_exact_hessian(self) -> bool {
-        true
-    }
 }
 
 /// How the defects state the fibre dynamics of the muscles.
@@ -1201,10 +1196,11 @@ impl Transcription {
             cols.dedup();
             me.final_cols = cols;
         }
-        if me.options.scheme.has_exact_hessian() {
+        {
             me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
             if me.options.scheme == Scheme::HermiteSimpson {
-                me.hess_elements.extend((1..=big_n).map(HessElement::Interval));
+                me.hess_elements
+                    .extend((1..=big_n).map(HessElement::Interval));
             } else {
                 for g in 0..me.groups.len() {
                     for k in 1..=big_n {
@@ -2305,7 +2301,7 @@ impl Nlp for Transcription {
         out
     }
 
-    /// Midpoint Euler and trapezoidal only (see [`Transcription::element_hessian`]).
+    /// Every scheme, for models whose point passes separate (see `HessPlan`).
     fn has_hessian(&self) -> bool {
         self.hess_plan.is_some()
     }
@@ -2389,7 +2385,9 @@ pub fn time_point_jacobian<const W: usize>(
 }
 
 // ---------------------------------------------------------------------------
-// Exact element Hessians of the Lagrangian (midpoint Euler and trapezoidal).
+// Exact element Hessians of the Lagrangian (every scheme; Hermite–Simpson
+// composes its centre's second derivatives with the nodes', see
+// `hermite_simpson_hessian`).
 
 /// The second-order passes over the state equation (HyperDualS<M, N>:
 /// M eps1 and N eps2 directions; the cost of an operation grows with M·N):
@@ -3191,19 +3189,22 @@ impl Transcription {
                     Scheme::HermiteSimpson => {
                         return Err(EvalError::new(
                             "hessian",
-                            "no exact Hessian for Hermite–Simpson",
+                            "Hermite–Simpson's elements are whole intervals",
                         ))
                     }
                 }
             }
             HessElement::Interval(k) => {
-                let node_data = |node: usize| self.node_point[node].map(|p| data(p));
+                let node_data = |node: usize| self.node_point[node].map(&data);
                 let node_f = |node: usize| match self.node_point[node] {
                     Some(p) => &cache.vals[p * nx..(p + 1) * nx],
                     None => &self.node0[..nx],
                 };
                 let Some(db) = node_data(k) else {
-                    return Err(EvalError::new("hessian", format!("node {k} is not evaluated")));
+                    return Err(EvalError::new(
+                        "hessian",
+                        format!("node {k} is not evaluated"),
+                    ));
                 };
                 hermite_simpson_hessian(
                     plan,

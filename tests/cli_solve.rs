@@ -297,12 +297,11 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     }
 }
 
-/// Hermite–Simpson has no exact element Hessians. By default its solve
-/// takes partitioned BFGS and runs (with the study's exact default it
-/// stopped before its first iteration, status "invalid_problem"); an exact
-/// Hessian named for it is refused, naming the option.
+/// Hermite–Simpson runs with the exact element Hessians, the default (before
+/// they existed for the scheme, that default stopped the solve before its
+/// first iteration with status "invalid_problem").
 #[test]
-fn hermite_simpson_takes_bfgs_and_refuses_an_exact_hessian() {
+fn hermite_simpson_solves_with_exact_element_hessians() {
     let (cwd, out, v) = small_solve_in_fresh_dirs(
         "hs",
         &[
@@ -314,19 +313,9 @@ fn hermite_simpson_takes_bfgs_and_refuses_an_exact_hessian() {
         ],
     );
     assert_eq!(v["scheme"].as_str(), Some("hermite-simpson"), "{v}");
-    assert_eq!(v["hessian"].as_str(), Some("partitioned_bfgs"), "{v}");
+    assert_eq!(v["hessian"].as_str(), Some("exact_convexified"), "{v}");
     assert_ne!(v["status"].as_str(), Some("invalid_problem"), "{v}");
     assert!(v["iterations"].as_u64().unwrap() >= 1, "{v}");
-    let err = refused(&[
-        "solve",
-        "--scheme",
-        "hermite-simpson",
-        "--hessian",
-        "exact",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(err.contains("--hessian") && err.contains("bfgs"), "{err}");
     let _ = std::fs::remove_dir_all(&cwd);
     let _ = std::fs::remove_dir_all(&out);
 }
