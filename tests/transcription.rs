@@ -1102,7 +1102,11 @@ fn timing() {
             1e3 * t[2]
         );
     }
-    for scheme in [Scheme::MidpointEuler, Scheme::Trapezoidal] {
+    for scheme in [
+        Scheme::MidpointEuler,
+        Scheme::Trapezoidal,
+        Scheme::HermiteSimpson,
+    ] {
         for threads in [1, 2] {
             let mut tr = transcription(TranscriptionOptions {
                 threads,
