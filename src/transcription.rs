@@ -673,6 +673,79 @@ enum Point {
     Center(usize),
 }
 
+impl std::fmt::Display for Point {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Point::Node(k) => write!(f, "node {k}"),
+            Point::Mid(k) => write!(f, "midpoint of interval {k}"),
+            Point::Center(k) => write!(f, "centre of interval {k}"),
+        }
+    }
+}
+
+/// The inputs (x, u) of point `p`: a node's values (point inputs beyond
+/// its excitations zero), the midpoint's ([`midpoint_inputs`]), or the
+/// Hermite–Simpson centre's from the nodes and their f (`node_f`).
+fn set_point_inputs<'a, 'b>(
+    p: Point,
+    node: impl Fn(usize) -> (&'a [f64], &'a [f64]),
+    node_f: impl Fn(usize) -> &'b [f64],
+    h: f64,
+    speeds: (usize, &[f64]),
+    x: &mut [f64],
+    u: &mut [f64],
+) {
+    match p {
+        Point::Node(k) => {
+            let (xn, un) = node(k);
+            x.copy_from_slice(xn);
+            u[..un.len()].copy_from_slice(un);
+            u[un.len()..].fill(0.0);
+        }
+        Point::Mid(k) => midpoint_inputs(node(k - 1), node(k), h, speeds, x, u),
+        Point::Center(k) => {
+            let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
+            let (fa, fb) = (node_f(k - 1), node_f(k));
+            for j in 0..x.len() {
+                x[j] = 0.5 * (xa[j] + xb[j]) + 0.125 * h * (fa[j] - fb[j]);
+            }
+            for j in 0..ua.len() {
+                u[j] = 0.5 * (ua[j] + ub[j]);
+            }
+            u[ua.len()..].fill(0.0);
+        }
+    }
+}
+
+/// Run `jobs` on `workers`, the first on this thread and each other on a
+/// scoped thread of its own. The first error in job order is returned; a
+/// thread that panicked is an error at point `lo`.
+fn run_jobs<W: Send, J: Send>(
+    workers: &mut [W],
+    jobs: impl Iterator<Item = J>,
+    lo: usize,
+    run: &(impl Fn(&mut W, J) -> Result<(), (usize, String)> + Sync),
+) -> Result<(), (usize, String)> {
+    std::thread::scope(|s| {
+        let mut pairs = workers.iter_mut().zip(jobs);
+        let first = pairs.next();
+        let handles: Vec<_> = pairs.map(|(w, j)| s.spawn(move || run(w, j))).collect();
+        let mut res = match first {
+            Some((w, j)) => run(w, j),
+            None => Ok(()),
+        };
+        for h in handles {
+            let r = h
+                .join()
+                .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
+            if res.is_ok() {
+                res = r;
+            }
+        }
+        res
+    })
+}
+
 /// How one Jacobian entry is computed from the point evaluations.
 #[derive(Debug, Clone, Copy)]
 enum Src {
@@ -1733,41 +1806,10 @@ impl Transcription {
             }
         };
         let run = |w: &mut Worker<LANES>,
-                   first: usize,
-                   pts: &[Point],
-                   vals: &mut [f64],
-                   jacs: &mut [f64]|
+                   (first, pts, vals, jacs): (usize, &[Point], &mut [f64], &mut [f64])|
          -> Result<(), (usize, String)> {
-            for (i, p) in pts.iter().enumerate() {
-                match *p {
-                    Point::Node(k) => {
-                        let (x, u) = node(k);
-                        w.x.copy_from_slice(x);
-                        w.u[..u.len()].copy_from_slice(u);
-                        w.u[u.len()..].fill(0.0);
-                    }
-                    Point::Mid(k) => {
-                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
-                        midpoint_inputs(
-                            (xa, ua),
-                            (xb, ub),
-                            h,
-                            (lm0, fiber_speed),
-                            &mut w.x,
-                            &mut w.u,
-                        );
-                    }
-                    Point::Center(k) => {
-                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
-                        let (fa, fb) = (node_f(k - 1), node_f(k));
-                        for j in 0..nx {
-                            w.x[j] = 0.5 * (xa[j] + xb[j]) + 0.125 * h * (fa[j] - fb[j]);
-                        }
-                        for j in 0..nu {
-                            w.u[j] = 0.5 * (ua[j] + ub[j]);
-                        }
-                    }
-                }
+            for (i, &p) in pts.iter().enumerate() {
+                set_point_inputs(p, node, node_f, h, (lm0, fiber_speed), &mut w.x, &mut w.u);
                 let out = &mut vals[i * nout..(i + 1) * nout];
                 let r = if jac {
                     eval_jac(ocp, cp, w, out, &mut jacs[i * nnz..(i + 1) * nnz], None)
@@ -1783,50 +1825,13 @@ impl Transcription {
         let threads = if jac { self.workers.len() } else { 1 };
         let nt = threads.min(points.len()).max(1);
         let per = points.len().div_ceil(nt).max(1);
-        let result = if nt == 1 {
-            run(&mut self.workers[0], lo, points, todo_vals, todo_jac)
-        } else {
-            let run = &run;
-            // The first chunk runs on this thread, the others on scoped threads.
-            std::thread::scope(|s| {
-                let mut jobs = self
-                    .workers
-                    .iter_mut()
-                    .zip(
-                        todo_vals
-                            .chunks_mut(per * nout)
-                            .zip(todo_jac.chunks_mut(per * nnz.max(1))),
-                    )
-                    .zip(points.chunks(per).enumerate());
-                let first = jobs.next();
-                let handles: Vec<_> = jobs
-                    .map(|((w, (vals, jacs)), (ci, pts))| {
-                        s.spawn(move || run(w, lo + ci * per, pts, vals, jacs))
-                    })
-                    .collect();
-                let mut res = match first {
-                    Some(((w, (vals, jacs)), (_, pts))) => run(w, lo, pts, vals, jacs),
-                    None => Ok(()),
-                };
-                for h in handles {
-                    let r = h
-                        .join()
-                        .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
-                    if res.is_ok() {
-                        res = r;
-                    }
-                }
-                res
-            })
-        };
-        result.map_err(|(p, e)| {
-            let at = match self.points[p] {
-                Point::Node(k) => format!("node {k}"),
-                Point::Mid(k) => format!("midpoint of interval {k}"),
-                Point::Center(k) => format!("centre of interval {k}"),
-            };
-            format!("{at}: {e}")
-        })
+        let jobs = todo_vals
+            .chunks_mut(per * nout)
+            .zip(todo_jac.chunks_mut(per * nnz.max(1)))
+            .zip(points.chunks(per).enumerate())
+            .map(|((vals, jacs), (ci, pts))| (lo + ci * per, pts, vals, jacs));
+        run_jobs(&mut self.workers, jobs, lo, &run)
+            .map_err(|(p, e)| format!("{}: {e}", self.points[p]))
     }
 
     /// The defect block values of the Hermite–Simpson scheme, in structure
@@ -2888,11 +2893,13 @@ impl Transcription {
         let node0 = &self.node0[..nx];
         let node_point = &self.node_point;
         let run = |w: &mut HessWorker,
-                   first: usize,
-                   pts: &[Point],
-                   done_vals: &[f64],
-                   out: &mut [f64],
-                   vals: &mut [f64]|
+                   (first, pts, done_vals, out, vals): (
+            usize,
+            &[Point],
+            &[f64],
+            &mut [f64],
+            &mut [f64],
+        )|
          -> Result<(), (usize, String)> {
             let node_f = |k: usize| -> &[f64] {
                 match node_point[k] {
@@ -2900,35 +2907,8 @@ impl Transcription {
                     None => node0,
                 }
             };
-            for (i, p) in pts.iter().enumerate() {
-                match *p {
-                    Point::Node(k) => {
-                        let (x, u) = node(k);
-                        w.x.copy_from_slice(x);
-                        w.u[..u.len()].copy_from_slice(u);
-                        w.u[u.len()..].fill(0.0);
-                    }
-                    Point::Mid(k) => {
-                        midpoint_inputs(
-                            node(k - 1),
-                            node(k),
-                            h,
-                            (lm0, fiber_speed),
-                            &mut w.x,
-                            &mut w.u,
-                        );
-                    }
-                    Point::Center(k) => {
-                        let ((xa, ua), (xb, ub)) = (node(k - 1), node(k));
-                        let (fa, fb) = (node_f(k - 1), node_f(k));
-                        for j in 0..nx {
-                            w.x[j] = 0.5 * (xa[j] + xb[j]) + 0.125 * h * (fa[j] - fb[j]);
-                        }
-                        for j in 0..ua.len() {
-                            w.u[j] = 0.5 * (ua[j] + ub[j]);
-                        }
-                    }
-                }
+            for (i, &p) in pts.iter().enumerate() {
+                set_point_inputs(p, node, node_f, h, (lm0, fiber_speed), &mut w.x, &mut w.u);
                 let o = &mut out[i * nout * block..(i + 1) * nout * block];
                 eval_hess_point(ocp, plan, w, o, &mut vals[i * nx..(i + 1) * nx])
                     .map_err(|e| (first + i, e))?;
@@ -2942,7 +2922,6 @@ impl Transcription {
         } else {
             &[(0, npts)]
         };
-        let mut result = Ok(());
         for &(lo, hi) in stages {
             let (done_vals, todo_vals) = cache.vals.split_at_mut(lo * nx);
             let done_vals: &[f64] = done_vals;
@@ -2951,49 +2930,14 @@ impl Transcription {
             let pts = &points[lo..hi];
             let nt = cache.workers.len().min(pts.len()).max(1);
             let per = pts.len().div_ceil(nt).max(1);
-            result = std::thread::scope(|s| {
-                let mut jobs = cache
-                    .workers
-                    .iter_mut()
-                    .zip(
-                        todo_data
-                            .chunks_mut(per * nout * block)
-                            .zip(todo_vals.chunks_mut(per * nx)),
-                    )
-                    .zip(pts.chunks(per).enumerate());
-                let first = jobs.next();
-                let run = &run;
-                let handles: Vec<_> = jobs
-                    .map(|((w, (out, vals)), (ci, pts))| {
-                        s.spawn(move || run(w, lo + ci * per, pts, done_vals, out, vals))
-                    })
-                    .collect();
-                let mut res = match first {
-                    Some(((w, (out, vals)), (_, pts))) => run(w, lo, pts, done_vals, out, vals),
-                    None => Ok(()),
-                };
-                for h in handles {
-                    let r = h
-                        .join()
-                        .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
-                    if res.is_ok() {
-                        res = r;
-                    }
-                }
-                res
-            });
-            if result.is_err() {
-                break;
-            }
+            let jobs = todo_data
+                .chunks_mut(per * nout * block)
+                .zip(todo_vals.chunks_mut(per * nx))
+                .zip(pts.chunks(per).enumerate())
+                .map(|((out, vals), (ci, pts))| (lo + ci * per, pts, done_vals, out, vals));
+            run_jobs(&mut cache.workers, jobs, lo, &run)
+                .map_err(|(p, e)| EvalError::new("hessian", format!("{}: {e}", self.points[p])))?;
         }
-        result.map_err(|(p, e)| {
-            let at = match self.points[p] {
-                Point::Node(k) => format!("node {k}"),
-                Point::Mid(k) => format!("midpoint of interval {k}"),
-                Point::Center(k) => format!("centre of interval {k}"),
-            };
-            EvalError::new("hessian", format!("{at}: {e}"))
-        })?;
         // Hessian of J over the final node's q, q̇.
         let n2 = 2 * self.ocp.nq();
         let mut obj = vec![0.0; n2 * n2];
@@ -3361,28 +3305,8 @@ fn hermite_simpson_hessian(
     }
     // JᵀHJ with H = −(2h/3)·Σλ∇²f_c: M = HJ, then JᵀM.
     let mut m = vec![0.0; nin * kk];
-    for c in 0..nin {
-        for e in 0..nin {
-            let v = hc[c * nin + e];
-            if v == 0.0 {
-                continue;
-            }
-            for b in 0..kk {
-                m[c * kk + b] += v * jm[e * kk + b];
-            }
-        }
-    }
-    for c in 0..nin {
-        for a in 0..kk {
-            let v = jm[c * kk + a];
-            if v == 0.0 {
-                continue;
-            }
-            for b in 0..kk {
-                h[a * kk + b] += v * m[c * kk + b];
-            }
-        }
-    }
+    add_product(&hc, (nin, nin), false, &jm, kk, &mut m);
+    add_product(&jm, (nin, kk), true, &m, kk, h);
     // The node terms, with x_c's curvature in the weights.
     let c2 = hstep * hstep / 12.0;
     // The t_f column's terms besides JᵀHJ's.
@@ -3424,6 +3348,34 @@ fn hermite_simpson_hessian(
         }
     }
     Ok(())
+}
+
+/// out += A·B (or Aᵀ·B with `transpose`), A dense `rows` × `cols` with
+/// many zeros (skipped), B and out row-major with `width` columns.
+fn add_product(
+    a: &[f64],
+    (rows, cols): (usize, usize),
+    transpose: bool,
+    b: &[f64],
+    width: usize,
+    out: &mut [f64],
+) {
+    for r in 0..rows {
+        for c in 0..cols {
+            let v = a[r * cols + c];
+            if v == 0.0 {
+                continue;
+            }
+            let (dst, src) = if transpose { (c, r) } else { (r, c) };
+            let (o, bs) = (
+                &mut out[dst * width..(dst + 1) * width],
+                &b[src * width..(src + 1) * width],
+            );
+            for (o, bv) in o.iter_mut().zip(bs) {
+                *o += v * bv;
+            }
+        }
+    }
 }
 
 /// The Hessian (into `h`, row-major over the element's variables: the
