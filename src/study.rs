@@ -441,7 +441,7 @@ impl SolveStudy {
             None
         };
 
-        let config = SolveConfig {
+        Ok(SolveConfig {
             study_file: file.map(Path::to_path_buf),
             name,
             model,
@@ -450,8 +450,7 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
-        };
-        Ok(config)
+        })
     }
 }
 

@@ -1269,25 +1269,23 @@ impl Transcription {
             cols.dedup();
             me.final_cols = cols;
         }
-        {
-            me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
-            if me.options.scheme == Scheme::HermiteSimpson {
-                me.hess_elements
-                    .extend((1..=big_n).map(HessElement::Interval));
-            } else {
-                for g in 0..me.groups.len() {
-                    for k in 1..=big_n {
-                        me.hess_elements.push(HessElement::Defect { group: g, k });
-                    }
+        me.hess_plan = HessPlan::new(&me.pattern, me.ocp.nq(), me.ocp.nm());
+        if me.options.scheme == Scheme::HermiteSimpson {
+            me.hess_elements
+                .extend((1..=big_n).map(HessElement::Interval));
+        } else {
+            for g in 0..me.groups.len() {
+                for k in 1..=big_n {
+                    me.hess_elements.push(HessElement::Defect { group: g, k });
                 }
             }
-            for j in 0..n_cm {
-                me.hess_elements.push(HessElement::NoCountermovement(j));
-            }
-            me.hess_elements.push(HessElement::Final);
-            for k in 1..=n_cv {
-                me.hess_elements.push(HessElement::ComVelocity(k));
-            }
+        }
+        for j in 0..n_cm {
+            me.hess_elements.push(HessElement::NoCountermovement(j));
+        }
+        me.hess_elements.push(HessElement::Final);
+        for k in 1..=n_cv {
+            me.hess_elements.push(HessElement::ComVelocity(k));
         }
         // Until a guess is set: the squat held, t_f = 0.3 s within its bounds.
         let [t0, t1] = me.ocp.options.final_time_bounds;
@@ -3158,6 +3156,7 @@ impl Transcription {
                     (node_f(k - 1), node_f(k)),
                     &lambda[(k - 1) * nx..k * nx],
                     (hstep, big_n),
+                    &mut hw,
                     h,
                 )?;
             }
@@ -3239,7 +3238,8 @@ impl Transcription {
 /// ```
 ///
 /// (the node terms carry the centre's dependence on the dynamics at the
-/// nodes, x_c's curvature; g_x is g's state part).
+/// nodes, x_c's curvature; g_x is g's state part). `scratch` holds the
+/// work arrays (kept by the caller between elements).
 #[allow(clippy::too_many_arguments)]
 fn hermite_simpson_hessian(
     plan: &HessPlan,
@@ -3249,6 +3249,7 @@ fn hermite_simpson_hessian(
     (fa, fb): (&[f64], &[f64]),
     lambda: &[f64],
     (hstep, big_n): (f64, usize),
+    scratch: &mut Vec<f64>,
     h: &mut [f64],
 ) -> Result<(), EvalError> {
     let nin = nx + nu;
@@ -3257,6 +3258,14 @@ fn hermite_simpson_hessian(
     let t = kk - 1;
     check_len("hessian", "h", h.len(), kk * kk)?;
     h.iter_mut().for_each(|v| *v = 0.0);
+    scratch.clear();
+    scratch.resize(2 * nin * nin + 2 * nin * kk + 2 * nin + t, 0.0);
+    let (hc, rest) = scratch.split_at_mut(nin * nin);
+    let (hn, rest) = rest.split_at_mut(nin * nin);
+    let (jm, rest) = rest.split_at_mut(nin * kk);
+    let (m, rest) = rest.split_at_mut(nin * kk);
+    let (g, rest) = rest.split_at_mut(nin);
+    let (gn, tcol) = rest.split_at_mut(nin);
     let inv_n = 1.0 / big_n as f64;
     // Σ_r w_r ∇²f_r (dense nin × nin, into `hm`) and Σ_r w_r ∇f_r (into
     // `gv`) from a point's data, over each row's own columns.
@@ -3279,19 +3288,23 @@ fn hermite_simpson_hessian(
         }
     };
     // The centre: g and −(2h/3)H.
-    let mut hc = vec![0.0; nin * nin];
-    let mut g = vec![0.0; nin];
-    weighted(dc, &|r| lambda[r], &mut hc, &mut g);
+    weighted(dc, &|r| lambda[r], hc, g);
     hc.iter_mut().for_each(|v| *v *= -2.0 * hstep / 3.0);
     // The nodes present, with their offsets and the sign of their f in x_c.
-    let nodes: Vec<(&[f64], usize, f64)> = match da {
-        Some(da) => vec![(da, 0, 1.0), (db, nin, -1.0)],
-        None => vec![(db, 0, -1.0)],
+    let (both, one);
+    let nodes: &[(&[f64], usize, f64)] = match da {
+        Some(da) => {
+            both = [(da, 0, 1.0), (db, nin, -1.0)];
+            &both
+        }
+        None => {
+            one = [(db, 0, -1.0)];
+            &one
+        }
     };
     // J = ∂(x_c, u_c)/∂(element variables), nin × kk.
-    let mut jm = vec![0.0; nin * kk];
     for j in 0..nin {
-        for &(d, off, sign) in &nodes {
+        for &(d, off, sign) in nodes {
             jm[j * kk + off + j] += 0.5;
             if j < nx {
                 for &c in &rows[j] {
@@ -3304,20 +3317,16 @@ fn hermite_simpson_hessian(
         }
     }
     // JᵀHJ with H = −(2h/3)·Σλ∇²f_c: M = HJ, then JᵀM.
-    let mut m = vec![0.0; nin * kk];
-    add_product(&hc, (nin, nin), false, &jm, kk, &mut m);
-    add_product(&jm, (nin, kk), true, &m, kk, h);
+    add_product(hc, (nin, nin), false, jm, kk, m);
+    add_product(jm, (nin, kk), true, m, kk, h);
     // The node terms, with x_c's curvature in the weights.
     let c2 = hstep * hstep / 12.0;
-    // The t_f column's terms besides JᵀHJ's.
-    let mut tcol = vec![0.0; t];
-    let mut hn = vec![0.0; nin * nin];
-    let mut gn = vec![0.0; nin];
-    for &(d, off, sign) in &nodes {
+    // `tcol`: the t_f column's terms besides JᵀHJ's.
+    for &(d, off, sign) in nodes {
         hn.iter_mut().for_each(|v| *v = 0.0);
         gn.iter_mut().for_each(|v| *v = 0.0);
         let w = |r: usize| -hstep / 6.0 * lambda[r] - sign * c2 * g[r];
-        weighted(d, &w, &mut hn, &mut gn);
+        weighted(d, &w, hn, gn);
         for a in 0..nin {
             for b in 0..nin {
                 h[(off + a) * kk + off + b] += hn[a * nin + b];
