@@ -21,9 +21,13 @@
 //!   point where the elastic QP cannot reduce the linearised infeasibility
 //!   even without the objective is a stationary point of the infeasibility:
 //!   status [`SqpStatus::Infeasible`].
-//! * Step bound: |d_j| ≤ Δ (enlarged ×10 whenever a full step reaches it),
+//! * Step bound: |d_j| ≤ Δ (enlarged ×4 whenever a full step reaches it),
 //!   so every QP is bounded; an objective below `unbounded_objective` at a
-//!   feasible point gives [`SqpStatus::Unbounded`].
+//!   feasible point, or a QP that fails at a huge Δ while the objective
+//!   keeps falling at feasible points, gives [`SqpStatus::Unbounded`].
+//!   Once Δ grows past its initial value the eigenvalue floor of the exact
+//!   Hessian falls in proportion, so Δ, not the floor, holds a step along a
+//!   direction without curvature.
 //! * Termination, with Moco's setting names: primal infeasibility (largest
 //!   constraint violation) ≤ `optim_constraint_tolerance` and scaled dual
 //!   infeasibility and complementarity (IPOPT's scaling, s_max = 100, with
@@ -143,7 +147,8 @@ pub struct SqpSettings {
     /// Eigenvalue modification of the exact element Hessians.
     pub convexification: Convexification,
     /// Smallest eigenvalue kept, relative to the element's largest |μ|
-    /// (and at least this absolute).
+    /// (and at least this absolute), while the step bound is at most its
+    /// initial value; times Δ₀/Δ beyond.
     pub eigenvalue_floor: f64,
     /// With the exact Hessian: where an element declares blocks
     /// ([`Element::blocks`]), keep only the curvature inside each block and
@@ -1429,6 +1434,7 @@ impl<'s> Solver<'s> {
         lambda: &[f64],
         prev: Option<(&Point, &[Vec<f64>])>,
         skips: &mut usize,
+        floor: f64,
     ) -> Result<(), EvalError> {
         match self.mode {
             HessianMode::ExactConvexified => {
@@ -1444,7 +1450,7 @@ impl<'s> Solver<'s> {
                 convexify_elements(
                     &self.pb.elements,
                     &mut self.blocks,
-                    self.settings.eigenvalue_floor,
+                    floor,
                     self.settings.convexification,
                 );
             }
@@ -1525,7 +1531,8 @@ impl<'s> Solver<'s> {
         let mut nu = 0.0f64; // merit penalty
         let mut rho; // elastic weight, set at every iteration
         let scale_x = norm_inf(&p.x).max(1.0);
-        let mut delta = st.initial_step_bound * scale_x;
+        let delta_0 = st.initial_step_bound * scale_x;
+        let mut delta = delta_0;
         let mut prev: Option<(Point, Vec<Vec<f64>>)> = None;
         let mut acceptable_count = 0usize;
         let mut best: Option<BestIterate> = None;
@@ -1735,7 +1742,13 @@ impl<'s> Solver<'s> {
             // Hessian model.
             let t = Instant::now();
             let old_grads = prev.as_ref().map(|(o, g)| (o, g.as_slice()));
-            if let Err(e) = self.update_hessian(nlp, &p, &lambda, old_grads, &mut skips) {
+            // The eigenvalue floor falls as the step bound grows past its
+            // initial value: a direction without curvature is then held by
+            // the step bound, as in a trust-region method, and not at
+            // ‖g‖/floor, so iterates that run down an unbounded objective
+            // grow geometrically and reach `unbounded_objective`.
+            let floor = st.eigenvalue_floor * (delta_0 / delta).min(1.0);
+            if let Err(e) = self.update_hessian(nlp, &p, &lambda, old_grads, &mut skips, floor) {
                 time.hessian_s += t.elapsed().as_secs_f64();
                 finish(
                     result,
