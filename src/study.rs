@@ -158,6 +158,12 @@ pub struct TolerancesSpec {
     /// (`optim_convergence_tolerance`) still ends the solve first if met.
     #[serde(default)]
     pub paper_criterion: Option<bool>,
+    /// Stop as restoration failed after this many iterations without
+    /// progress (`SqpSettings::stall_iterations`: the violation above 1e-3
+    /// and falling less than 10%, the objective flat); 0 turns the test
+    /// off, −1 keeps the default 50.
+    #[serde(default)]
+    pub stall_iterations: Option<i64>,
 }
 
 /// The forward check: the optimal excitations integrated from the squat
@@ -374,6 +380,21 @@ impl SolveStudy {
         }
         if let Some(p) = t.paper_criterion {
             settings.paper_criterion = p;
+        }
+        if let Some(v) = t.stall_iterations {
+            settings.stall_iterations = match v {
+                -1 => settings.stall_iterations,
+                v if v >= 0 => usize::try_from(v)
+                    .map_err(|_| err("tolerances.stall_iterations", format!("{v} is too large")))?,
+                v => {
+                    return Err(err(
+                        "tolerances.stall_iterations",
+                        format!(
+                            "must be ≥ 0 (0 turns the test off, -1 keeps the default), got {v}"
+                        ),
+                    ))
+                }
+            };
         }
         if let Some(h) = &self.hessian {
             apply_hessian(&mut settings, h).map_err(|r| err("hessian", r))?;
@@ -798,6 +819,22 @@ mod tests {
         assert!(r.contains("interior-point"), "{r}");
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");
+    }
+
+    #[test]
+    fn stall_iterations_zero_turns_the_test_off() {
+        let (f, r) = field_error(r#"{"tolerances": {"stall_iterations": -2}}"#);
+        assert_eq!(f, "tolerances.stall_iterations");
+        assert!(r.contains("-2"), "{r}");
+        for (v, want) in [
+            (0, 0),
+            (-1, SqpSettings::default().stall_iterations),
+            (7, 7),
+        ] {
+            let json = format!(r#"{{"tolerances": {{"stall_iterations": {v}}}}}"#);
+            let c = SolveStudy::from_json_str(&json, "s").unwrap();
+            assert_eq!(c.resolve(None).unwrap().settings.stall_iterations, want);
+        }
     }
 
     #[test]

@@ -941,6 +941,13 @@ pub fn infeasible_problems() -> Vec<HsProblem> {
                 "min x1^2 + x2^2 + x3^2 s.t. x1 + x2 + x3 = 1 and x1 + x2 + x3 = 2: parallel, \
                  inconsistent linear equalities (rank-deficient Jacobian).",
             ),
+        HsProblem::new("infeasible_asymptotic", Id::Infeasible(5), vec![0.0, 1.0])
+            .row(-1.0, -1.0)
+            .status(Status::Infeasible)
+            .source("constructed")
+            .notes(
+                "min x2^2 s.t. exp(-x1) = -1. The violation 1 + exp(-x1) falls towards 1 as                  x1 grows and never reaches it: no stationary point of the infeasibility.",
+            ),
     ]
 }
 
@@ -1588,6 +1595,10 @@ fn eval_infeasible<D: Scalar>(number: u32, x: &[D], c: &mut [D]) -> D {
             c[0] = x[0] + x[1] + x[2];
             c[1] = x[0] + x[1] + x[2];
             sq(x[0]) + sq(x[1]) + sq(x[2])
+        }
+        5 => {
+            c[0] = (-x[0]).exp();
+            sq(x[1])
         }
         _ => unreachable!("no infeasible problem {number}"),
     }

@@ -570,3 +570,51 @@ fn paper_criterion_stops_only_where_the_multipliers_balance_the_gradient() {
         assert_eq!(guarded.message, plain.message, "{mode:?}");
     }
 }
+
+/// The stall test ends a solve whose violation no longer falls: on
+/// `infeasible_asymptotic` (exp(−x1) = −1: the violation 1 + exp(−x1)
+/// creeps towards 1 from the second iteration on) a three-iteration window
+/// stops it as restoration failed, with the window in the message and
+/// before the infeasibility test would have; with the test off it ends as
+/// infeasible, as with the default 50.
+#[test]
+fn stalled_solves_end_as_restoration_failed() {
+    let p = leap::testset::by_name("infeasible_asymptotic").expect("in the test set");
+    let mut ended = Vec::new();
+    for stall_iterations in [0, 3, 50] {
+        let settings = SqpSettings {
+            hessian: HessianMode::ExactConvexified,
+            stall_iterations,
+            ..Default::default()
+        };
+        let r = solve(&mut AdNlp::new(p.clone()), &settings);
+        ended.push(r.iterations);
+        if stall_iterations == 3 {
+            assert_eq!(r.status, SqpStatus::RestorationFailed, "{}", r.message);
+            assert!(
+                r.message.contains("no progress in 3 iterations"),
+                "{}",
+                r.message
+            );
+            // The window: the last four iterates, none 10% below the first.
+            let h = &r.history[r.history.len() - 4..];
+            assert!(h
+                .iter()
+                .all(|k| k.inf_pr > 0.9 * h[0].inf_pr && k.inf_pr > 1e-3));
+            assert!(
+                (r.constraint_violation - 1.0).abs() < 1e-3,
+                "{}",
+                r.constraint_violation
+            );
+        } else {
+            assert_eq!(
+                r.status,
+                SqpStatus::Infeasible,
+                "{stall_iterations}: {}",
+                r.message
+            );
+        }
+    }
+    assert!(ended[1] < ended[0], "{ended:?}");
+    assert_eq!(ended[0], ended[2]);
+}
