@@ -257,6 +257,8 @@ pub struct SqpSettings {
     /// converge (the jump with every scheme and study of the README) met
     /// the violation part of the test alone.
     pub stall_iterations: usize,
+    /// The violation above which [`SqpSettings::stall_iterations`] counts
+    /// (default 1e-3, the paper's constraint tolerance).
     pub stall_violation: f64,
 }
 
