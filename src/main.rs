@@ -273,6 +273,16 @@ fn opensim_system(
 }
 
 fn main() -> ExitCode {
+    // Built for x86-64-v3 (.cargo/config.toml): refuse a CPU without it
+    // rather than die on an illegal instruction.
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
+        eprintln!(
+            "error: this build of leap needs a CPU with AVX2 and FMA (x86-64-v3, .cargo/config.toml); \
+             rebuild with RUSTFLAGS=\"-C target-cpu=x86-64\" for this one"
+        );
+        return ExitCode::from(2);
+    }
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
