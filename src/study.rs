@@ -382,19 +382,11 @@ impl SolveStudy {
             settings.paper_criterion = p;
         }
         if let Some(v) = t.stall_iterations {
-            settings.stall_iterations = match v {
-                -1 => settings.stall_iterations,
-                v if v >= 0 => usize::try_from(v)
-                    .map_err(|_| err("tolerances.stall_iterations", format!("{v} is too large")))?,
-                v => {
-                    return Err(err(
-                        "tolerances.stall_iterations",
-                        format!(
-                            "must be ≥ 0 (0 turns the test off, -1 keeps the default), got {v}"
-                        ),
-                    ))
-                }
-            };
+            if let Some(v) = check_count(v, 0, ", 0 turns the test off")
+                .map_err(|r| err("tolerances.stall_iterations", r))?
+            {
+                settings.stall_iterations = v;
+            }
         }
         if let Some(h) = &self.hessian {
             apply_hessian(&mut settings, h).map_err(|r| err("hessian", r))?;
@@ -594,12 +586,20 @@ fn check_tolerance(v: f64) -> Result<Option<f64>, String> {
 
 /// A positive iteration limit, or −1 for the default (Moco's convention).
 fn check_max_iterations(n: i64) -> Result<Option<usize>, String> {
+    check_count(n, 1, "")
+}
+
+/// A count of at least `min` (`what_min` says what `min` means, if
+/// anything), or −1 for the default (None).
+fn check_count(n: i64, min: i64, what_min: &str) -> Result<Option<usize>, String> {
     match n {
         -1 => Ok(None),
-        n if n >= 1 => usize::try_from(n)
+        n if n >= min => usize::try_from(n)
             .map(Some)
             .map_err(|_| format!("{n} is too large")),
-        n => Err(format!("must be ≥ 1 (or -1 for the default), got {n}")),
+        n => Err(format!(
+            "must be ≥ {min}{what_min} (or -1 for the default), got {n}"
+        )),
     }
 }
 

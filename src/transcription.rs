@@ -717,6 +717,21 @@ fn set_point_inputs<'a, 'b>(
     }
 }
 
+/// f at node `k` for the Hermite–Simpson centres: from the values of the
+/// points evaluated so far (`stride` values per point, f first), or the
+/// fixed start's `node0` at node 0, which is no point.
+fn node_f<'a>(
+    node_point: &[Option<usize>],
+    done: &'a [f64],
+    stride: usize,
+    node0: &'a [f64],
+    k: usize,
+) -> &'a [f64] {
+    node_point[k]
+        .and_then(|p| done.get(p * stride..p * stride + node0.len()))
+        .unwrap_or(node0)
+}
+
 /// Run `jobs` on `workers`, the first on this thread and each other on a
 /// scoped thread of its own. The first error in job order is returned; a
 /// thread that panicked is an error at point `lo`.
@@ -1797,12 +1812,7 @@ impl Transcription {
             }
         };
         // f at node k from the first stage (node 0: the fixed start).
-        let node_f = |k: usize| -> &[f64] {
-            match node_point[k] {
-                Some(p) if p < lo => &done_vals[p * nout..p * nout + nx],
-                _ => &node0[..nx],
-            }
-        };
+        let node_f = |k: usize| node_f(node_point, done_vals, nout, &node0[..nx], k);
         let run = |w: &mut Worker<LANES>,
                    (first, pts, vals, jacs): (usize, &[Point], &mut [f64], &mut [f64])|
          -> Result<(), (usize, String)> {
@@ -2784,7 +2794,6 @@ fn eval_hess_point(
     vals: &mut [f64],
 ) -> Result<(), String> {
     let (n, nm) = (ocp.nq(), ocp.nm());
-    let nx = w.x.len();
     out.iter_mut().for_each(|v| *v = 0.0);
     given_paths(ocp, plan, w)?;
     let (x, u) = (&w.x[..], &w.u[..]);
@@ -2824,7 +2833,6 @@ fn eval_hess_point(
         )?;
     }
     let block = plan.block;
-    let _ = nx;
     if let Some(i) = out.iter().position(|v| !v.is_finite()) {
         return Err(format!(
             "derivative {} of output {} is {}",
@@ -2899,12 +2907,7 @@ impl Transcription {
             &mut [f64],
         )|
          -> Result<(), (usize, String)> {
-            let node_f = |k: usize| -> &[f64] {
-                match node_point[k] {
-                    Some(p) => &done_vals[p * nx..(p + 1) * nx],
-                    None => node0,
-                }
-            };
+            let node_f = |k: usize| node_f(node_point, done_vals, nx, node0, k);
             for (i, &p) in pts.iter().enumerate() {
                 set_point_inputs(p, node, node_f, h, (lm0, fiber_speed), &mut w.x, &mut w.u);
                 let o = &mut out[i * nout * block..(i + 1) * nout * block];
@@ -3138,9 +3141,8 @@ impl Transcription {
             }
             HessElement::Interval(k) => {
                 let node_data = |node: usize| self.node_point[node].map(&data);
-                let node_f = |node: usize| match self.node_point[node] {
-                    Some(p) => &cache.vals[p * nx..(p + 1) * nx],
-                    None => &self.node0[..nx],
+                let node_f = |node: usize| {
+                    node_f(&self.node_point, &cache.vals, nx, &self.node0[..nx], node)
                 };
                 let Some(db) = node_data(k) else {
                     return Err(EvalError::new(
