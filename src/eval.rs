@@ -127,7 +127,16 @@ pub fn read_inputs(
                 .iter()
                 .map(|&k| parse(k))
                 .collect::<Result<Vec<_>, _>>()?;
+            check_ranges(&states, &controls, &x, &u).map_err(|(name, reason)| {
+                err(format!("line {}, column '{name}'", ln + 1), reason)
+            })?;
             out.push((x, u));
+        }
+        if out.is_empty() {
+            return Err(err(
+                "rows".into(),
+                "no evaluations: the file has a header but no rows".into(),
+            ));
         }
         return Ok(out);
     }
@@ -154,6 +163,12 @@ pub fn read_inputs(
                       names: &[String]|
          -> Result<Vec<f64>, EvalInputError> {
             if let Some(arr) = item.get(key) {
+                if item.get(named).is_some() {
+                    return Err(err(
+                        place(key),
+                        format!("given together with '{named}': give one of them"),
+                    ));
+                }
                 let arr = arr
                     .as_array()
                     .ok_or_else(|| err(place(key), "must be an array of numbers".into()))?;
@@ -199,9 +214,50 @@ pub fn read_inputs(
         };
         let x = vector("x", "state", &states)?;
         let u = vector("u", "excitation", &controls)?;
+        check_ranges(&states, &controls, &x, &u)
+            .map_err(|(name, reason)| err(place(&name), reason))?;
         out.push((x, u));
     }
+    if out.is_empty() {
+        return Err(err(
+            "(file)".into(),
+            "no evaluations: an empty array".into(),
+        ));
+    }
     Ok(out)
+}
+
+/// The physical range of the inputs: activations and excitations in
+/// [0, 1], fibre lengths positive. (name, reason) of the first outside it.
+fn check_ranges(
+    states: &[String],
+    controls: &[String],
+    x: &[f64],
+    u: &[f64],
+) -> Result<(), (String, String)> {
+    for (name, &v) in states.iter().zip(x) {
+        if name.ends_with("/activation") && !(0.0..=1.0).contains(&v) {
+            return Err((
+                name.clone(),
+                format!("an activation must be in [0, 1], got {v}"),
+            ));
+        }
+        if name.ends_with("/fiber_length") && !(v > 0.0) {
+            return Err((
+                name.clone(),
+                format!("a fibre length must be positive, got {v} m"),
+            ));
+        }
+    }
+    for (name, &v) in controls.iter().zip(u) {
+        if !(0.0..=1.0).contains(&v) {
+            return Err((
+                name.clone(),
+                format!("an excitation must be in [0, 1], got {v}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Evaluate ẋ = f(x, u) and its parts.

@@ -49,10 +49,10 @@ enum Command {
         #[arg(long)]
         integrator: Option<String>,
         /// Integrator accuracy (ExplicitEuler: fixed step in s). Default 1e-5.
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         accuracy: Option<f64>,
         /// Stop time if the apex is not reached (s).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         t_max: Option<f64>,
         /// Results directory (default results/).
         #[arg(long)]
@@ -150,7 +150,7 @@ enum Command {
         #[arg(long, default_value = "models/jumper.json")]
         model: PathBuf,
         /// Analyse from START to END (s) instead of the push-off.
-        #[arg(long, num_args = 2, value_names = ["START", "END"])]
+        #[arg(long, num_args = 2, value_names = ["START", "END"], allow_negative_numbers = true)]
         window: Option<Vec<f64>>,
         /// The full 10-coordinate system instead of the symmetric one.
         #[arg(long)]
@@ -207,7 +207,7 @@ enum BenchCommand {
     /// at the published optimum, iterations, median wall time and its split.
     Sqp {
         /// Runs of the whole set per mode (the median is reported).
-        #[arg(long, default_value_t = 5)]
+        #[arg(long, default_value_t = 5, value_parser = at_least_one)]
         repeats: usize,
         #[arg(long)]
         json: bool,
@@ -236,7 +236,7 @@ enum BenchCommand {
         /// Study file (as `leap solve`).
         study: Option<PathBuf>,
         /// Solves per mesh (the medians over all runs are reported).
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, value_parser = at_least_one)]
         repeats: usize,
         /// Hessian mode (as `leap solve --hessian`; default: the study's).
         #[arg(long)]
@@ -391,10 +391,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let inputs = leap::eval::read_inputs(&eq, &input)?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {
-                reports.push(
-                    leap::eval::evaluate(&eq, &laws, x, u)
-                        .with_context(|| format!("{}: evaluation {k}", input.display()))?,
-                );
+                let r = leap::eval::evaluate(&eq, &laws, x, u)
+                    .with_context(|| format!("{}: evaluation {k}", input.display()))?;
+                if let Some((name, v)) = r.state_derivative.iter().find(|(_, v)| !v.is_finite()) {
+                    anyhow::bail!(
+                        "{}: evaluation {k}: the derivative of '{name}' is {v} at this state (a coordinate far outside its range?)",
+                        input.display()
+                    );
+                }
+                reports.push(r);
             }
             if json {
                 let v = if reports.len() == 1 {
@@ -632,6 +637,43 @@ fn run(cli: Cli) -> Result<ExitCode> {
 }
 
 #[allow(clippy::too_many_arguments)]
+/// A count of runs: a whole number ≥ 1.
+fn at_least_one(s: &str) -> Result<usize, String> {
+    match s.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        Ok(_) => Err("must be at least 1".into()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Rows a forward simulation may report (t_max / report_interval).
+const MAX_REPORTS: f64 = 1e6;
+
+/// An integrator accuracy leap accepts: a relative error tolerance in
+/// [1e-12, 1) (Simbody asserts below 1; below 1e-12 the error control
+/// works on rounding and the steps shrink without end), or ExplicitEuler's
+/// fixed step, with at most 1e7 steps to `t_max`.
+fn check_accuracy(accuracy: f64, fixed_step: bool, t_max: f64) -> Result<(), String> {
+    if !(accuracy.is_finite() && accuracy > 0.0) {
+        return Err(format!("must be positive, got {accuracy:e}"));
+    }
+    if fixed_step {
+        if t_max / accuracy > 1e7 {
+            return Err(format!(
+                "a fixed step of {accuracy:e} s takes {:.1e} steps to t_max = {t_max} s; at most 1e7",
+                t_max / accuracy
+            ));
+        }
+        return Ok(());
+    }
+    if !(1e-12..1.0).contains(&accuracy) {
+        return Err(format!(
+            "a relative error tolerance in [1e-12, 1), got {accuracy:e}"
+        ));
+    }
+    Ok(())
+}
+
 fn simulate(
     study: Option<PathBuf>,
     model: Option<PathBuf>,
@@ -679,20 +721,49 @@ fn simulate(
         .as_ref()
         .map(|p| format!("{}: ", p.display()))
         .unwrap_or_default();
-    if !(st.accuracy.is_finite() && st.accuracy > 0.0) {
-        anyhow::bail!("{where_}accuracy: must be positive, got {}", st.accuracy);
-    }
     if !(st.t_max.is_finite() && st.t_max > 0.0) {
         anyhow::bail!("{where_}t_max: must be positive, got {}", st.t_max);
     }
+    let choice =
+        parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
+    check_accuracy(
+        st.accuracy,
+        matches!(
+            choice,
+            IntegratorChoice::Simbody(leap::simbody::SimbodyIntegrator::ExplicitEuler)
+        ),
+        st.t_max,
+    )
+    .map_err(|e| anyhow::anyhow!("{where_}accuracy: {e}"))?;
     if !(st.report_interval.is_finite() && st.report_interval > 0.0) {
         anyhow::bail!(
             "{where_}report_interval: must be positive, got {}",
             st.report_interval
         );
     }
-    let choice =
-        parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
+    if st.t_max / st.report_interval > MAX_REPORTS {
+        anyhow::bail!(
+            "{where_}report_interval: {} s over t_max = {} s would report {:.0} rows; at most {MAX_REPORTS:e} (make it larger or t_max smaller)",
+            st.report_interval,
+            st.t_max,
+            st.t_max / st.report_interval
+        );
+    }
+    if let Some(bb) = &st.bang_bang {
+        if !(bb.on_time.is_finite() && bb.on_time >= 0.0) {
+            anyhow::bail!(
+                "{where_}bang_bang.on_time: must be a time ≥ 0 s, got {}",
+                bb.on_time
+            );
+        }
+        if !(bb.off_time > bb.on_time) {
+            anyhow::bail!(
+                "{where_}bang_bang.off_time: must be after on_time ({} s), got {}",
+                bb.on_time,
+                bb.off_time
+            );
+        }
+    }
     let m = leap::model::Model::from_file(&model_path)?;
     let laws = leap::laws::OpenSimLaws::new(&m)?;
     let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
@@ -769,8 +840,8 @@ fn simulate(
             st.report_interval,
         ),
     };
-    std::fs::create_dir_all(&out_dir)
-        .with_context(|| format!("{}: cannot create the results directory", out_dir.display()))?;
+    leap::solve::create_results_dir(&out_dir)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
     match result {
         Ok((summary, traj)) => {
             let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
@@ -795,10 +866,20 @@ fn simulate(
                     "forward jump ({}, accuracy {:e}) from the static squat",
                     summary.integrator, summary.accuracy
                 );
-                println!(
-                    "  jump height            {:.1} cm",
-                    100.0 * summary.jump_height_m
-                );
+                match summary.liftoff_time_s {
+                    Some(_) => println!(
+                        "  jump height            {:.1} cm",
+                        100.0 * summary.jump_height_m
+                    ),
+                    None => {
+                        println!("  jump height            - (no lift-off before t_max)");
+                        eprintln!(
+                            "warning: the feet did not leave the ground before t_max = {} s: no jump; the COM ended {:.1} cm from its standing height",
+                            st.t_max,
+                            100.0 * summary.jump_height_m
+                        );
+                    }
+                }
                 println!(
                     "  lift-off time          {}",
                     f(summary.liftoff_time_s, 1.0, "s")

@@ -64,6 +64,25 @@ pub enum SolveError {
     },
 }
 
+/// Create the results directory `dir` (and its parents), with an error
+/// that says what stands in the way (the OS's own, "File exists", does not
+/// say that a regular file has the directory's name).
+pub fn create_results_dir(dir: &Path) -> Result<(), std::io::Error> {
+    use std::io::{Error, ErrorKind};
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::new(
+            ErrorKind::AlreadyExists,
+            "cannot create the results directory: a file of that name exists",
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Error::new(
+            e.kind(),
+            format!("cannot create the results directory: {e}"),
+        )
+    })
+}
+
 /// The forward check: the optimal excitations (linear between the nodes,
 /// held after t_f) integrated from the squat.
 #[derive(Debug, Clone, Serialize)]
@@ -245,7 +264,7 @@ pub fn run(
         }
     };
     // The results directory only once the problem is set up.
-    std::fs::create_dir_all(dir).map_err(|source| SolveError::Io {
+    create_results_dir(dir).map_err(|source| SolveError::Io {
         file: dir.clone(),
         source,
     })?;

@@ -99,3 +99,143 @@ fn analyze_names_the_missing_or_bad_column() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The `leap squat` state as a `leap eval` input, in a fresh directory.
+fn squat_input(name: &str) -> (std::path::PathBuf, serde_json::Value) {
+    let dir = std::env::temp_dir().join(format!("leap-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("squat")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    (dir, serde_json::from_slice(&o.stdout).unwrap())
+}
+
+/// `leap eval` refuses inputs outside their physical range (OpenSim's
+/// muscles take activations and excitations in [0, 1] and positive fibre
+/// lengths), both forms of one input, and a file without evaluations,
+/// naming the file and the field; exit code 2.
+#[test]
+fn eval_refuses_inputs_outside_their_physical_range() {
+    let (dir, squat) = squat_input("eval-range");
+    let cases: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+        (
+            "activation",
+            Box::new(|s| s["state"]["/forceset/soleus_r/activation"] = 2.0.into()),
+            "/forceset/soleus_r/activation",
+        ),
+        (
+            "fibre",
+            Box::new(|s| s["state"]["/forceset/soleus_r/fiber_length"] = (-0.1).into()),
+            "/forceset/soleus_r/fiber_length",
+        ),
+        (
+            "excitation",
+            Box::new(|s| s["excitation"]["/forceset/soleus_r"] = 5.0.into()),
+            "/forceset/soleus_r",
+        ),
+        (
+            "both",
+            Box::new(|s| s["x"] = serde_json::json!([0.0])),
+            "'state'",
+        ),
+        (
+            "empty",
+            Box::new(|s| *s = serde_json::json!([])),
+            "no evaluations",
+        ),
+    ];
+    for (name, edit, field) in cases {
+        let mut s = squat.clone();
+        edit(&mut s);
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, serde_json::to_vec(&s).unwrap()).unwrap();
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains(&format!("{name}.json")) && err.contains(field),
+            "{name}: {err}"
+        );
+    }
+    // The squat itself is in range.
+    let file = dir.join("ok.json");
+    std::fs::write(&file, serde_json::to_vec(&squat).unwrap()).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["eval", "--input"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Integrator accuracies Simbody cannot take (it asserts at 1 and above)
+/// or that never finish are refused before the simulation, negative ones
+/// read as numbers, not flags; exit code 2 naming the field.
+#[test]
+fn simulate_refuses_accuracies_outside_their_range() {
+    for args in [
+        &["--accuracy", "1"][..],
+        &["--accuracy", "10", "--integrator", "CPodes"],
+        &["--accuracy", "-1"],
+        &["--accuracy", "1e-300"],
+        &["--accuracy", "1e-12", "--integrator", "ExplicitEuler"],
+    ] {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .arg("simulate")
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains("accuracy:"), "{args:?}: {err}");
+    }
+}
+
+/// A results directory whose name a regular file holds is named as such
+/// (the OS says only "File exists").
+#[test]
+fn results_directory_taken_by_a_file_is_named() {
+    let (dir, _) = squat_input("out-file");
+    let file = dir.join("taken");
+    std::fs::write(&file, "x").unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["simulate", "--t-max", "0.05", "--out"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("taken") && err.contains("a file of that name exists"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn zero_repeats_are_refused() {
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["bench", "solve", "--repeats", "0"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--repeats") && err.contains("at least 1"),
+        "{err}"
+    );
+}
