@@ -18,6 +18,7 @@
 //! what the first leaves after the other two (with the integration error of
 //! the trapezoidal rule on the file's rows).
 
+use crate::io::StoError;
 use crate::ode::StateEquation;
 use serde::Serialize;
 use std::path::Path;
@@ -78,78 +79,17 @@ pub struct JumpAnalysis {
     pub muscles: Vec<MuscleWork>,
 }
 
-/// Bad input to [`analyze`] or [`read_states`]: names the file and the
-/// column or row.
-#[derive(Debug, thiserror::Error)]
-#[error("{file}: {place}: {reason}")]
-pub struct AnalyzeError {
-    pub file: String,
-    pub place: String,
-    pub reason: String,
-}
-
 /// The states of `eq` over time from an OpenSim storage file: its columns
-/// named as [`StateEquation::state_names`] (other columns are ignored).
-pub fn read_states(
-    eq: &StateEquation,
-    path: &Path,
-) -> Result<(Vec<f64>, Vec<Vec<f64>>), AnalyzeError> {
-    let file = path.display().to_string();
-    let err = |place: String, reason: String| AnalyzeError {
-        file: file.clone(),
-        place,
-        reason,
-    };
-    let table = crate::io::StoTable::read(path).map_err(|e| err("(file)".into(), e.to_string()))?;
-    let names = eq.state_names();
-    let cols: Vec<usize> = names
-        .iter()
-        .map(|n| {
-            table.labels.iter().position(|l| l == n).ok_or_else(|| {
-                err(
-                    format!("column '{n}'"),
-                    "missing (a states file of this model's symmetric system is needed; `--full` for the full one)".into(),
-                )
-            })
-        })
-        .collect::<Result<_, _>>()?;
-    if table.time.len() < 2 {
-        return Err(err(
-            "rows".into(),
-            format!("{} rows; at least 2 are needed", table.time.len()),
-        ));
-    }
-    let mut states = Vec::with_capacity(table.rows.len());
-    for (r, row) in table.rows.iter().enumerate() {
-        let x: Vec<f64> = cols.iter().map(|&c| row[c]).collect();
-        if let Some(k) = x.iter().position(|v| !v.is_finite()) {
-            return Err(err(
-                format!(
-                    "row {} (t = {}), column '{}'",
-                    r + 1,
-                    table.time[r],
-                    names[k]
-                ),
-                "not a finite number".into(),
-            ));
-        }
-        states.push(x);
-    }
-    // Not increasing, or NaN.
-    if let Some(r) = table
-        .time
-        .windows(2)
-        .position(|w| w[1].partial_cmp(&w[0]) != Some(std::cmp::Ordering::Greater))
-    {
-        return Err(err(
-            format!("row {}", r + 2),
-            format!(
-                "time {} does not follow {}",
-                table.time[r + 1],
-                table.time[r]
-            ),
-        ));
-    }
+/// named as [`StateEquation::state_names`] (other columns are ignored), in
+/// radians whatever the header's `inDegrees` (see [`crate::io::read_states`]);
+/// at least 2 rows, time strictly increasing, every value finite.
+pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec<f64>>), StoError> {
+    let table = crate::io::read_states(eq, path)?;
+    let states = table.finite_columns(
+        path,
+        &eq.state_names(),
+        "missing (a states file of this model's symmetric system is needed; `--full` for the full one)",
+    )?;
     Ok((table.time, states))
 }
 

@@ -5,7 +5,14 @@
 //! `key=value` lines sorted by key, `DataType=double`, `version=3`,
 //! `OpenSimVersion`, `endheader`, a tab-separated label line starting with
 //! `time`, then rows printed with 16 significant digits.
+//!
+//! With `inDegrees=yes` the values of rotational coordinates are in degrees
+//! and their speeds in deg/s (OpenSim's Storage convention); translations,
+//! fibre lengths, activations and excitations never are. Which columns are
+//! angles depends on the model: [`read_states`] converts them to radians.
 
+use crate::model::Mobilizer;
+use crate::ode::StateEquation;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -27,10 +34,12 @@ pub struct StoTable {
 /// A storage file could not be read or written.
 #[derive(Debug, thiserror::Error)]
 pub enum StoError {
-    #[error("{file}: {source}")]
+    /// The OS's error is part of the message (not a `source`, which
+    /// `{:#}` would print a second time).
+    #[error("{file}: {error}")]
     Io {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{file}: line {line}: {reason}")]
     Parse {
@@ -43,6 +52,22 @@ pub enum StoError {
         file: PathBuf,
         column: String,
         reason: String,
+    },
+    #[error("{file}: header '{key}': {reason}")]
+    Header {
+        file: PathBuf,
+        key: String,
+        reason: String,
+    },
+    /// Too few data rows.
+    #[error(
+        "{file}: {rows} data row{s}; at least {needed} are needed",
+        s = if *rows == 1 { "" } else { "s" }
+    )]
+    Rows {
+        file: PathBuf,
+        rows: usize,
+        needed: usize,
     },
 }
 
@@ -87,9 +112,9 @@ impl StoTable {
         );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|source| StoError::Io {
+        std::fs::write(path, out).map_err(|error| StoError::Io {
             file: path.into(),
-            source,
+            error,
         })
     }
 
@@ -114,9 +139,9 @@ impl StoTable {
         );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|source| StoError::Io {
+        std::fs::write(path, out).map_err(|error| StoError::Io {
             file: path.into(),
-            source,
+            error,
         })
     }
 
@@ -137,11 +162,21 @@ impl StoTable {
         }
     }
 
-    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF).
+    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF;
+    /// a UTF-8 byte-order mark). Values are as in the file: see
+    /// [`read_states`] for degrees.
     pub fn read(path: &Path) -> Result<Self, StoError> {
-        let text = std::fs::read_to_string(path).map_err(|source| StoError::Io {
+        let bytes = std::fs::read(path).map_err(|error| StoError::Io {
             file: path.into(),
-            source,
+            error,
+        })?;
+        let text = String::from_utf8(bytes).map_err(|e| {
+            let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+            StoError::Parse {
+                file: path.into(),
+                line: good.iter().filter(|&&b| b == b'\n').count() + 1,
+                reason: "not UTF-8 text (a binary file?)".into(),
+            }
         })?;
         Self::parse(&text, path)
     }
@@ -153,6 +188,10 @@ impl StoTable {
             line,
             reason,
         };
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+        if text.trim().is_empty() {
+            return Err(perr(1, "the file is empty".into()));
+        }
         let mut table = StoTable::default();
         let mut lines = text.lines().enumerate();
         let mut found_end = false;
@@ -177,6 +216,7 @@ impl StoTable {
         if !found_end {
             return Err(perr(text.lines().count(), "no 'endheader' line".into()));
         }
+        table.in_degrees(path)?;
         let (label_line, labels_raw) = loop {
             match lines.next() {
                 Some((i, raw)) if raw.trim().is_empty() => {
@@ -208,6 +248,18 @@ impl StoTable {
                     labels.first().cloned().unwrap_or_default()
                 ),
             ));
+        }
+        for (k, label) in labels.iter().enumerate() {
+            if let Some(first) = labels[..k].iter().position(|l| l == label) {
+                return Err(perr(
+                    label_line,
+                    format!(
+                        "column '{label}' appears twice: columns {} and {} (time is column 1)",
+                        first + 1,
+                        k + 1
+                    ),
+                ));
+            }
         }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
@@ -252,6 +304,137 @@ impl StoTable {
         let k = self.labels.iter().position(|l| l == label)?;
         Some(self.rows.iter().map(|r| r[k]).collect())
     }
+
+    /// Whether the values of rotational coordinates are in degrees: the
+    /// header's `inDegrees` (`yes` or `no`, any case); radians without it,
+    /// as OpenSim assumes. `path` names the file in errors.
+    pub fn in_degrees(&self, path: &Path) -> Result<bool, StoError> {
+        match self.metadata.get("inDegrees") {
+            None => Ok(false),
+            Some(v) if v.eq_ignore_ascii_case("yes") => Ok(true),
+            Some(v) if v.eq_ignore_ascii_case("no") => Ok(false),
+            Some(v) => Err(StoError::Header {
+                file: path.into(),
+                key: "inDegrees".into(),
+                reason: format!("'{v}' is neither 'yes' nor 'no'"),
+            }),
+        }
+    }
+
+    /// Check that there are at least `min_rows` rows and that time is
+    /// finite and strictly increasing.
+    pub fn check_time(&self, path: &Path, min_rows: usize) -> Result<(), StoError> {
+        if self.time.len() < min_rows {
+            return Err(StoError::Rows {
+                file: path.into(),
+                rows: self.time.len(),
+                needed: min_rows,
+            });
+        }
+        let time_err = |reason: String| StoError::Column {
+            file: path.into(),
+            column: "time".into(),
+            reason,
+        };
+        for (k, &t) in self.time.iter().enumerate() {
+            if !t.is_finite() {
+                return Err(time_err(format!("row {}: {t} is not finite", k + 1)));
+            }
+            if k > 0 && t <= self.time[k - 1] {
+                return Err(time_err(format!(
+                    "not strictly increasing: row {} has t = {t} after t = {}",
+                    k + 1,
+                    self.time[k - 1]
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// The columns `names`, row by row, all finite. A missing column is an
+    /// error whose reason is `missing` (what the caller needed it for).
+    pub fn finite_columns(
+        &self,
+        path: &Path,
+        names: &[String],
+        missing: &str,
+    ) -> Result<Vec<Vec<f64>>, StoError> {
+        let cols = names
+            .iter()
+            .map(|n| {
+                self.labels
+                    .iter()
+                    .position(|l| l == n)
+                    .ok_or_else(|| StoError::Column {
+                        file: path.into(),
+                        column: n.clone(),
+                        reason: missing.into(),
+                    })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut out = Vec::with_capacity(self.rows.len());
+        for (r, row) in self.rows.iter().enumerate() {
+            let x: Vec<f64> = cols.iter().map(|&c| row[c]).collect();
+            if let Some(k) = x.iter().position(|v| !v.is_finite()) {
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: names[k].clone(),
+                    reason: format!(
+                        "row {} (t = {}): {} is not a finite number",
+                        r + 1,
+                        self.time[r],
+                        x[k]
+                    ),
+                });
+            }
+            out.push(x);
+        }
+        Ok(out)
+    }
+}
+
+/// Read a storage file with states of `eq`'s system (a solution, a forward
+/// simulation's states) in radians: with `inDegrees=yes` the value and
+/// speed columns of its rotational coordinates are converted from degrees
+/// (deg/s); other columns are left as they are. Time must be finite and
+/// strictly increasing over at least 2 rows.
+pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
+    let mut t = StoTable::read(path)?;
+    t.check_time(path, 2)?;
+    if t.in_degrees(path)? {
+        let names = eq.state_names();
+        let nq = eq.nq();
+        for q in rotational_coordinates(eq) {
+            for name in [&names[q], &names[nq + q]] {
+                if let Some(k) = t.labels.iter().position(|l| l == name) {
+                    for row in &mut t.rows {
+                        row[k] = row[k].to_radians();
+                    }
+                }
+            }
+        }
+        t.metadata.insert("inDegrees".into(), "no".into());
+    }
+    Ok(t)
+}
+
+/// The system coordinates of `eq` that are angles: a pin's, a translating
+/// hinge's (its translation follows the angle) and a planar joint's
+/// rotation. Sorted, without repeats (symmetric sides share a q).
+fn rotational_coordinates(eq: &StateEquation) -> Vec<usize> {
+    let mut qs: Vec<usize> = eq
+        .system
+        .bodies
+        .iter()
+        .filter_map(|b| match &b.mobilizer {
+            Mobilizer::Planar { q } => Some(q[0]),
+            Mobilizer::Pin { q } | Mobilizer::TranslatingHinge { q, .. } => Some(*q),
+            Mobilizer::Weld => None,
+        })
+        .collect();
+    qs.sort_unstable();
+    qs.dedup();
+    qs
 }
 
 /// Excitations over time read from a controls file, one column per muscle,
@@ -276,34 +459,7 @@ impl Controls {
 
     /// As [`Self::from_file`] for a parsed table.
     pub fn from_table(t: &StoTable, path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
-        if t.time.is_empty() {
-            return Err(StoError::Parse {
-                file: path.into(),
-                line: 0,
-                reason: "no data rows".into(),
-            });
-        }
-        for k in 0..t.time.len() {
-            if !t.time[k].is_finite() {
-                return Err(StoError::Column {
-                    file: path.into(),
-                    column: "time".into(),
-                    reason: format!("row {} is not finite", k + 1),
-                });
-            }
-            if k > 0 && t.time[k] <= t.time[k - 1] {
-                return Err(StoError::Column {
-                    file: path.into(),
-                    column: "time".into(),
-                    reason: format!(
-                        "not strictly increasing: row {} has t = {} after t = {}",
-                        k + 1,
-                        t.time[k],
-                        t.time[k - 1]
-                    ),
-                });
-            }
-        }
+        t.check_time(path, 1)?;
         let mut cols = Vec::with_capacity(muscles.len());
         for m in muscles {
             let names = [
@@ -362,5 +518,66 @@ impl Controls {
         for (m, o) in out.iter_mut().enumerate() {
             *o = (1.0 - w) * self.values[k][m] + w * self.values[k + 1][m];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_byte_order_mark_is_stripped() {
+        let t = StoTable::parse(
+            "\u{feff}states\nendheader\ntime\tx\n0\t1\n",
+            Path::new("bom.sto"),
+        )
+        .unwrap();
+        assert_eq!(t.name.as_deref(), Some("states"));
+        assert_eq!(t.labels, ["x"]);
+        assert_eq!(t.rows, [[1.0]]);
+    }
+
+    #[test]
+    fn duplicate_labels_are_refused_naming_the_label_and_both_columns() {
+        let e = StoTable::parse(
+            "endheader\ntime\tx\ty\tx\n0\t1\t2\t3\n",
+            Path::new("dup.sto"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("dup.sto: line 2:") && e.contains("'x'") && e.contains("columns 2 and 4"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn in_degrees_is_yes_or_no_in_any_case() {
+        for (value, want) in [("yes", true), ("YES", true), ("No", false), ("no", false)] {
+            let text = format!("inDegrees={value}\nendheader\ntime\tx\n0\t1\n");
+            let t = StoTable::parse(&text, Path::new("a.sto")).unwrap();
+            assert_eq!(t.in_degrees(Path::new("a.sto")).unwrap(), want, "{value}");
+        }
+        // Absent: radians, OpenSim's default.
+        let t = StoTable::parse("endheader\ntime\tx\n0\t1\n", Path::new("a.sto")).unwrap();
+        assert!(!t.in_degrees(Path::new("a.sto")).unwrap());
+        let e = StoTable::parse(
+            "inDegrees=true\nendheader\ntime\tx\n0\t1\n",
+            Path::new("b.sto"),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.starts_with("b.sto: header 'inDegrees':") && e.contains("'true'"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn an_empty_file_says_so() {
+        let e = StoTable::parse("\u{feff}\n \n", Path::new("e.sto"))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, "e.sto: line 1: the file is empty");
     }
 }

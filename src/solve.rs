@@ -502,16 +502,15 @@ pub fn solution_table(
 
 /// A guess from a `.sto` with every state and excitation column (a
 /// previous solution), from t = 0, resampled onto the mesh with t_f its
-/// last time.
+/// last time. Angles in degrees (`inDegrees=yes`) are converted to radians;
+/// time must be finite and strictly increasing over at least 2 rows, and
+/// every value used finite.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
-    let t = StoTable::read(path)?;
+    let t = crate::io::read_states(&tr.ocp.eq, path)?;
     let bad = |reason: String| SolveError::Guess {
         file: path.into(),
         reason,
     };
-    if t.time.is_empty() {
-        return Err(bad("no data rows".into()));
-    }
     if t.time[0].abs() > 1e-9 {
         return Err(bad(format!(
             "time: starts at {} s; a guess must start at 0 (the squat)",
@@ -519,33 +518,9 @@ pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, Solv
         )));
     }
     let eq = &tr.ocp.eq;
-    let column = |name: &str| -> Result<usize, SolveError> {
-        t.labels.iter().position(|l| l == name).ok_or_else(|| {
-            bad(format!(
-                "column '{name}': missing (a guess needs every state and control column)"
-            ))
-        })
-    };
-    let sc = eq
-        .state_names()
-        .iter()
-        .map(|n| column(n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let cc = eq
-        .control_names()
-        .iter()
-        .map(|n| column(n))
-        .collect::<Result<Vec<_>, _>>()?;
-    let states: Vec<Vec<f64>> = t
-        .rows
-        .iter()
-        .map(|r| sc.iter().map(|&k| r[k]).collect())
-        .collect();
-    let controls: Vec<Vec<f64>> = t
-        .rows
-        .iter()
-        .map(|r| cc.iter().map(|&k| r[k]).collect())
-        .collect();
+    let missing = "missing (a guess needs every state and control column)";
+    let states = t.finite_columns(path, &eq.state_names(), missing)?;
+    let controls = t.finite_columns(path, &eq.control_names(), missing)?;
     let tf = *t.time.last().unwrap_or(&0.0);
     tr.guess_from_trajectory(&t.time, &states, &controls, tf)
         .map_err(|e| bad(e.to_string()))

@@ -111,3 +111,73 @@ fn push_off_impulse_equals_the_momentum_change_and_the_jump_matches_the_simulati
         "{b:?}"
     );
 }
+
+/// `read_states` names the file once, then the column and row, for every
+/// way a states file can be broken.
+#[test]
+fn broken_states_files_name_file_column_and_row_once() {
+    let (_, eq, _, x0) = jumper();
+    let dir = std::env::temp_dir().join(format!("leap-analyze-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = leap::io::StoTable {
+        labels: eq.state_names(),
+        time: vec![0.0, 0.01, 0.02],
+        rows: vec![x0.clone(); 3],
+        ..Default::default()
+    };
+    let ty = "/jointset/ground_pelvis/pelvis_ty/value";
+    let k = good.labels.iter().position(|l| l == ty).unwrap();
+    let mut nan = good.clone();
+    nan.rows[1][k] = f64::NAN;
+    let mut inf = good.clone();
+    inf.time[2] = f64::INFINITY;
+    let mut back = good.clone();
+    back.time[2] = 0.005;
+    let mut one = good.clone();
+    one.time.truncate(1);
+    one.rows.truncate(1);
+    let mut missing = good.clone();
+    missing.labels[k] = "pelvis_ty".into();
+    let mut bad_header = good.clone();
+    bad_header
+        .metadata
+        .insert("inDegrees".into(), "radians".into());
+    for (name, table, want) in [
+        ("nan", nan, format!("column '{ty}': row 2 (t = 0.01): NaN is not a finite number")),
+        ("inf", inf, "column 'time': row 3: inf is not finite".into()),
+        (
+            "back",
+            back,
+            "column 'time': not strictly increasing: row 3 has t = 0.005 after t = 0.01".into(),
+        ),
+        ("one", one, "1 data row; at least 2 are needed".into()),
+        (
+            "missing",
+            missing,
+            format!("column '{ty}': missing (a states file of this model's symmetric system is needed; `--full` for the full one)"),
+        ),
+        (
+            "bad_header",
+            bad_header,
+            "header 'inDegrees': 'radians' is neither 'yes' nor 'no'".into(),
+        ),
+    ] {
+        let p = dir.join(format!("{name}.sto"));
+        table.write_sto(&p).unwrap();
+        let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+        assert_eq!(e, format!("{}: {want}", p.display()), "{name}");
+    }
+    // A parse error names the file once (it was "X: (file): X: line ...").
+    let p = dir.join("no_end.sto");
+    std::fs::write(&p, "states\ntime\tx\n").unwrap();
+    let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+    assert_eq!(e, format!("{}: line 2: no 'endheader' line", p.display()));
+    // A good file in radians: the file's values as they are.
+    let p = dir.join("good.sto");
+    good.write_sto(&p).unwrap();
+    let (time, xs) = leap::analyze::read_states(&eq, &p).unwrap();
+    let raw = leap::io::StoTable::read(&p).unwrap();
+    assert_eq!(time, good.time);
+    assert_eq!(xs, raw.rows);
+    std::fs::remove_dir_all(&dir).ok();
+}

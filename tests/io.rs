@@ -1,8 +1,69 @@
-//! Storage files: round trips, OpenSim 3 and Moco control files, and clear
-//! errors for broken controls.
+//! Storage files: round trips, OpenSim 3 and Moco control files, states
+//! in degrees (OpenSim's `inDegrees=yes`), and clear errors for broken
+//! controls, states and guesses.
 
 use leap::io::{Controls, StoError, StoTable};
-use std::path::Path;
+use leap::ode::StateEquation;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, OnceLock};
+
+/// A fresh directory for one test's files.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("leap-io-{}-{test}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn jumper_ocp() -> &'static Arc<leap::ocp::JumpOcp> {
+    static OCP: OnceLock<Arc<leap::ocp::JumpOcp>> = OnceLock::new();
+    OCP.get_or_init(|| {
+        let model = leap::model::Model::from_file("models/jumper.json").unwrap();
+        Arc::new(leap::ocp::JumpOcp::new(&model, Default::default()).unwrap())
+    })
+}
+
+/// States and excitations of `eq` in SI units and radians: the squat `x0`
+/// moved a little in each of 4 rows 0.05 s apart.
+fn states_table(eq: &StateEquation, x0: &[f64]) -> StoTable {
+    let mut t = StoTable::default();
+    t.metadata.insert("inDegrees".into(), "no".into());
+    t.labels = eq.state_names();
+    t.labels.extend(eq.control_names());
+    for r in 0..4 {
+        t.time.push(0.05 * r as f64);
+        let mut row: Vec<f64> = x0
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v + 0.01 * (r as f64) * ((i % 7) as f64 - 3.0) / 3.0)
+            .collect();
+        row.extend(std::iter::repeat_n(0.3 + 0.1 * r as f64, eq.nm()));
+        t.rows.push(row);
+    }
+    t
+}
+
+/// OpenSim's convention, from the model file rather than from leap: the
+/// values and speeds of every coordinate but the planar joint's
+/// translations (`pelvis_tx`, `pelvis_ty`) are angles.
+fn is_angle(label: &str) -> bool {
+    let parts: Vec<&str> = label.split('/').collect();
+    matches!(parts.as_slice(), ["", "jointset", _, coord, "value" | "speed"]
+        if !matches!(*coord, "pelvis_tx" | "pelvis_ty"))
+}
+
+/// `t` with its angles in degrees (deg/s) and `inDegrees=<flag>`.
+fn in_degrees(t: &StoTable, flag: &str) -> StoTable {
+    let mut d = t.clone();
+    d.metadata.insert("inDegrees".into(), flag.into());
+    for (k, label) in t.labels.iter().enumerate() {
+        if is_angle(label) {
+            for row in &mut d.rows {
+                row[k] *= 180.0 / std::f64::consts::PI;
+            }
+        }
+    }
+    d
+}
 
 #[test]
 fn sto_round_trip_keeps_values_to_the_last_bit() {
@@ -75,4 +136,170 @@ fn broken_controls_name_file_column_and_reason() {
     assert!(e.to_string().contains("'time'"));
     let e = StoTable::parse("endheader\ntime\tx\n0\tabc\n", Path::new("bad.sto")).unwrap_err();
     assert!(e.to_string().contains("line 3") && e.to_string().contains("'abc'"));
+}
+
+#[test]
+fn states_in_degrees_are_read_in_radians_and_only_angles_are_converted() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("degrees");
+    let rad = states_table(eq, ocp.x0());
+    let (p_rad, p_deg) = (dir.join("rad.sto"), dir.join("deg.mot"));
+    rad.write_sto(&p_rad).unwrap();
+    // "Yes": the header's value is case-insensitive.
+    in_degrees(&rad, "Yes").write_mot(&p_deg).unwrap();
+    let a = leap::io::read_states(eq, &p_rad).unwrap();
+    let b = leap::io::read_states(eq, &p_deg).unwrap();
+    assert_eq!(a.labels, b.labels);
+    assert_eq!(a.time, b.time);
+    let (mut angles, mut others) = (0, 0);
+    for (k, label) in a.labels.iter().enumerate() {
+        for (ra, rb) in a.rows.iter().zip(&b.rows) {
+            if is_angle(label) {
+                // Printed with 16 digits in degrees, converted back.
+                assert!(
+                    (ra[k] - rb[k]).abs() <= 1e-14 * ra[k].abs().max(1e-3),
+                    "{label}: {} rad, from degrees {}",
+                    ra[k],
+                    rb[k]
+                );
+                angles += 1;
+            } else {
+                assert_eq!(ra[k], rb[k], "{label} is not an angle");
+                others += 1;
+            }
+        }
+    }
+    // 5 of the symmetric system's 7 coordinates are angles (pelvis tilt,
+    // hip, knee, ankle, lumbar): value and speed in 4 rows.
+    assert_eq!(angles, 4 * 2 * 5, "angle cells");
+    assert!(others > 0);
+    // The file's degrees really are degrees: the knee of the squat.
+    let knee = rad
+        .labels
+        .iter()
+        .position(|l| l == "/jointset/knee_r/knee_angle_r/value")
+        .unwrap();
+    let raw = StoTable::read(&p_deg).unwrap();
+    assert!((raw.rows[0][knee] - rad.rows[0][knee].to_degrees()).abs() < 1e-12);
+    // analyze reads the same states.
+    let (time, xs) = leap::analyze::read_states(eq, &p_deg).unwrap();
+    assert_eq!(time, a.time);
+    let xa = leap::analyze::read_states(eq, &p_rad).unwrap().1;
+    for (x, y) in xs.iter().flatten().zip(xa.iter().flatten()) {
+        assert!((x - y).abs() <= 1e-14 * y.abs().max(1e-3), "{x} vs {y}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() {
+    use leap::transcription::{Transcription, TranscriptionOptions};
+    let ocp = jumper_ocp();
+    let tr = Transcription::new(
+        ocp.clone(),
+        TranscriptionOptions {
+            num_mesh_intervals: 8,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let dir = scratch("guess");
+    let rad = states_table(&ocp.eq, ocp.x0());
+    let (p_rad, p_deg) = (dir.join("rad.sto"), dir.join("deg.sto"));
+    rad.write_sto(&p_rad).unwrap();
+    in_degrees(&rad, "yes").write_sto(&p_deg).unwrap();
+    let a = leap::solve::guess_from_file(&tr, &p_rad).unwrap();
+    let b = leap::solve::guess_from_file(&tr, &p_deg).unwrap();
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= 1e-14 * x.abs().max(1e-3), "{x} vs {y}");
+    }
+    // A NaN, a single row, an infinite or a repeated time.
+    let mut nan = rad.clone();
+    nan.rows[2][3] = f64::NAN;
+    let mut one = rad.clone();
+    one.time.truncate(1);
+    one.rows.truncate(1);
+    let mut inf = rad.clone();
+    inf.time[3] = f64::INFINITY;
+    let mut repeated = rad.clone();
+    repeated.time[2] = repeated.time[1];
+    let hip = "/jointset/hip_r/hip_flexion_r/value";
+    assert_eq!(rad.labels[3], hip);
+    for (name, table, want) in [
+        (
+            "nan",
+            nan,
+            format!("column '{hip}': row 3 (t = 0.1): NaN is not a finite number"),
+        ),
+        ("one", one, "1 data row; at least 2 are needed".to_string()),
+        (
+            "inf",
+            inf,
+            "column 'time': row 4: inf is not finite".to_string(),
+        ),
+        (
+            "repeated",
+            repeated,
+            "column 'time': not strictly increasing: row 3 has t = 0.05 after t = 0.05".to_string(),
+        ),
+    ] {
+        let p = dir.join(format!("{name}.sto"));
+        table.write_sto(&p).unwrap();
+        let e = leap::solve::guess_from_file(&tr, &p)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, format!("{}: {want}", p.display()), "{name}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_missing_or_binary_file_is_named_once_with_one_reason() {
+    let e = StoTable::read(Path::new("no_such_dir/none.sto"))
+        .unwrap_err()
+        .to_string();
+    assert!(e.starts_with("no_such_dir/none.sto: "), "{e}");
+    // The OS error is the message, not also a `source` that `{:#}` repeats.
+    let any = anyhow::Error::new(StoTable::read(Path::new("none.sto")).unwrap_err());
+    let full = format!("{any:#}");
+    assert_eq!(full.matches("os error").count(), 1, "{full}");
+    let dir = scratch("binary");
+    let p = dir.join("bin.sto");
+    std::fs::write(&p, b"name\nendheader\ntime\tx\n0\t\xff\x00\n").unwrap();
+    let e = StoTable::read(&p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!("{}: line 4: not UTF-8 text (a binary file?)", p.display())
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn controls_refuse_an_infinite_time_and_take_one_row() {
+    let dir = scratch("controls");
+    let mut t = StoTable {
+        labels: vec!["/forceset/soleus_r".into()],
+        time: vec![0.0],
+        rows: vec![vec![0.5]],
+        ..Default::default()
+    };
+    let p = dir.join("one.sto");
+    t.write_sto(&p).unwrap();
+    let c = Controls::from_file(&p, &["soleus_r"]).unwrap();
+    let mut u = [0.0];
+    c.at(1.0, &mut u);
+    assert_eq!(u, [0.5]);
+    t.time.push(f64::INFINITY);
+    t.rows.push(vec![0.5]);
+    t.write_sto(&p).unwrap();
+    let e = Controls::from_file(&p, &["soleus_r"])
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        format!("{}: column 'time': row 2: inf is not finite", p.display())
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
