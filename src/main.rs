@@ -646,34 +646,6 @@ fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
-/// Rows a forward simulation may report (t_max / report_interval).
-const MAX_REPORTS: f64 = 1e6;
-
-/// An integrator accuracy leap accepts: a relative error tolerance in
-/// [1e-12, 1) (Simbody asserts below 1; below 1e-12 the error control
-/// works on rounding and the steps shrink without end), or ExplicitEuler's
-/// fixed step, with at most 1e7 steps to `t_max`.
-fn check_accuracy(accuracy: f64, fixed_step: bool, t_max: f64) -> Result<(), String> {
-    if !(accuracy.is_finite() && accuracy > 0.0) {
-        return Err(format!("must be positive, got {accuracy:e}"));
-    }
-    if fixed_step {
-        if t_max / accuracy > 1e7 {
-            return Err(format!(
-                "a fixed step of {accuracy:e} s takes {:.1e} steps to t_max = {t_max} s; at most 1e7",
-                t_max / accuracy
-            ));
-        }
-        return Ok(());
-    }
-    if !(1e-12..1.0).contains(&accuracy) {
-        return Err(format!(
-            "a relative error tolerance in [1e-12, 1), got {accuracy:e}"
-        ));
-    }
-    Ok(())
-}
-
 fn simulate(
     study: Option<PathBuf>,
     model: Option<PathBuf>,
@@ -688,14 +660,10 @@ fn simulate(
     use std::sync::Arc;
     // Study file first (paths relative to it), then command-line overrides.
     let (mut st, base) = match &study {
-        Some(p) => {
-            let text = std::fs::read_to_string(p)
-                .with_context(|| format!("{}: cannot read the study file", p.display()))?;
-            let de = &mut serde_json::Deserializer::from_str(&text);
-            let st: SimulateStudy = serde_path_to_error::deserialize(de)
-                .map_err(|e| anyhow::anyhow!("{}: {}: {}", p.display(), e.path(), e.inner()))?;
-            (st, p.parent().map(|d| d.to_path_buf()).unwrap_or_default())
-        }
+        Some(p) => (
+            SimulateStudy::from_file(p)?,
+            p.parent().map(|d| d.to_path_buf()).unwrap_or_default(),
+        ),
         None => (SimulateStudy::default(), PathBuf::new()),
     };
     let rel = |s: &str| -> PathBuf {
@@ -717,53 +685,12 @@ fn simulate(
     if let Some(t) = t_max {
         st.t_max = t;
     }
-    let where_ = study
+    let origin = study
         .as_ref()
-        .map(|p| format!("{}: ", p.display()))
-        .unwrap_or_default();
-    if !(st.t_max.is_finite() && st.t_max > 0.0) {
-        anyhow::bail!("{where_}t_max: must be positive, got {}", st.t_max);
-    }
-    let choice =
-        parse_integrator(&st.integrator).map_err(|e| anyhow::anyhow!("{where_}integrator: {e}"))?;
-    check_accuracy(
-        st.accuracy,
-        matches!(
-            choice,
-            IntegratorChoice::Simbody(leap::simbody::SimbodyIntegrator::ExplicitEuler)
-        ),
-        st.t_max,
-    )
-    .map_err(|e| anyhow::anyhow!("{where_}accuracy: {e}"))?;
-    if !(st.report_interval.is_finite() && st.report_interval > 0.0) {
-        anyhow::bail!(
-            "{where_}report_interval: must be positive, got {}",
-            st.report_interval
-        );
-    }
-    if st.t_max / st.report_interval > MAX_REPORTS {
-        anyhow::bail!(
-            "{where_}report_interval: {} s over t_max = {} s would report {:.0} rows; at most {MAX_REPORTS:e} (make it larger or t_max smaller)",
-            st.report_interval,
-            st.t_max,
-            st.t_max / st.report_interval
-        );
-    }
-    if let Some(bb) = &st.bang_bang {
-        if !(bb.on_time.is_finite() && bb.on_time >= 0.0) {
-            anyhow::bail!(
-                "{where_}bang_bang.on_time: must be a time ≥ 0 s, got {}",
-                bb.on_time
-            );
-        }
-        if !(bb.off_time > bb.on_time) {
-            anyhow::bail!(
-                "{where_}bang_bang.off_time: must be after on_time ({} s), got {}",
-                bb.on_time,
-                bb.off_time
-            );
-        }
-    }
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| "command line".into());
+    let where_ = format!("{origin}: ");
+    let choice = st.check(&origin)?;
     let m = leap::model::Model::from_file(&model_path)?;
     let laws = leap::laws::OpenSimLaws::new(&m)?;
     let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;

@@ -30,7 +30,8 @@ pub struct ModelFile {
     /// Where the data come from and under which licence.
     #[serde(default)]
     pub credits: Vec<String>,
-    /// Gravity in ground (m/s²).
+    /// Gravity in ground (m/s²); with foot-ground contact it must point
+    /// down, `[0, -g, 0]`.
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
     pub bodies: Vec<BodySpec>,
@@ -38,11 +39,15 @@ pub struct ModelFile {
     pub coordinates: Vec<CoordinateSpec>,
     #[serde(default)]
     pub stations: Vec<StationSpec>,
-    /// Right/left coordinate pairs that the symmetric system couples.
+    /// Right/left coordinate pairs that the symmetric system couples. With
+    /// pairs, every muscle named `<stem>_r` needs its `<stem>_l` with equal
+    /// parameters (the symmetric system carries both by the right one).
     #[serde(default)]
     pub symmetry: Vec<[String; 2]>,
     /// Named poses: coordinate values (rad or m); missing coordinates take
-    /// their `default_value`.
+    /// their `default_value`. A `squat` pose makes the model a jump model
+    /// (`leap squat`, `solve` and `simulate` start from it): it then needs
+    /// muscles and foot-ground contact.
     #[serde(default)]
     pub poses: BTreeMap<String, BTreeMap<String, f64>>,
     /// Muscles, passive joint torques and foot-ground contact.
@@ -184,6 +189,7 @@ pub struct ContactSpec {
     pub hunt_crossley_smoothing: Option<f64>,
     #[serde(default)]
     pub derivative_smoothing: Option<f64>,
+    /// At least one, with distinct names.
     pub spheres: Vec<SphereSpec>,
 }
 
@@ -447,6 +453,63 @@ pub struct Contact {
     pub spheres: Vec<Sphere>,
 }
 
+/// Why a JSON file could not be read into a settings struct: the JSON
+/// path of the field ("(document)" for the whole file) and the reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct JsonError {
+    pub path: String,
+    pub reason: String,
+}
+
+/// Parse `text` as exactly one JSON object into `T` (a model, `leap solve`
+/// or `leap simulate` study file). Besides serde's errors (with the JSON
+/// path of the field), refuse what serde would accept: a top-level array,
+/// which fills a struct's fields by position, and anything after the
+/// object (a second object, stray text), which serde leaves unread.
+pub fn parse_json_object<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, JsonError> {
+    let document = |reason: String| JsonError {
+        path: "(document)".into(),
+        reason,
+    };
+    match text.trim_start().chars().next() {
+        Some('{') => {}
+        None => return Err(document("empty; expected a JSON object".into())),
+        Some(_) => {
+            // Say what the document is when it is JSON, else where it is not.
+            let reason = match serde_json::from_str::<serde_json::Value>(text) {
+                Ok(v) => format!("expected a JSON object, got {}", json_kind(&v)),
+                Err(e) => format!("expected a JSON object: {e}"),
+            };
+            return Err(document(reason));
+        }
+    }
+    let mut de = serde_json::Deserializer::from_str(text);
+    let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        JsonError {
+            path: if path == "." || path == "?" {
+                "(document)".into()
+            } else {
+                path
+            },
+            reason: e.into_inner().to_string(),
+        }
+    })?;
+    de.end().map_err(|e| document(e.to_string()))?;
+    Ok(value)
+}
+
+fn json_kind(v: &serde_json::Value) -> &'static str {
+    match v {
+        serde_json::Value::Null => "null",
+        serde_json::Value::Bool(_) => "a boolean",
+        serde_json::Value::Number(_) => "a number",
+        serde_json::Value::String(_) => "a string",
+        serde_json::Value::Array(_) => "an array",
+        serde_json::Value::Object(_) => "an object",
+    }
+}
+
 fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -465,19 +528,10 @@ impl Model {
     /// Parse and validate JSON text; `file` names it in errors.
     pub fn from_json_str(text: &str, file: impl AsRef<Path>) -> Result<Self, ModelError> {
         let file = file.as_ref().to_path_buf();
-        let de = &mut serde_json::Deserializer::from_str(text);
-        let spec: ModelFile = serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            ModelError::Parse {
-                file: file.clone(),
-                path: if path == "." {
-                    "(document)".into()
-                } else {
-                    path
-                },
-                reason: inner.to_string(),
-            }
+        let spec: ModelFile = parse_json_object(text).map_err(|e| ModelError::Parse {
+            file: file.clone(),
+            path: e.path,
+            reason: e.reason,
         })?;
         Self::from_spec(spec, file)
     }
@@ -914,9 +968,30 @@ impl Model {
                         }
                     }
                 }
+                if cs.spheres.is_empty() {
+                    return Err(err(
+                        p("spheres"),
+                        "no contact spheres: give at least one per foot, or leave out `contact`"
+                            .into(),
+                    ));
+                }
                 let mut spheres = Vec::new();
+                let mut sphere_names = HashMap::new();
                 for (i, sp) in cs.spheres.iter().enumerate() {
                     let q = |f: &str| format!("forces.contact.spheres[{i}].{f}");
+                    // Spheres are reported by name (`leap eval`).
+                    if sp.name.is_empty() {
+                        return Err(err(q("name"), "empty sphere name".into()));
+                    }
+                    if let Some(first) = sphere_names.insert(sp.name.clone(), i) {
+                        return Err(err(
+                            q("name"),
+                            format!(
+                                "sphere '{}' is defined twice (also spheres[{first}])",
+                                sp.name
+                            ),
+                        ));
+                    }
                     let body = body_of(&sp.body)
                         .ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
                     if !finite3(&sp.location) {
@@ -941,6 +1016,12 @@ impl Model {
                 })
             }
         };
+        if contact.is_some() {
+            check_gravity_down(&spec.gravity).map_err(|r| err("gravity".into(), r))?;
+        }
+        if !symmetry.is_empty() {
+            check_muscle_pairs(&spec.forces.muscles).map_err(|(path, r)| err(path, r))?;
+        }
         let model = Model {
             muscle_model: spec.forces.muscle_model,
             muscles,
@@ -959,6 +1040,40 @@ impl Model {
         };
         if !model.symmetry.is_empty() {
             model.system(true)?; // reports asymmetric geometry at load time
+        }
+        if model.poses.contains_key("squat") {
+            // A jump model: `leap squat`, `solve` and `simulate` start from
+            // the static squat, which stands on the spheres by the muscles.
+            if model.muscles.is_empty() {
+                return Err(err(
+                    "forces.muscles".into(),
+                    "no muscles: a jump model (one with a 'squat' pose) needs muscles to hold the squat and push off".into(),
+                ));
+            }
+            if model.contact.is_none() {
+                return Err(err(
+                    "forces.contact".into(),
+                    "missing: a jump model (one with a 'squat' pose) needs foot-ground contact spheres to stand on".into(),
+                ));
+            }
+            // The jump is solved on the symmetric system, which pairs
+            // <stem>_r with <stem>_l: without coordinate pairs their legs move
+            // apart and no pair can be a mirror image.
+            let sided = model.muscles.iter().find_map(|m| {
+                let stem = m.spec.name.strip_suffix("_r")?;
+                let left = format!("{stem}_l");
+                model
+                    .muscles
+                    .iter()
+                    .any(|o| o.spec.name == left)
+                    .then(|| (m.spec.name.clone(), left))
+            });
+            if let (true, Some((right, left))) = (model.symmetry.is_empty(), sided) {
+                return Err(err(
+                    "symmetry".into(),
+                    format!("no right/left coordinate pairs, but the muscles come in pairs ('{right}', '{left}'): a jump model is solved on the symmetric system, which needs the pairs (e.g. [\"hip_flexion_r\", \"hip_flexion_l\"])"),
+                ));
+            }
         }
         Ok(model)
     }
@@ -983,6 +1098,86 @@ impl Model {
     pub fn system(&self, symmetric: bool) -> Result<SystemSpec, ModelError> {
         SystemSpec::build(self, symmetric)
     }
+}
+
+/// Gravity of a model standing on the ground, whose half-space has the
+/// normal +y: `[0, -g, 0]` with g > 0. (A model without contact, a
+/// pendulum say, may point it anywhere.)
+fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
+    if g[1] < 0.0 && g[0] == 0.0 && g[2] == 0.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "must point down (−y), [0, -g, 0] with g > 0, got {g:?}: the ground's normal is +y, and the squat and the jump need the model's weight on it"
+        ))
+    }
+}
+
+/// With a `symmetry` section the symmetric system carries each left muscle
+/// (`<stem>_l`) by its right partner (`<stem>_r`), doubling its force: every
+/// sided muscle needs its partner, with equal parameters. (A muscle without
+/// a side suffix is a midline muscle, carried once; `StateEquation::new`
+/// checks that partners' paths are mirror images.) Returns the JSON path
+/// and the reason.
+fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
+    let index = |name: &str| muscles.iter().position(|m| m.name == name);
+    for (i, m) in muscles.iter().enumerate() {
+        let (stem, own, other) = if let Some(stem) = m.name.strip_suffix("_r") {
+            (stem, "right", "_l")
+        } else if let Some(stem) = m.name.strip_suffix("_l") {
+            (stem, "left", "_r")
+        } else {
+            continue;
+        };
+        let partner = format!("{stem}{other}");
+        let Some(j) = index(&partner) else {
+            let hint = if index(stem).is_some() {
+                format!(" ('{stem}' has no side suffix)")
+            } else {
+                String::new()
+            };
+            return Err((
+                format!("forces.muscles[{i}].name"),
+                format!(
+                    "{own} muscle '{}' has no mirror partner '{partner}'{hint}: the symmetric system carries each left muscle by its right partner, so with a `symmetry` section every muscle named *_r needs its *_l and the other way round",
+                    m.name
+                ),
+            ));
+        };
+        if own == "left" {
+            continue; // compared from its right partner
+        }
+        let l = &muscles[j];
+        let params = |m: &MuscleSpec| {
+            [
+                ("max_isometric_force", m.max_isometric_force),
+                ("optimal_fiber_length", m.optimal_fiber_length),
+                ("tendon_slack_length", m.tendon_slack_length),
+                ("pennation_angle_at_optimal", m.pennation_angle_at_optimal),
+                ("max_contraction_velocity", m.max_contraction_velocity),
+                ("activation_time_constant", m.activation_time_constant),
+                ("deactivation_time_constant", m.deactivation_time_constant),
+                ("FmaxTendonStrain", m.FmaxTendonStrain),
+                ("FmaxMuscleStrain", m.FmaxMuscleStrain),
+                ("KshapeActive", m.KshapeActive),
+                ("KshapePassive", m.KshapePassive),
+                ("Af", m.Af),
+                ("Flen", m.Flen),
+            ]
+        };
+        for ((name, vr), (_, vl)) in params(m).into_iter().zip(params(l)) {
+            if vr != vl {
+                return Err((
+                    format!("forces.muscles[{j}].{name}"),
+                    format!(
+                        "muscle '{}' is not the mirror image of '{}' (forces.muscles[{i}]): {name} is {vl:?} against {vr:?}; the symmetric system carries both by the right one",
+                        l.name, m.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Why an inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` is not physical, if it is not.

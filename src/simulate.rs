@@ -5,6 +5,7 @@
 use crate::integrator::{Dopri5, Dopri5Options, IntegrationError, OdeSystem};
 use crate::io::StoTable;
 use crate::ode::{ForceLaws, StateEquation, StateWorkspace};
+use crate::study::StudyError;
 use serde::Serialize;
 use std::path::Path;
 
@@ -475,6 +476,17 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
             .map_err(|e| e.to_string())?;
         Ok(grf_of(eq, &ws, x))
     };
+    // Simbody aborts the process on an accuracy ≥ 1; a tiny one or a tiny
+    // report interval never ends.
+    let checked = check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator))
+        .map_err(|r| format!("accuracy: {r}"))
+        .and_then(|()| {
+            check_report_interval(report_interval, t_max)
+                .map_err(|r| format!("report_interval: {r}"))
+        });
+    if let Err(cause) = checked {
+        return Err(fail(0.0, x0, cause, traj));
+    }
     let start_at = |sb: &mut SimbodyStateEquation, t: f64, x: &[f64]| -> Result<(), String> {
         sb.set_state(t, x).map_err(|e| e.to_string())?;
         sb.simbody
@@ -605,6 +617,61 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
     Ok((summary, traj))
 }
 
+/// The smallest relative accuracy leap passes to an error-controlled
+/// integrator: below it the error control works on rounding error and the
+/// steps shrink without end (1e-300 never finished; 1e-12 takes the
+/// RungeKuttaMerson jump 28 000 steps, 9 s).
+pub const MIN_ACCURACY: f64 = 1e-12;
+/// The smallest fixed step of ExplicitEuler (s): about 70 µs a step on the
+/// jumper, so a million steps to a second of motion take over a minute.
+pub const MIN_FIXED_STEP: f64 = 1e-6;
+/// The most steps of ExplicitEuler's fixed step to `t_max`.
+pub const MAX_FIXED_STEPS: f64 = 1e6;
+/// The most rows a Simbody simulation reports (`t_max / report_interval`):
+/// each costs about half a millisecond and a kilobyte of output (the
+/// default 1e-3 s reports 1000 rows a second).
+pub const MAX_REPORTED_ROWS: f64 = 1e5;
+
+/// Why `accuracy` is unusable for `integrator`, if it is: a relative error
+/// tolerance in [[`MIN_ACCURACY`], 1) (Simbody asserts accuracy < 1 and
+/// aborts the process otherwise), or for ExplicitEuler a fixed step of at
+/// least [`MIN_FIXED_STEP`] s.
+pub fn check_integrator_accuracy(
+    accuracy: f64,
+    integrator: &IntegratorChoice,
+) -> Result<(), String> {
+    if !(accuracy.is_finite() && accuracy > 0.0) {
+        return Err(format!("must be positive, got {accuracy}"));
+    }
+    if let IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::ExplicitEuler) = integrator
+    {
+        if accuracy < MIN_FIXED_STEP {
+            return Err(format!(
+                "ExplicitEuler's fixed step must be at least {MIN_FIXED_STEP:e} s, got {accuracy:e}: a million steps to each second of motion already take over a minute"
+            ));
+        }
+    } else if !(MIN_ACCURACY..1.0).contains(&accuracy) {
+        return Err(format!(
+            "must be a relative error tolerance in [{MIN_ACCURACY:e}, 1), got {accuracy:e}: Simbody's integrators need accuracy < 1, and below {MIN_ACCURACY:e} the error control works on rounding error and the steps shrink without end"
+        ));
+    }
+    Ok(())
+}
+
+/// Why `t_max / report_interval` reports too many rows, if it does.
+fn check_report_interval(report_interval: f64, t_max: f64) -> Result<(), String> {
+    if !(report_interval.is_finite() && report_interval > 0.0) {
+        return Err(format!("must be positive, got {report_interval}"));
+    }
+    let rows = t_max / report_interval;
+    if rows > MAX_REPORTED_ROWS {
+        return Err(format!(
+            "{report_interval:e} s over t_max = {t_max} s would report {rows:.1e} rows; at most {MAX_REPORTED_ROWS:e} (report_interval ≥ t_max / {MAX_REPORTED_ROWS:e})"
+        ));
+    }
+    Ok(())
+}
+
 /// Whole-body COM height of the model standing (its `standing` pose, or
 /// the coordinates' defaults).
 pub fn standing_com_height(eq: &StateEquation) -> f64 {
@@ -632,7 +699,8 @@ pub struct SimulateStudy {
     /// (Rust-native).
     #[serde(default = "default_integrator")]
     pub integrator: String,
-    /// Integrator accuracy (for ExplicitEuler: the fixed step, s).
+    /// Integrator accuracy in [1e-12, 1) (for ExplicitEuler: the fixed
+    /// step, s, at least 1e-6 and at most 1e6 steps to `t_max`).
     #[serde(default = "default_accuracy")]
     pub accuracy: f64,
     /// Stop here if the apex is not reached (s).
@@ -647,13 +715,15 @@ pub struct SimulateStudy {
     pub controls: Option<String>,
     #[serde(default)]
     pub bang_bang: Option<BangBangSpec>,
-    /// Report interval of the Simbody integrators (s).
+    /// Report interval of the Simbody integrators (s), at least
+    /// `t_max / 1e5` ([`MAX_REPORTED_ROWS`]).
     #[serde(default = "default_report")]
     pub report_interval: f64,
 }
 
 /// The bang-bang pattern: muscles in `on` (default: the extensors at the
-/// squat) are fully on between `on_time` and `off_time`, the others off.
+/// squat) are fully on between `on_time` (≥ 0) and `off_time` (after it),
+/// the others off.
 #[derive(Debug, Clone, serde::Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct BangBangSpec {
@@ -687,6 +757,82 @@ fn default_off() -> f64 {
     f64::INFINITY
 }
 
+impl SimulateStudy {
+    /// Read a study file: one JSON object, unknown fields refused. Values
+    /// are checked by [`SimulateStudy::check`] once command-line options
+    /// have overridden them.
+    pub fn from_file(path: &Path) -> Result<Self, StudyError> {
+        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
+            file: path.into(),
+            source,
+        })?;
+        Self::from_json_str(&text, &path.display().to_string())
+    }
+
+    /// Parse study JSON; `origin` names it in errors.
+    pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
+        crate::model::parse_json_object(text).map_err(|e| StudyError::Field {
+            origin: origin.into(),
+            field: e.path,
+            reason: e.reason,
+        })
+    }
+
+    /// Check every value and return the integrator; `origin` names the
+    /// study file (or "command line") in errors.
+    pub fn check(&self, origin: &str) -> Result<IntegratorChoice, StudyError> {
+        let err = |field: &str, reason: String| StudyError::Field {
+            origin: origin.into(),
+            field: field.into(),
+            reason,
+        };
+        let choice = parse_integrator(&self.integrator).map_err(|r| err("integrator", r))?;
+        if !(self.t_max.is_finite() && self.t_max > 0.0) {
+            return Err(err(
+                "t_max",
+                format!("must be positive, got {}", self.t_max),
+            ));
+        }
+        check_integrator_accuracy(self.accuracy, &choice).map_err(|r| err("accuracy", r))?;
+        if let IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::ExplicitEuler) = choice
+        {
+            let steps = self.t_max / self.accuracy;
+            if steps > MAX_FIXED_STEPS {
+                return Err(err(
+                    "accuracy",
+                    format!(
+                        "ExplicitEuler's fixed step of {:e} s takes {steps:.1e} steps to t_max = {} s; at most {MAX_FIXED_STEPS:e}",
+                        self.accuracy, self.t_max
+                    ),
+                ));
+            }
+        }
+        check_report_interval(self.report_interval, self.t_max)
+            .map_err(|r| err("report_interval", r))?;
+        if let Some(bb) = &self.bang_bang {
+            if !(bb.on_time.is_finite() && bb.on_time >= 0.0) {
+                return Err(err(
+                    "bang_bang.on_time",
+                    format!(
+                        "must be a time ≥ 0 s (the simulation starts at 0), got {}",
+                        bb.on_time
+                    ),
+                ));
+            }
+            if bb.off_time.is_nan() || bb.off_time <= bb.on_time {
+                return Err(err(
+                    "bang_bang.off_time",
+                    format!(
+                        "must be after on_time ({} s), got {}",
+                        bb.on_time, bb.off_time
+                    ),
+                ));
+            }
+        }
+        Ok(choice)
+    }
+}
+
 impl Default for SimulateStudy {
     fn default() -> Self {
         SimulateStudy {
@@ -703,6 +849,7 @@ impl Default for SimulateStudy {
 }
 
 /// Which integrator a name means.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum IntegratorChoice {
     Simbody(crate::simbody::SimbodyIntegrator),
     DormandPrince,

@@ -31,7 +31,8 @@ use crate::simbody::SimbodyIntegrator;
 /// Relative eigenvalue floor of the exact element Hessians in the jump
 /// (see [`SolveStudy::resolve`]'s settings).
 pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
-use crate::simulate::{parse_integrator, IntegratorChoice};
+use crate::model::parse_json_object;
+use crate::simulate::{check_integrator_accuracy, parse_integrator, IntegratorChoice};
 use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
 use crate::transcription::{FiberDynamics, Scheme, TranscriptionOptions};
 use serde::{Deserialize, Serialize};
@@ -125,7 +126,8 @@ pub struct SolveStudy {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSpec {
-    /// Uniform mesh intervals N ≥ 2 (default 28, the paper's 29 nodes).
+    /// Uniform mesh intervals, 2 ≤ N ≤ [`MAX_NUM_MESH_INTERVALS`] (default
+    /// 28, the paper's 29 nodes).
     /// Signed so that a negative count is reported as such.
     #[serde(default)]
     pub num_mesh_intervals: Option<i64>,
@@ -178,7 +180,9 @@ pub struct ForwardCheckSpec {
     /// Simbody integrator (default "RungeKuttaMerson", OpenSim's default).
     #[serde(default)]
     pub integrator: Option<String>,
-    /// Integrator accuracy (default 1e-5, OpenSim's).
+    /// Integrator accuracy (default 1e-5, OpenSim's): a relative error
+    /// tolerance in [1e-12, 1), or ExplicitEuler's fixed step
+    /// ([`crate::simulate::check_integrator_accuracy`]).
     #[serde(default)]
     pub accuracy: Option<f64>,
 }
@@ -258,20 +262,12 @@ impl SolveStudy {
         Self::from_json_str(&text, &path.display().to_string())
     }
 
-    /// Parse study JSON; `origin` names it in errors.
+    /// Parse study JSON (one object); `origin` names it in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
-        let de = &mut serde_json::Deserializer::from_str(text);
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            let path = e.path().to_string();
-            StudyError::Field {
-                origin: origin.into(),
-                field: if path == "." || path == "?" {
-                    "(document)".into()
-                } else {
-                    path
-                },
-                reason: e.into_inner().to_string(),
-            }
+        parse_json_object(text).map_err(|e| StudyError::Field {
+            origin: origin.into(),
+            field: e.path,
+            reason: e.reason,
         })
     }
 
@@ -440,12 +436,8 @@ impl SolveStudy {
                 },
             };
             let accuracy = fc.accuracy.unwrap_or(1e-5);
-            if !(accuracy.is_finite() && accuracy > 0.0) {
-                return Err(err(
-                    "forward_check.accuracy",
-                    format!("must be positive, got {accuracy}"),
-                ));
-            }
+            check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator))
+                .map_err(|r| err("forward_check.accuracy", r))?;
             Some(ForwardCheck {
                 integrator,
                 accuracy,
@@ -565,10 +557,22 @@ fn check_method(method: &str) -> Result<(), String> {
     }
 }
 
-/// N ≥ 2 uniform mesh intervals.
+/// The most mesh intervals a study may ask for, far above any use: the
+/// studies in the README use 20-40. Every interval adds a node of 86
+/// variables (62 states, 24 excitations); a mistyped count of 10⁵ took
+/// gigabytes and minutes before the first iteration, and one near 2⁶³
+/// overflowed the allocation.
+pub const MAX_NUM_MESH_INTERVALS: i64 = 1000;
+
+/// 2 ≤ N ≤ [`MAX_NUM_MESH_INTERVALS`] uniform mesh intervals.
 pub fn check_mesh_intervals(n: i64) -> Result<usize, String> {
     if n < 2 {
         return Err(format!("must be an integer ≥ 2, got {n}"));
+    }
+    if n > MAX_NUM_MESH_INTERVALS {
+        return Err(format!(
+            "must be at most {MAX_NUM_MESH_INTERVALS}, got {n}: each interval adds 86 variables, and the studies in the README use 20-40 (the paper's 28)"
+        ));
     }
     usize::try_from(n).map_err(|_| format!("{n} is too large"))
 }
@@ -819,6 +823,94 @@ mod tests {
         assert!(r.contains("interior-point"), "{r}");
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");
+    }
+
+    #[test]
+    fn mesh_intervals_have_a_maximum_in_the_file_and_on_the_command_line() {
+        for n in ["1001", "100000", "9223372036854775807"] {
+            let (f, r) = field_error(&format!(r#"{{"mesh": {{"num_mesh_intervals": {n}}}}}"#));
+            assert_eq!(f, "mesh.num_mesh_intervals");
+            assert!(r.contains("at most 1000") && r.contains(n), "{r}");
+        }
+        let mut c = SolveConfig::builtin().unwrap();
+        let e = c
+            .apply(&Overrides {
+                num_mesh_intervals: Some(i64::MAX),
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("command line: --num-mesh-intervals: must be at most 1000"),
+            "{e}"
+        );
+        c.apply(&Overrides {
+            num_mesh_intervals: Some(MAX_NUM_MESH_INTERVALS),
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(c.transcription.num_mesh_intervals, 1000);
+    }
+
+    /// Simbody aborts the process on an accuracy ≥ 1 (after the whole
+    /// solve); below 1e-12 its steps shrink without end.
+    #[test]
+    fn forward_check_accuracy_is_a_tolerance_below_one() {
+        for a in ["1", "10", "1e-300", "0", "-1e-5"] {
+            let (f, r) = field_error(&format!(r#"{{"forward_check": {{"accuracy": {a}}}}}"#));
+            assert_eq!(f, "forward_check.accuracy");
+            assert!(
+                r.contains("[1e-12, 1)") || r.contains("positive"),
+                "{a}: {r}"
+            );
+        }
+        let (f, r) =
+            field_error(r#"{"forward_check": {"integrator": "ExplicitEuler", "accuracy": 1e-9}}"#);
+        assert_eq!(f, "forward_check.accuracy");
+        assert!(r.contains("fixed step must be at least 1e-6 s"), "{r}");
+        for (integrator, a) in [("RungeKuttaMerson", 1e-12), ("ExplicitEuler", 1e-4)] {
+            let json = format!(
+                r#"{{"forward_check": {{"integrator": "{integrator}", "accuracy": {a}}}}}"#
+            );
+            let c = SolveStudy::from_json_str(&json, "s.json")
+                .and_then(|s| s.resolve(None))
+                .unwrap();
+            assert_eq!(c.forward_check.unwrap().accuracy, a);
+        }
+    }
+
+    /// serde reads the first value and fills a struct from an array by
+    /// position; a study is exactly one object.
+    #[test]
+    fn a_study_is_one_json_object() {
+        for (text, reason) in [
+            (
+                r#"{"name":"jump"} xyz"#,
+                "trailing characters at line 1 column 17",
+            ),
+            (
+                "{\"name\": \"a\"}\n{\"name\": \"b\"}",
+                "trailing characters at line 2 column 1",
+            ),
+            ("[]", "expected a JSON object, got an array"),
+            (
+                r#"["text", "myname", "models/jumper.json"]"#,
+                "expected a JSON object, got an array",
+            ),
+            ("null", "expected a JSON object, got null"),
+            ("  ", "empty; expected a JSON object"),
+            (
+                "<?xml",
+                "expected a JSON object: expected value at line 1 column 1",
+            ),
+        ] {
+            let e = SolveStudy::from_json_str(text, "s.json")
+                .unwrap_err()
+                .to_string();
+            assert_eq!(e, format!("s.json: (document): {reason}"), "{text}");
+        }
+        let s = SolveStudy::from_json_str(" \n{\"name\": \"a\"} \n\t", "s.json").unwrap();
+        assert_eq!(s.name.as_deref(), Some("a"));
     }
 
     #[test]

@@ -186,3 +186,105 @@ fn eval_reports_the_static_squat_at_rest() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Simbody asserts accuracy < 1 and aborts the process; a tiny accuracy,
+/// fixed step or report interval never ends: all are refused as bad input.
+#[test]
+fn accuracies_that_would_abort_or_hang_are_refused() {
+    let out = tmp("accuracy");
+    for (args, want) in [
+        (vec!["--accuracy", "1"], "accuracy: "),
+        (vec!["--accuracy", "10"], "accuracy: "),
+        (
+            vec!["--integrator", "CPodes", "--accuracy", "10"],
+            "accuracy: ",
+        ),
+        (vec!["--accuracy", "1e-300"], "accuracy: "),
+        (
+            vec!["--integrator", "ExplicitEuler", "--accuracy", "1e-12"],
+            "fixed step",
+        ),
+    ] {
+        let o = leap()
+            .arg("simulate")
+            .args(&args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(want), "{args:?}: {err}");
+        if !args.contains(&"ExplicitEuler") {
+            assert!(err.contains("[1e-12, 1)"), "{args:?}: {err}");
+        }
+        assert!(!err.contains("Assertion"), "{args:?}: {err}");
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+#[test]
+fn nonsense_simulate_study_settings_name_the_field() {
+    let out = tmp("bad-study");
+    let model = std::env::current_dir().unwrap().join("models/jumper.json");
+    for (json, field, reason) in [
+        (
+            r#"{"bang_bang": {"on_time": 0.3, "off_time": 0.1}}"#,
+            "bang_bang.off_time",
+            "must be after on_time",
+        ),
+        (
+            r#"{"bang_bang": {"on_time": -0.2, "off_time": 0.3}}"#,
+            "bang_bang.on_time",
+            "≥ 0",
+        ),
+        (r#"{"report_interval": 1e-9}"#, "report_interval", "rows"),
+        (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1)"),
+    ] {
+        let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
+        v["model"] = model.display().to_string().into();
+        let study = out.join("study.json");
+        std::fs::write(&study, v.to_string()).unwrap();
+        let o = leap()
+            .args(["simulate", "--study"])
+            .arg(&study)
+            .arg("--out")
+            .arg(out.join("results"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{json}: {err}");
+        assert!(
+            err.contains(&format!("{}: {field}: ", study.display())) && err.contains(reason),
+            "{json}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// Model errors reach the command line naming file and field (here one that
+/// `leap eval`'s per-sphere report would otherwise have lost).
+#[test]
+fn a_model_with_duplicate_sphere_names_is_refused() {
+    let out = tmp("dup-sphere");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    v["forces"]["contact"]["spheres"][9]["name"] = "heel_lat_l".into();
+    let model = out.join("m.json");
+    std::fs::write(&model, v.to_string()).unwrap();
+    let o = leap()
+        .args(["squat", "--model"])
+        .arg(&model)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{}: forces.contact.spheres[9].name: sphere 'heel_lat_l' is defined twice",
+            model.display()
+        )),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}

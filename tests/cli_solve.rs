@@ -446,3 +446,93 @@ fn dump_qps_writes_each_iteration_qp_into_out() {
     let _ = std::fs::remove_dir_all(&cwd);
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A study file in a fresh directory, with the default model's absolute
+/// path in place of `MODEL`.
+fn study_file(tag: &str, json: &str) -> PathBuf {
+    let model = std::env::current_dir().unwrap().join("models/jumper.json");
+    let path = fresh_dir(tag).join("study.json");
+    std::fs::write(&path, json.replace("MODEL", &model.display().to_string())).unwrap();
+    path
+}
+
+/// Refused before the solve: what Simbody would abort on after it, text
+/// serde leaves unread, an array it fills by position, and a mesh that
+/// would overflow the allocation or run for hours.
+#[test]
+fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
+    for (tag, json, field, reason) in [
+        (
+            "fc_acc1",
+            r#"{"model": "MODEL", "forward_check": {"accuracy": 1}}"#,
+            "forward_check.accuracy",
+            "must be a relative error tolerance in [1e-12, 1), got 1e0",
+        ),
+        (
+            "fc_acc_tiny",
+            r#"{"model": "MODEL", "forward_check": {"accuracy": 1e-300}}"#,
+            "forward_check.accuracy",
+            "must be a relative error tolerance in [1e-12, 1), got 1e-300",
+        ),
+        (
+            "trailing",
+            r#"{"model": "MODEL"} garbage"#,
+            "(document)",
+            "trailing characters at line 1 column",
+        ),
+        (
+            "concat",
+            "{\"model\": \"MODEL\"}\n{\"mesh\": {\"num_mesh_intervals\": -4}}",
+            "(document)",
+            "trailing characters at line 2 column 1",
+        ),
+        (
+            "positional",
+            r#"["free text", "myname", "MODEL"]"#,
+            "(document)",
+            "expected a JSON object, got an array",
+        ),
+        (
+            "mesh_huge",
+            r#"{"model": "MODEL", "mesh": {"num_mesh_intervals": 100000}}"#,
+            "mesh.num_mesh_intervals",
+            "must be at most 1000, got 100000",
+        ),
+    ] {
+        let study = study_file(tag, json);
+        let out = study.parent().unwrap().join("out");
+        let err = refused(&[
+            "solve",
+            study.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            err.contains(&format!("{}: {field}: {reason}", study.display())),
+            "{tag}: {err}"
+        );
+        assert!(!out.exists(), "{tag}: {out:?} was created");
+        std::fs::remove_dir_all(study.parent().unwrap()).ok();
+    }
+}
+
+#[test]
+fn num_mesh_intervals_beyond_the_maximum_is_refused_without_a_panic() {
+    for args in [
+        vec!["solve", "--num-mesh-intervals", "9223372036854775807"],
+        vec!["solve", "--num-mesh-intervals", "100000"],
+        vec![
+            "bench",
+            "solve",
+            "--num-mesh-intervals",
+            "28,9223372036854775807",
+        ],
+    ] {
+        let err = refused(&args);
+        assert!(
+            err.contains("command line: --num-mesh-intervals: must be at most 1000"),
+            "{args:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+}

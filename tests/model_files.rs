@@ -233,3 +233,172 @@ fn missing_file_is_an_io_error_naming_it() {
     assert!(matches!(e, ModelError::Io { .. }));
     assert!(e.to_string().contains("models/no_such_model.json"));
 }
+
+/// The default model as JSON, to break one thing at a time.
+fn jumper_json() -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap()
+}
+
+/// The error of a model built from `v` (named "m.json"), checked to name
+/// the file.
+fn refused(v: &serde_json::Value) -> ModelError {
+    let e = Model::from_json_str(&v.to_string(), "m.json").unwrap_err();
+    assert!(e.to_string().starts_with("m.json: "), "{e}");
+    e
+}
+
+fn muscle_index(v: &serde_json::Value, name: &str) -> usize {
+    v["forces"]["muscles"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|m| m["name"] == name)
+        .unwrap()
+}
+
+/// serde reads the first value and fills a struct from an array by
+/// position; a model file is exactly one object.
+#[test]
+fn a_model_file_is_one_json_object() {
+    let text = std::fs::read_to_string("models/jumper.json").unwrap();
+    for (doc, reason) in [
+        (format!("{text}\n\n{{}}"), "trailing characters at line"),
+        (format!("{text} xyz"), "trailing characters at line"),
+        ("[]".to_string(), "expected a JSON object, got an array"),
+        (
+            r#"["jump", [], [0, -9.8, 0]]"#.to_string(),
+            "expected a JSON object, got an array",
+        ),
+    ] {
+        let e = Model::from_json_str(&doc, "m.json").unwrap_err();
+        assert!(matches!(e, ModelError::Parse { .. }), "{e}");
+        assert_eq!(e.field(), "(document)", "{e}");
+        assert!(
+            e.to_string()
+                .starts_with(&format!("m.json: (document): {reason}")),
+            "{e}"
+        );
+    }
+}
+
+/// `leap eval` reports contact forces per sphere name.
+#[test]
+fn contact_spheres_need_distinct_names_and_at_least_one() {
+    let mut v = jumper_json();
+    v["forces"]["contact"]["spheres"][1]["name"] =
+        v["forces"]["contact"]["spheres"][0]["name"].clone();
+    let e = refused(&v);
+    assert_eq!(e.field(), "forces.contact.spheres[1].name");
+    assert!(
+        e.to_string()
+            .contains("sphere 'heel_lat_r' is defined twice"),
+        "{e}"
+    );
+    v["forces"]["contact"]["spheres"] = serde_json::json!([]);
+    let e = refused(&v);
+    assert_eq!(e.field(), "forces.contact.spheres");
+    assert!(e.to_string().contains("no contact spheres"), "{e}");
+}
+
+/// Refused at load instead of as "the feet do not touch the ground" from
+/// the static squat.
+#[test]
+fn jump_models_need_gravity_down_muscles_and_contact() {
+    for g in [[0.0, 0.0, 0.0], [0.0, 9.81, 0.0], [-9.81, 0.0, 0.0]] {
+        let mut v = jumper_json();
+        v["gravity"] = serde_json::json!(g);
+        let e = refused(&v);
+        assert_eq!(e.field(), "gravity");
+        assert!(e.to_string().contains("must point down (−y)"), "{e}");
+    }
+    let mut v = jumper_json();
+    v["forces"]["muscles"] = serde_json::json!([]);
+    let e = refused(&v);
+    assert_eq!(e.field(), "forces.muscles");
+    assert!(e.to_string().contains("no muscles: a jump model"), "{e}");
+    let mut v = jumper_json();
+    v["forces"].as_object_mut().unwrap().remove("contact");
+    let e = refused(&v);
+    assert_eq!(e.field(), "forces.contact");
+    assert!(e.to_string().contains("needs foot-ground contact"), "{e}");
+    // A model without contact may point gravity anywhere.
+    let mut p: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/double_pendulum.json").unwrap())
+            .unwrap();
+    p["gravity"] = serde_json::json!([9.81, 0.0, 0.0]);
+    let m = Model::from_json_str(&p.to_string(), "p.json").unwrap();
+    assert_eq!(m.gravity, [9.81, 0.0, 0.0]);
+}
+
+/// The symmetric system carries each left muscle by its right partner:
+/// a sided muscle without its partner is refused naming both.
+#[test]
+fn sided_muscles_need_their_mirror_partner() {
+    let mut v = jumper_json();
+    let k = muscle_index(&v, "ext_dig_l");
+    v["forces"]["muscles"].as_array_mut().unwrap().remove(k);
+    let e = refused(&v);
+    assert_eq!(
+        e.field(),
+        format!("forces.muscles[{}].name", muscle_index(&v, "ext_dig_r"))
+    );
+    assert!(
+        e.to_string()
+            .contains("right muscle 'ext_dig_r' has no mirror partner 'ext_dig_l'"),
+        "{e}"
+    );
+    let mut v = jumper_json();
+    let k = muscle_index(&v, "ercspn_r");
+    v["forces"]["muscles"][k]["name"] = "ercspn".into();
+    let e = refused(&v);
+    assert_eq!(
+        e.field(),
+        format!("forces.muscles[{}].name", muscle_index(&v, "ercspn_l"))
+    );
+    assert!(
+        e.to_string().contains(
+            "left muscle 'ercspn_l' has no mirror partner 'ercspn_r' ('ercspn' has no side suffix)"
+        ),
+        "{e}"
+    );
+    // A midline muscle (no side suffix) is carried once.
+    let l = muscle_index(&v, "ercspn_l");
+    v["forces"]["muscles"].as_array_mut().unwrap().remove(l);
+    let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    assert!(m.muscles.iter().any(|m| m.spec.name == "ercspn"));
+}
+
+#[test]
+fn mirror_muscles_must_have_equal_parameters_and_the_error_names_the_parameter() {
+    for (param, value) in [
+        ("max_isometric_force", 1e300),
+        ("activation_time_constant", 0.02),
+    ] {
+        let mut v = jumper_json();
+        let (l, r) = (muscle_index(&v, "iliacus_l"), muscle_index(&v, "iliacus_r"));
+        v["forces"]["muscles"][l][param] = value.into();
+        let e = refused(&v);
+        assert_eq!(e.field(), format!("forces.muscles[{l}].{param}"));
+        assert!(
+            e.to_string().contains(&format!(
+                "muscle 'iliacus_l' is not the mirror image of 'iliacus_r' (forces.muscles[{r}]): {param} is {value:?} against"
+            )),
+            "{e}"
+        );
+    }
+}
+
+/// Without coordinate pairs the legs move apart, and the symmetric system
+/// the jump is solved on cannot carry a left muscle by its right one.
+#[test]
+fn a_jump_model_with_paired_muscles_needs_symmetry_pairs() {
+    let mut v = jumper_json();
+    v["symmetry"] = serde_json::json!([]);
+    let e = refused(&v);
+    assert_eq!(e.field(), "symmetry");
+    assert!(
+        e.to_string()
+            .contains("no right/left coordinate pairs, but the muscles come in pairs ('ercspn_r', 'ercspn_l')"),
+        "{e}"
+    );
+}

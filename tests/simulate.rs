@@ -93,3 +93,113 @@ fn bang_bang_jump_leaves_the_ground_and_reaches_its_apex() {
     assert_eq!(grf.time.len(), traj.time.len());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+fn study_error(json: &str) -> String {
+    let st = leap::simulate::SimulateStudy::from_json_str(json, "sim.json").unwrap();
+    st.check("sim.json").unwrap_err().to_string()
+}
+
+/// Settings that would abort (Simbody asserts accuracy < 1), never end or
+/// make no sense are refused naming the study and the field.
+#[test]
+fn simulate_study_values_are_checked() {
+    for (json, want) in [
+        (r#"{"accuracy": 1}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1), got 1e0"),
+        (r#"{"accuracy": 10}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1), got 1e1"),
+        (r#"{"accuracy": 1e-300}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1)"),
+        (r#"{"accuracy": 0}"#, "sim.json: accuracy: must be positive, got 0"),
+        (r#"{"integrator": "DormandPrince", "accuracy": 2}"#, "sim.json: accuracy: must be a relative error tolerance"),
+        (r#"{"integrator": "ExplicitEuler", "accuracy": 1e-12}"#, "sim.json: accuracy: ExplicitEuler's fixed step must be at least 1e-6 s"),
+        (r#"{"integrator": "ExplicitEuler", "accuracy": 1e-5, "t_max": 20}"#, "sim.json: accuracy: ExplicitEuler's fixed step of 1e-5 s takes 2.0e6 steps to t_max = 20 s; at most 1e6"),
+        (r#"{"report_interval": 1e-9}"#, "sim.json: report_interval: 1e-9 s over t_max = 1 s would report 1.0e9 rows; at most 1e5"),
+        (r#"{"report_interval": 0}"#, "sim.json: report_interval: must be positive, got 0"),
+        (r#"{"t_max": -1}"#, "sim.json: t_max: must be positive, got -1"),
+        (r#"{"integrator": "Verlet"}"#, "sim.json: integrator: unknown integrator 'Verlet'"),
+        (r#"{"bang_bang": {"on_time": 0.3, "off_time": 0.1}}"#, "sim.json: bang_bang.off_time: must be after on_time (0.3 s), got 0.1"),
+        (r#"{"bang_bang": {"on_time": 0.2, "off_time": 0.2}}"#, "sim.json: bang_bang.off_time: must be after on_time"),
+        (r#"{"bang_bang": {"on_time": -0.1, "off_time": 0.3}}"#, "sim.json: bang_bang.on_time: must be a time ≥ 0 s"),
+    ] {
+        let e = study_error(json);
+        assert!(e.starts_with(want), "{json}: {e}");
+    }
+    let ok = leap::simulate::SimulateStudy::from_json_str(
+        r#"{"integrator": "ExplicitEuler", "accuracy": 1e-4, "bang_bang": {"on_time": 0, "off_time": 0.3}}"#,
+        "sim.json",
+    )
+    .unwrap();
+    assert!(matches!(
+        ok.check("sim.json").unwrap(),
+        leap::simulate::IntegratorChoice::Simbody(leap::simbody::SimbodyIntegrator::ExplicitEuler)
+    ));
+}
+
+#[test]
+fn a_simulate_study_is_one_json_object() {
+    for (text, reason) in [
+        (
+            r#"{"t_max": 1} garbage"#,
+            "trailing characters at line 1 column 14",
+        ),
+        (
+            r#"{"t_max": 1}{"t_max": 2}"#,
+            "trailing characters at line 1 column 13",
+        ),
+        ("[]", "expected a JSON object, got an array"),
+        (
+            r#"["m.json", "RungeKutta3"]"#,
+            "expected a JSON object, got an array",
+        ),
+    ] {
+        let e = match leap::simulate::SimulateStudy::from_json_str(text, "sim.json") {
+            Ok(_) => panic!("{text} was accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert_eq!(e, format!("sim.json: (document): {reason}"), "{text}");
+    }
+}
+
+/// Called directly, the Simbody simulation refuses an accuracy Simbody
+/// would abort on, and a report interval that would never end, as a
+/// failure at t = 0 instead.
+#[test]
+fn simbody_simulation_refuses_what_would_abort_or_hang() {
+    use std::sync::Arc;
+    let model = leap::model::Model::from_file("models/jumper_reduced.json").unwrap();
+    let laws = Arc::new(leap::laws::OpenSimLaws::new(&model).unwrap());
+    let eq = Arc::new(StateEquation::new(&model, true, PathSmoothing::Exact).unwrap());
+    let exc = BangBang {
+        intervals: vec![None; eq.nm()],
+        off_level: 0.01,
+    };
+    let x0 = vec![0.0; eq.nx()];
+    let run = |accuracy: f64, report_interval: f64| {
+        leap::simulate::simulate_simbody(
+            &eq,
+            &laws,
+            &exc,
+            &x0,
+            1.0,
+            leap::simbody::SimbodyIntegrator::RungeKuttaMerson,
+            accuracy,
+            1.0,
+            report_interval,
+        )
+        .map(|_| ())
+        .unwrap_err()
+    };
+    let f = run(1.0, 1e-3);
+    assert_eq!(f.t, 0.0);
+    assert!(
+        f.cause
+            .starts_with("accuracy: must be a relative error tolerance in [1e-12, 1)"),
+        "{}",
+        f.cause
+    );
+    let f = run(1e-5, 1e-9);
+    assert!(
+        f.cause
+            .starts_with("report_interval: 1e-9 s over t_max = 1 s"),
+        "{}",
+        f.cause
+    );
+}
