@@ -70,6 +70,8 @@ pub fn read_inputs(
         reason,
     };
     let text = std::fs::read_to_string(path).map_err(|e| err("(file)".into(), e.to_string()))?;
+    // A byte-order mark (spreadsheet exports write one) is not data.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let states = eq.state_names();
     let controls = eq.control_names();
     let is_csv = path
@@ -86,7 +88,11 @@ pub fn read_inputs(
         let (_, header) = lines
             .next()
             .ok_or_else(|| err("line 1".into(), "empty file".into()))?;
-        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        // Labels may be quoted, as spreadsheets write them.
+        let cols: Vec<&str> = header
+            .split(',')
+            .map(|c| c.trim().trim_matches('"'))
+            .collect();
         let find = |name: &str| cols.iter().position(|c| *c == name);
         let xi: Vec<usize> = states
             .iter()

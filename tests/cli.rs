@@ -239,3 +239,47 @@ fn zero_repeats_are_refused() {
         "{err}"
     );
 }
+
+/// A CSV as spreadsheets write it (byte-order mark, quoted labels) reads
+/// as the same evaluation as the JSON input.
+#[test]
+fn eval_reads_a_spreadsheet_csv() {
+    let (dir, squat) = squat_input("eval-csv");
+    let (st, ex) = (
+        squat["state"].as_object().unwrap(),
+        squat["excitation"].as_object().unwrap(),
+    );
+    let labels: Vec<String> = st
+        .keys()
+        .chain(ex.keys())
+        .map(|k| format!("\"{k}\""))
+        .collect();
+    let values: Vec<String> = st
+        .values()
+        .chain(ex.values())
+        .map(|v| format!("{:e}", v.as_f64().unwrap()))
+        .collect();
+    let csv = dir.join("squat.csv");
+    std::fs::write(
+        &csv,
+        format!("\u{feff}{}\n{}\n", labels.join(","), values.join(",")),
+    )
+    .unwrap();
+    let json = dir.join("squat.json");
+    std::fs::write(&json, serde_json::to_vec(&squat).unwrap()).unwrap();
+    let run = |f: &std::path::Path| -> serde_json::Value {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--json", "--input"])
+            .arg(f)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    assert_eq!(
+        run(&csv)["state_derivative"],
+        run(&json)["state_derivative"]
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
