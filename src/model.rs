@@ -842,21 +842,11 @@ impl Model {
                     format!("muscle name '{}' is empty or defined twice", m.name),
                 ));
             }
-            let positive = [
-                ("max_isometric_force", m.max_isometric_force),
-                ("optimal_fiber_length", m.optimal_fiber_length),
-                ("tendon_slack_length", m.tendon_slack_length),
-                ("max_contraction_velocity", m.max_contraction_velocity),
-                ("activation_time_constant", m.activation_time_constant),
-                ("deactivation_time_constant", m.deactivation_time_constant),
-                ("FmaxTendonStrain", m.FmaxTendonStrain),
-                ("FmaxMuscleStrain", m.FmaxMuscleStrain),
-                ("KshapeActive", m.KshapeActive),
-                ("KshapePassive", m.KshapePassive),
-                ("Af", m.Af),
-                ("Flen", m.Flen),
-            ];
-            for (name, v) in positive {
+            // Every parameter is positive but the pennation angle.
+            for (name, v) in m.parameters() {
+                if name == "pennation_angle_at_optimal" {
+                    continue;
+                }
                 if !(v.is_finite() && v > 0.0) {
                     return Err(err(
                         p(name),
@@ -1100,6 +1090,33 @@ impl Model {
     }
 }
 
+impl MuscleSpec {
+    /// The muscle's parameters by their model-file names.
+    fn parameters(&self) -> [(&'static str, f64); 13] {
+        [
+            ("max_isometric_force", self.max_isometric_force),
+            ("optimal_fiber_length", self.optimal_fiber_length),
+            ("tendon_slack_length", self.tendon_slack_length),
+            (
+                "pennation_angle_at_optimal",
+                self.pennation_angle_at_optimal,
+            ),
+            ("max_contraction_velocity", self.max_contraction_velocity),
+            ("activation_time_constant", self.activation_time_constant),
+            (
+                "deactivation_time_constant",
+                self.deactivation_time_constant,
+            ),
+            ("FmaxTendonStrain", self.FmaxTendonStrain),
+            ("FmaxMuscleStrain", self.FmaxMuscleStrain),
+            ("KshapeActive", self.KshapeActive),
+            ("KshapePassive", self.KshapePassive),
+            ("Af", self.Af),
+            ("Flen", self.Flen),
+        ]
+    }
+}
+
 /// Gravity of a model standing on the ground, whose half-space has the
 /// normal +y: `[0, -g, 0]` with g > 0. (A model without contact, a
 /// pendulum say, may point it anywhere.)
@@ -1148,24 +1165,7 @@ fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
             continue; // compared from its right partner
         }
         let l = &muscles[j];
-        let params = |m: &MuscleSpec| {
-            [
-                ("max_isometric_force", m.max_isometric_force),
-                ("optimal_fiber_length", m.optimal_fiber_length),
-                ("tendon_slack_length", m.tendon_slack_length),
-                ("pennation_angle_at_optimal", m.pennation_angle_at_optimal),
-                ("max_contraction_velocity", m.max_contraction_velocity),
-                ("activation_time_constant", m.activation_time_constant),
-                ("deactivation_time_constant", m.deactivation_time_constant),
-                ("FmaxTendonStrain", m.FmaxTendonStrain),
-                ("FmaxMuscleStrain", m.FmaxMuscleStrain),
-                ("KshapeActive", m.KshapeActive),
-                ("KshapePassive", m.KshapePassive),
-                ("Af", m.Af),
-                ("Flen", m.Flen),
-            ]
-        };
-        for ((name, vr), (_, vl)) in params(m).into_iter().zip(params(l)) {
+        for ((name, vr), (_, vl)) in m.parameters().into_iter().zip(l.parameters()) {
             if vr != vl {
                 return Err((
                     format!("forces.muscles[{j}].{name}"),

@@ -762,20 +762,12 @@ impl SimulateStudy {
     /// are checked by [`SimulateStudy::check`] once command-line options
     /// have overridden them.
     pub fn from_file(path: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
-            file: path.into(),
-            source,
-        })?;
-        Self::from_json_str(&text, &path.display().to_string())
+        crate::study::read_study(path)
     }
 
     /// Parse study JSON; `origin` names it in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
-        crate::model::parse_json_object(text).map_err(|e| StudyError::Field {
-            origin: origin.into(),
-            field: e.path,
-            reason: e.reason,
-        })
+        crate::study::parse_study(text, origin)
     }
 
     /// Check every value and return the integrator; `origin` names the

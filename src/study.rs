@@ -251,24 +251,38 @@ pub struct Overrides {
     pub dump_qps: bool,
 }
 
+/// Read a study file of any kind (`leap solve`'s, `leap simulate`'s): one
+/// JSON object, its errors naming the file and the field's JSON path.
+pub fn read_study<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
+    let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
+        file: path.into(),
+        source,
+    })?;
+    parse_study(&text, &path.display().to_string())
+}
+
+/// Parse study JSON (one object); `origin` names it in errors.
+pub fn parse_study<T: serde::de::DeserializeOwned>(
+    text: &str,
+    origin: &str,
+) -> Result<T, StudyError> {
+    parse_json_object(text).map_err(|e| StudyError::Field {
+        origin: origin.into(),
+        field: e.path,
+        reason: e.reason,
+    })
+}
+
 impl SolveStudy {
     /// Read a study file (unknown fields and wrong types are errors naming
     /// the JSON path).
     pub fn from_file(path: &Path) -> Result<Self, StudyError> {
-        let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
-            file: path.into(),
-            source,
-        })?;
-        Self::from_json_str(&text, &path.display().to_string())
+        read_study(path)
     }
 
     /// Parse study JSON (one object); `origin` names it in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
-        parse_json_object(text).map_err(|e| StudyError::Field {
-            origin: origin.into(),
-            field: e.path,
-            reason: e.reason,
-        })
+        parse_study(text, origin)
     }
 
     /// Fill in the defaults, resolve paths against the directory of

@@ -147,17 +147,20 @@ fn eval_refuses_inputs_outside_their_physical_range() {
             "no evaluations",
         ),
     ];
-    for (name, edit, field) in cases {
-        let mut s = squat.clone();
-        edit(&mut s);
+    let eval = |name: &str, input: &serde_json::Value| {
         let file = dir.join(format!("{name}.json"));
-        std::fs::write(&file, serde_json::to_vec(&s).unwrap()).unwrap();
-        let o = Command::cargo_bin("leap")
+        std::fs::write(&file, serde_json::to_vec(input).unwrap()).unwrap();
+        Command::cargo_bin("leap")
             .unwrap()
             .args(["eval", "--input"])
             .arg(&file)
             .output()
-            .unwrap();
+            .unwrap()
+    };
+    for (name, edit, field) in cases {
+        let mut s = squat.clone();
+        edit(&mut s);
+        let o = eval(name, &s);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{name}: {err}");
         assert!(
@@ -166,14 +169,7 @@ fn eval_refuses_inputs_outside_their_physical_range() {
         );
     }
     // The squat itself is in range.
-    let file = dir.join("ok.json");
-    std::fs::write(&file, serde_json::to_vec(&squat).unwrap()).unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["eval", "--input"])
-        .arg(&file)
-        .output()
-        .unwrap();
+    let o = eval("ok", &squat);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::remove_dir_all(&dir).ok();
 }
