@@ -146,7 +146,7 @@ pub fn read_inputs(
         }
         return Ok(out);
     }
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| {
+    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         err(
             format!("line {}, column {}", e.line(), e.column()),
             e.to_string(),
@@ -248,7 +248,7 @@ fn check_ranges(
                 format!("an activation must be in [0, 1], got {v}"),
             ));
         }
-        if name.ends_with("/fiber_length") && !(v > 0.0) {
+        if name.ends_with("/fiber_length") && v <= 0.0 {
             return Err((
                 name.clone(),
                 format!("a fibre length must be positive, got {v} m"),

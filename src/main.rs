@@ -636,7 +636,6 @@ fn run(cli: Cli) -> Result<ExitCode> {
     }
 }
 
-#[allow(clippy::too_many_arguments)]
 /// A count of runs: a whole number ≥ 1.
 fn at_least_one(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
@@ -646,6 +645,7 @@ fn at_least_one(s: &str) -> Result<usize, String> {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn simulate(
     study: Option<PathBuf>,
     model: Option<PathBuf>,

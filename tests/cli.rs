@@ -117,10 +117,17 @@ fn squat_input(name: &str) -> (std::path::PathBuf, serde_json::Value) {
 /// muscles take activations and excitations in [0, 1] and positive fibre
 /// lengths), both forms of one input, and a file without evaluations,
 /// naming the file and the field; exit code 2.
+/// A change to an input, by name, and the field its error must name.
+type InputCase = (
+    &'static str,
+    Box<dyn Fn(&mut serde_json::Value)>,
+    &'static str,
+);
+
 #[test]
 fn eval_refuses_inputs_outside_their_physical_range() {
     let (dir, squat) = squat_input("eval-range");
-    let cases: Vec<(&str, Box<dyn Fn(&mut serde_json::Value)>, &str)> = vec![
+    let cases: Vec<InputCase> = vec![
         (
             "activation",
             Box::new(|s| s["state"]["/forceset/soleus_r/activation"] = 2.0.into()),
