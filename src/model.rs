@@ -322,10 +322,10 @@ pub struct StationSpec {
 /// A model file could not be used. `path` is the JSON path of the field.
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
-    #[error("{file}: cannot read: {source}")]
+    #[error("{file}: cannot read: {error}")]
     Io {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     #[error("{file}: {path}: {reason}")]
     Parse {
@@ -518,9 +518,9 @@ impl Model {
     /// Read and validate a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| ModelError::Io {
             file: path.into(),
-            source,
+            error,
         })?;
         Self::from_json_str(&text, path)
     }

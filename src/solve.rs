@@ -57,10 +57,10 @@ pub enum SolveError {
     Sto(#[from] StoError),
     #[error("{file}: {reason}")]
     Guess { file: PathBuf, reason: String },
-    #[error("{file}: {source}")]
+    #[error("{file}: {error}")]
     Io {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
 }
 
@@ -264,9 +264,9 @@ pub fn run(
         }
     };
     // The results directory only once the problem is set up.
-    create_results_dir(dir).map_err(|source| SolveError::Io {
+    create_results_dir(dir).map_err(|error| SolveError::Io {
         file: dir.clone(),
-        source,
+        error,
     })?;
     let mut settings = config.settings.clone();
     settings.verbose = verbose;
@@ -303,9 +303,9 @@ pub fn run(
     let p = dir.join(format!("{name}_history.csv"));
     result
         .write_history_csv(&p)
-        .map_err(|source| SolveError::Io {
+        .map_err(|error| SolveError::Io {
             file: p.clone(),
-            source,
+            error,
         })?;
     files.push(p);
 
@@ -327,7 +327,7 @@ pub fn run(
     files.push(p.clone());
     report.output_files = files.iter().map(|f| f.display().to_string()).collect();
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
-    std::fs::write(&p, text).map_err(|source| SolveError::Io { file: p, source })?;
+    std::fs::write(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
     Ok(report)
 }
 

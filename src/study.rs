@@ -58,10 +58,10 @@ pub const DEFAULT_OUTPUT_DIRECTORY: &str = "results";
 /// A study could not be read, or one of its settings is unusable.
 #[derive(Debug, thiserror::Error)]
 pub enum StudyError {
-    #[error("{file}: cannot read the study file: {source}")]
+    #[error("{file}: cannot read the study file: {error}")]
     Io {
         file: PathBuf,
-        source: std::io::Error,
+        error: std::io::Error,
     },
     /// `origin` is the study file, or "command line" for an override.
     #[error("{origin}: {field}: {reason}")]
@@ -254,9 +254,9 @@ pub struct Overrides {
 /// Read a study file of any kind (`leap solve`'s, `leap simulate`'s): one
 /// JSON object, its errors naming the file and the field's JSON path.
 pub fn read_study<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
-    let text = std::fs::read_to_string(path).map_err(|source| StudyError::Io {
+    let text = std::fs::read_to_string(path).map_err(|error| StudyError::Io {
         file: path.into(),
-        source,
+        error,
     })?;
     parse_study(&text, &path.display().to_string())
 }
