@@ -304,6 +304,11 @@ fn run(cli: Cli) -> Result<ExitCode> {
             if samples == 0 {
                 anyhow::bail!("--samples must be at least 1");
             }
+            if samples > 1_000_000 {
+                anyhow::bail!(
+                    "--samples: at most 1000000, got {samples} (about a millisecond each: a million take a quarter of an hour)"
+                );
+            }
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::crosscheck::run(&m, samples, seed)
                 .with_context(|| format!("cross-check of {}", model.display()))?;

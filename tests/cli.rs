@@ -48,13 +48,16 @@ fn bad_model_files_exit_nonzero_naming_file_and_field() {
 
 #[test]
 fn zero_samples_is_refused() {
-    let out = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["crosscheck", "--samples", "0"])
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--samples"));
+    // Zero, and more than run in a quarter of an hour (1e8 ran for a day).
+    for n in ["0", "100000000"] {
+        let out = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["crosscheck", "--samples", n])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&out.stderr).contains("--samples"));
+    }
 }
 
 /// `leap analyze` on a states file of another system, and on one with a

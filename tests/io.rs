@@ -227,6 +227,11 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
     repeated.time[2] = repeated.time[1];
     let hip = "/jointset/hip_r/hip_flexion_r/value";
     assert_eq!(rad.labels[3], hip);
+    // An excitation outside [0, 1].
+    let mut strong = rad.clone();
+    let soleus = "/forceset/soleus_r";
+    let k = rad.labels.iter().position(|l| l == soleus).unwrap();
+    strong.rows[2][k] = 5.0;
     for (name, table, want) in [
         (
             "nan",
@@ -234,6 +239,11 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
             format!("column '{hip}': row 3 (t = 0.1): NaN is not a finite number"),
         ),
         ("one", one, "1 data row; at least 2 are needed".to_string()),
+        (
+            "strong",
+            strong,
+            format!("column '{soleus}': row 3 (t = 0.1): excitation 5 is outside [0, 1]"),
+        ),
         (
             "inf",
             inf,
