@@ -278,6 +278,12 @@ pub fn evaluate(
     let mut xdot = vec![0.0; eq.nx()];
     eq.rhs(laws, &mut ws, x, u, &mut xdot)?;
     let names = eq.state_names();
+    if let Some(k) = xdot.iter().position(|v| !v.is_finite()) {
+        return Err(crate::ode::OdeError::NotFinite {
+            state: names[k].clone(),
+            value: xdot[k],
+        });
+    }
     let model = &eq.model;
     let coord_name = |k: usize| model.coordinates[eq.system.coordinates[k]].name.clone();
     let mut muscles = BTreeMap::new();

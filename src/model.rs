@@ -1049,20 +1049,21 @@ impl Model {
             // The jump is solved on the symmetric system, which pairs
             // <stem>_r with <stem>_l: without coordinate pairs their legs move
             // apart and no pair can be a mirror image.
-            let sided = model.muscles.iter().find_map(|m| {
-                let stem = m.spec.name.strip_suffix("_r")?;
-                let left = format!("{stem}_l");
-                model
-                    .muscles
-                    .iter()
-                    .any(|o| o.spec.name == left)
-                    .then(|| (m.spec.name.clone(), left))
-            });
-            if let (true, Some((right, left))) = (model.symmetry.is_empty(), sided) {
-                return Err(err(
-                    "symmetry".into(),
-                    format!("no right/left coordinate pairs, but the muscles come in pairs ('{right}', '{left}'): a jump model is solved on the symmetric system, which needs the pairs (e.g. [\"hip_flexion_r\", \"hip_flexion_l\"])"),
-                ));
+            if model.symmetry.is_empty() {
+                let paired = model.muscles.iter().find_map(|m| {
+                    let left = format!("{}_l", m.spec.name.strip_suffix("_r")?);
+                    model
+                        .muscles
+                        .iter()
+                        .any(|o| o.spec.name == left)
+                        .then(|| (m.spec.name.clone(), left))
+                });
+                if let Some((right, left)) = paired {
+                    return Err(err(
+                        "symmetry".into(),
+                        format!("no right/left coordinate pairs, but the muscles come in pairs ('{right}', '{left}'): a jump model is solved on the symmetric system, which needs the pairs (e.g. [\"hip_flexion_r\", \"hip_flexion_l\"])"),
+                    ));
+                }
             }
         }
         Ok(model)

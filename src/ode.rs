@@ -65,6 +65,9 @@ pub enum OdeError {
     },
     #[error("the workspace's given muscle paths belong to another (q, q̇) or system")]
     StaleGivenPaths,
+    /// A derivative that is not finite at the state given.
+    #[error("the derivative of '{state}' is {value} at this state (a coordinate far outside its range?)")]
+    NotFinite { state: String, value: f64 },
 }
 
 /// The state equation of a model's full or symmetric system.

@@ -478,12 +478,15 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
     };
     // Simbody aborts the process on an accuracy ≥ 1; a tiny one or a tiny
     // report interval never ends.
-    let checked = check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator))
-        .map_err(|r| format!("accuracy: {r}"))
-        .and_then(|()| {
-            check_report_interval(report_interval, t_max)
-                .map_err(|r| format!("report_interval: {r}"))
-        });
+    let checked = check_integrator_accuracy(
+        accuracy,
+        &IntegratorChoice::Simbody(integrator),
+        Some(t_max),
+    )
+    .map_err(|r| format!("accuracy: {r}"))
+    .and_then(|()| {
+        check_report_interval(report_interval, t_max).map_err(|r| format!("report_interval: {r}"))
+    });
     if let Err(cause) = checked {
         return Err(fail(0.0, x0, cause, traj));
     }
@@ -635,10 +638,12 @@ pub const MAX_REPORTED_ROWS: f64 = 1e5;
 /// Why `accuracy` is unusable for `integrator`, if it is: a relative error
 /// tolerance in [[`MIN_ACCURACY`], 1) (Simbody asserts accuracy < 1 and
 /// aborts the process otherwise), or for ExplicitEuler a fixed step of at
-/// least [`MIN_FIXED_STEP`] s.
+/// least [`MIN_FIXED_STEP`] s and, where the end time `t_max` is known, at
+/// most [`MAX_FIXED_STEPS`] steps to it.
 pub fn check_integrator_accuracy(
     accuracy: f64,
     integrator: &IntegratorChoice,
+    t_max: Option<f64>,
 ) -> Result<(), String> {
     if !(accuracy.is_finite() && accuracy > 0.0) {
         return Err(format!("must be positive, got {accuracy}"));
@@ -648,6 +653,12 @@ pub fn check_integrator_accuracy(
         if accuracy < MIN_FIXED_STEP {
             return Err(format!(
                 "ExplicitEuler's fixed step must be at least {MIN_FIXED_STEP:e} s, got {accuracy:e}: a million steps to each second of motion already take over a minute"
+            ));
+        }
+        if let Some(t_max) = t_max.filter(|t| t / accuracy > MAX_FIXED_STEPS) {
+            return Err(format!(
+                "ExplicitEuler's fixed step of {accuracy:e} s takes {:.1e} steps to t_max = {t_max} s; at most {MAX_FIXED_STEPS:e}",
+                t_max / accuracy
             ));
         }
     } else if !(MIN_ACCURACY..1.0).contains(&accuracy) {
@@ -785,20 +796,8 @@ impl SimulateStudy {
                 format!("must be positive, got {}", self.t_max),
             ));
         }
-        check_integrator_accuracy(self.accuracy, &choice).map_err(|r| err("accuracy", r))?;
-        if let IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::ExplicitEuler) = choice
-        {
-            let steps = self.t_max / self.accuracy;
-            if steps > MAX_FIXED_STEPS {
-                return Err(err(
-                    "accuracy",
-                    format!(
-                        "ExplicitEuler's fixed step of {:e} s takes {steps:.1e} steps to t_max = {} s; at most {MAX_FIXED_STEPS:e}",
-                        self.accuracy, self.t_max
-                    ),
-                ));
-            }
-        }
+        check_integrator_accuracy(self.accuracy, &choice, Some(self.t_max))
+            .map_err(|r| err("accuracy", r))?;
         check_report_interval(self.report_interval, self.t_max)
             .map_err(|r| err("report_interval", r))?;
         if let Some(bb) = &self.bang_bang {

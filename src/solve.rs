@@ -520,20 +520,13 @@ pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, Solv
     let eq = &tr.ocp.eq;
     let missing = "missing (a guess needs every state and control column)";
     let states = t.finite_columns(path, &eq.state_names(), missing)?;
-    let control_names = eq.control_names();
-    let controls = t.finite_columns(path, &control_names, missing)?;
-    // Excitations are in [0, 1] (OpenSim's muscles; the problem's bounds).
-    for (r, row) in controls.iter().enumerate() {
-        if let Some(k) = row.iter().position(|u| !(0.0..=1.0).contains(u)) {
-            return Err(bad(format!(
-                "column '{}': row {} (t = {}): excitation {} is outside [0, 1]",
-                control_names[k],
-                r + 1,
-                t.time[r],
-                row[k]
-            )));
-        }
-    }
+    // Excitations as a controls file reads them (finite, in [0, 1]).
+    let muscles: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&m| eq.model.muscles[m].spec.name.as_str())
+        .collect();
+    let controls = Controls::from_table(&t, path, &muscles)?.values;
     let tf = *t.time.last().unwrap_or(&0.0);
     tr.guess_from_trajectory(&t.time, &states, &controls, tf)
         .map_err(|e| bad(e.to_string()))

@@ -450,7 +450,8 @@ impl SolveStudy {
                 },
             };
             let accuracy = fc.accuracy.unwrap_or(1e-5);
-            check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator))
+            // t_max is t_f + the flight, unknown before the solve.
+            check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator), None)
                 .map_err(|r| err("forward_check.accuracy", r))?;
             Some(ForwardCheck {
                 integrator,

@@ -156,6 +156,11 @@ fn eval_refuses_inputs_outside_their_physical_range() {
             Box::new(|s| *s = serde_json::json!([])),
             "no evaluations",
         ),
+        (
+            "far",
+            Box::new(|s| s["state"]["/jointset/knee_r/knee_angle_r/value"] = 1e6.into()),
+            "at this state",
+        ),
     ];
     let eval = |name: &str, input: &serde_json::Value| {
         let file = dir.join(format!("{name}.json"));

@@ -242,7 +242,7 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         (
             "strong",
             strong,
-            format!("column '{soleus}': row 3 (t = 0.1): excitation 5 is outside [0, 1]"),
+            format!("column '{soleus}': row 3 (t = 0.1): excitation 5 is not a number in [0, 1]"),
         ),
         (
             "inf",
