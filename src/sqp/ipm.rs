@@ -44,6 +44,7 @@
 //! constraints (IPOPT's rule for τ), reading the inertia off the LDLᵀ
 //! factor's D.
 
+use super::ldlt::FactorLayout;
 use super::norm_inf;
 use clarabel::algebra::CscMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -168,129 +169,6 @@ enum Slot {
     A(usize),
 }
 
-/// Where the supernodes of faer's supernodal LDLᵀ factor keep their
-/// values: supernode s holds columns `begin[s]..begin[s + 1]` of L (unit
-/// lower, D on its diagonal) as a column-major block from `val_ptr[s]`,
-/// of its columns' count plus as many rows as lie below the diagonal
-/// block, `row_idx[row_ptr[s]..row_ptr[s + 1]]`; the system is permuted by
-/// `perm_fwd` (new i = old perm_fwd[i]).
-struct FactorLayout {
-    begin: Vec<usize>,
-    row_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
-    val_ptr: Vec<usize>,
-    perm_fwd: Option<Vec<usize>>,
-}
-
-impl FactorLayout {
-    fn of(symbolic: &SymbolicCholesky<usize>) -> Option<FactorLayout> {
-        match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(_) => None,
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                let ns = s.n_supernodes();
-                if ns == 0 {
-                    return None;
-                }
-                Some(FactorLayout {
-                    begin: s.supernode_begin()[..ns]
-                        .iter()
-                        .copied()
-                        .chain(std::iter::once(s.supernode_end()[ns - 1]))
-                        .collect(),
-                    row_ptr: s.col_ptr_for_row_idx().to_vec(),
-                    row_idx: s.row_idx().to_vec(),
-                    val_ptr: s.col_ptr_for_val().to_vec(),
-                    perm_fwd: symbolic.perm().map(|p| p.arrays().0.to_vec()),
-                })
-            }
-        }
-    }
-
-    /// Solve L D Lᵀ x = v in place (x, v in the factor's order). The
-    /// supernodes of a transcription's KKT system are mostly a column or
-    /// two wide, where plain loops beat faer's dense kernels (measured:
-    /// LEAP's QP set, `examples/ipm_bench`).
-    fn solve(&self, values: &[f64], x: &mut [f64], work: &mut Vec<f64>) {
-        let ns = self.begin.len() - 1;
-        // The rows below a supernode's diagonal block are gathered into
-        // (backward) or accumulated in (forward) the contiguous `work`, so
-        // that the inner loops run over contiguous memory (the jump's
-        // widest supernode has 172 columns).
-        for s in 0..ns {
-            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
-            let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = nc + below.len();
-            let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
-            let (xs, _) = x[start..].split_at_mut(nc);
-            work.clear();
-            work.resize(below.len(), 0.0);
-            let mut any = false;
-            for j in 0..nc {
-                let col = &block[j * nr..(j + 1) * nr];
-                let xj = xs[j];
-                if xj == 0.0 {
-                    continue;
-                }
-                any = true;
-                for (xi, l) in xs[j + 1..].iter_mut().zip(&col[j + 1..nc]) {
-                    *xi -= l * xj;
-                }
-                for (w, l) in work.iter_mut().zip(&col[nc..]) {
-                    *w += l * xj;
-                }
-            }
-            if any {
-                for (&r, w) in below.iter().zip(work.iter()) {
-                    x[r] -= w;
-                }
-            }
-        }
-        for s in 0..ns {
-            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
-            let nr = nc + self.row_ptr[s + 1] - self.row_ptr[s];
-            let block = &values[self.val_ptr[s]..];
-            for j in 0..nc {
-                x[start + j] /= block[j * nr + j];
-            }
-        }
-        for s in (0..ns).rev() {
-            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
-            let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
-            let nr = nc + below.len();
-            let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
-            work.clear();
-            work.extend(below.iter().map(|&r| x[r]));
-            let xs = &mut x[start..start + nc];
-            for j in (0..nc).rev() {
-                let col = &block[j * nr..(j + 1) * nr];
-                xs[j] -= dot(&col[nc..], work) + dot(&col[j + 1..nc], &xs[j + 1..]);
-            }
-        }
-    }
-}
-
-/// Σ a_i b_i over the shorter of the two, in four independent sums (a
-/// single running sum waits on each addition's latency).
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0; 4];
-    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
-    let tail: f64 = ac
-        .remainder()
-        .iter()
-        .zip(bc.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ac.zip(bc) {
-        for k in 0..4 {
-            acc[k] += x[k] * y[k];
-        }
-    }
-    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
-}
-
 /// The interior-point solver of one fixed-pattern QP.
 pub struct Ipm {
     n: usize,
@@ -317,6 +195,10 @@ pub struct Ipm {
     /// The supernodal factor's layout, for [`Ipm::ldlt_solve`] (None when
     /// faer chose the simplicial factorisation).
     layout: Option<FactorLayout>,
+    /// Position in the supernodal factor's values of each KKT entry.
+    l_slot: Vec<usize>,
+    /// The pivot signs in the factor's order.
+    factor_signs: Vec<i8>,
     /// Permuted right-hand side of a solve.
     perm_work: Vec<f64>,
     /// Scratch of the triangular solves.
@@ -365,6 +247,10 @@ pub struct Ipm {
 /// time per iteration, but stalls the dual residual of near-degenerate
 /// QPs (hs039, hs046, the jump's first QP) until clarabel takes over.
 const STATIC_REG: f64 = 1e-9;
+/// Dynamic regularisation of the LDLᵀ pivots: one of the wrong sign for
+/// its row, or within ε of zero, becomes ±δ.
+const REG_DELTA: f64 = 1e-8;
+const REG_EPSILON: f64 = 1e-14;
 /// Bounds of the cumulative Ruiz scaling of a variable or row (clarabel's
 /// `equilibrate_min_scaling` and `equilibrate_max_scaling`).
 const EQUILIBRATION_MIN: f64 = 1e-4;
@@ -527,11 +413,35 @@ impl Ipm {
             symbolic.factorize_numeric_ldlt_scratch::<f64>(par(), params),
             symbolic.solve_in_place_scratch::<f64>(1, par()),
         ]);
-        let signs = (0..dim).map(|j| if j < n { 1 } else { -1 }).collect();
+        let signs: Vec<i8> = (0..dim).map(|j| if j < n { 1 } else { -1 }).collect();
         let nnz = rowind.len();
         let layout = FactorLayout::of(&symbolic);
+        let (mut l_slot, mut factor_signs) = (Vec::new(), Vec::new());
+        if let Some(layout) = &layout {
+            // new i = old fwd[i]; old i is new inv[i].
+            let (fwd, inv): (Vec<usize>, Vec<usize>) = match symbolic.perm() {
+                Some(perm) => {
+                    let (f, i) = perm.arrays();
+                    (f.to_vec(), i.to_vec())
+                }
+                None => ((0..dim).collect(), (0..dim).collect()),
+            };
+            for j in 0..dim {
+                for &i in &rowind[colptr[j]..colptr[j + 1]] {
+                    let (pi, pj) = (inv[i], inv[j]);
+                    l_slot.push(
+                        layout
+                            .position(pi.max(pj), pi.min(pj))
+                            .ok_or("the supernodal factor lacks an entry of the KKT matrix")?,
+                    );
+                }
+            }
+            factor_signs = fwd.iter().map(|&old| signs[old]).collect();
+        }
         Ok(Ipm {
             layout,
+            l_slot,
+            factor_signs,
             perm_work: vec![0.0; dim],
             solve_work: Vec::new(),
             kkt_scratch: Default::default(),
@@ -611,13 +521,23 @@ impl Ipm {
         for (k, &r) in self.kept.iter().enumerate() {
             self.values[self.diag[n + k]] = -d[r] - STATIC_REG;
         }
+        if let Some(layout) = &mut self.layout {
+            self.l_values.fill(0.0);
+            for (&pos, &v) in self.l_slot.iter().zip(&self.values) {
+                self.l_values[pos] += v;
+            }
+            let signs = (!self.inertia_correction).then_some(&self.factor_signs[..]);
+            return layout
+                .factorise(&mut self.l_values, signs, REG_EPSILON, REG_DELTA)
+                .is_ok();
+        }
         let dim = self.diag.len();
         let symb = SymbolicSparseColMatRef::new_checked(dim, dim, &self.colptr, None, &self.rowind);
         let mat = SparseColMatRef::new(symb, &self.values);
         let reg = LdltRegularization {
             dynamic_regularization_signs: (!self.inertia_correction).then_some(&self.signs[..]),
-            dynamic_regularization_delta: 1e-8,
-            dynamic_regularization_epsilon: 1e-14,
+            dynamic_regularization_delta: REG_DELTA,
+            dynamic_regularization_epsilon: REG_EPSILON,
         };
         self.symbolic
             .factorize_numeric_ldlt(
@@ -1547,6 +1467,60 @@ mod tests {
             ro <= 2.0 * rt + 1e-12,
             "residual {ro:e} against faer's {rt:e}"
         );
+    }
+
+    /// The supernodal factorisation (left-looking loops, one thread and
+    /// two) against faer's own numeric LDLᵀ of the same matrix and
+    /// symbolic factor: the same L and D to rounding, with and without the
+    /// sign-driven regularisation (the inertia correction factorises
+    /// without signs).
+    #[test]
+    fn supernodal_factorisation_matches_faer() {
+        let (p, a, ne, r) = stage_qp(5);
+        for (threads, inertia) in [(1, false), (2, false), (2, true)] {
+            let mut ipm = Ipm::with_threshold(
+                &p,
+                &a,
+                ne,
+                SupernodalThreshold::FORCE_SUPERNODAL,
+                KktOrdering::SmallerFactor,
+            )
+            .unwrap();
+            ipm.inertia_correction = inertia;
+            let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
+            ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
+            assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
+            let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
+            assert!(ipm.factor(&p, &a, &d));
+            let ours = ipm.l_values.clone();
+            let dim = ipm.diag.len();
+            let symb =
+                SymbolicSparseColMatRef::new_checked(dim, dim, &ipm.colptr, None, &ipm.rowind);
+            let reg = LdltRegularization {
+                dynamic_regularization_signs: (!inertia).then_some(&ipm.signs[..]),
+                dynamic_regularization_delta: REG_DELTA,
+                dynamic_regularization_epsilon: REG_EPSILON,
+            };
+            ipm.symbolic
+                .factorize_numeric_ldlt(
+                    &mut ipm.l_values,
+                    SparseColMatRef::new(symb, &ipm.values),
+                    Side::Upper,
+                    reg,
+                    Par::Seq,
+                    MemStack::new(&mut ipm.work),
+                    Default::default(),
+                )
+                .unwrap();
+            let scale = norm_inf(&ipm.l_values);
+            assert!(scale > 1.0);
+            for (k, (x, y)) in ours.iter().zip(&ipm.l_values).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-10 * scale,
+                    "{threads} thread(s), inertia {inertia}: value {k}: {x} against faer's {y}"
+                );
+            }
+        }
     }
 
     /// The SQP's next QP (the stage QP with its linear term and equality

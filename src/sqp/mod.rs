@@ -39,6 +39,7 @@
 //!   `paper_criterion_dual_infeasibility`.
 
 pub mod ipm;
+mod ldlt;
 pub mod qp;
 
 use crate::nlp::{check_elements, Element, EvalError, Nlp, INFINITE_BOUND};

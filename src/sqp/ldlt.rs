@@ -1,0 +1,680 @@
+//! The numeric supernodal LDLᵀ factorisation and triangular solves of the
+//! interior-point solver's KKT matrix, over the layout of faer's symbolic
+//! supernodal factorisation, with the elimination tree split over two
+//! threads.
+//!
+//! The factorisation is left-looking, as faer's: each supernode gathers the
+//! updates of the descendants whose rows reach its columns, then factorises
+//! its dense column block. What differs:
+//! * the updates and the dense block are plain loops over contiguous
+//!   columns (the jump's supernodes are mostly one or two columns wide,
+//!   where faer's dense kernels cost more in setup than in arithmetic);
+//! * a supernode reads only its own descendants, so disjoint subtrees of the
+//!   supernodal elimination tree factorise independently: the subtrees
+//!   below the top separators of the nested-dissection ordering are shared
+//!   between two threads by their estimated work, and the top supernodes
+//!   run after both (Duff & Reid's tree parallelism, as in MA57 and
+//!   PARDISO). Small systems (the Hock–Schittkowski problems) stay on one
+//!   thread.
+//!
+//! The pivots are regularised as faer's `LdltRegularization` does: a pivot
+//! of the wrong sign for its row (or, without signs, of magnitude at most
+//! ε) becomes ±δ.
+
+/// Where the supernodes of faer's supernodal LDLᵀ factor keep their
+/// values: supernode s holds columns `begin[s]..begin[s + 1]` of L (unit
+/// lower, D on its diagonal) as a column-major block from `val_ptr[s]`,
+/// of its columns' count plus as many rows as lie below the diagonal
+/// block, `row_idx[row_ptr[s]..row_ptr[s + 1]]` (ascending); the system is
+/// permuted by `perm_fwd` (new i = old perm_fwd[i]).
+pub(crate) struct FactorLayout {
+    begin: Vec<usize>,
+    row_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    val_ptr: Vec<usize>,
+    pub(crate) perm_fwd: Option<Vec<usize>>,
+    /// The updates each supernode gathers: `updates[update_ptr[s]..
+    /// update_ptr[s + 1]]` holds (d, first, end): descendant d's pattern
+    /// rows `first..end` are columns of s.
+    update_ptr: Vec<usize>,
+    updates: Vec<(usize, usize, usize)>,
+    /// Which thread factorises each supernode: 0 or 1 (disjoint subtrees),
+    /// or [`TOP`] (after both).
+    owner: Vec<u8>,
+    /// Whether the factorisation uses the second thread.
+    pub(crate) parallel: bool,
+    /// The top supernodes in order, with the offset and length of their
+    /// blocks in a thread's buffer of updates from its subtrees.
+    top: Vec<(usize, usize, usize)>,
+    top_len: usize,
+    scratch: [Scratch; 2],
+}
+
+/// Supernodes at least this wide factorise their dense block with faer's
+/// blocked kernels.
+const DENSE_KERNEL_MIN_COLUMNS: usize = 32;
+
+/// Supernodes factorised after both subtree sets.
+const TOP: u8 = 2;
+
+/// Estimated multiply-adds below which a factorisation stays on one thread
+/// (a thread's start costs tens of microseconds).
+const PARALLEL_MIN_WORK: f64 = 2e6;
+
+struct Scratch {
+    /// Local row of each global row in the supernode being factorised.
+    map: Vec<usize>,
+    /// One column of a descendant's update.
+    column: Vec<f64>,
+    /// D times the descendant's row of the target column.
+    weights: Vec<f64>,
+    /// faer's dense LDLᵀ workspace.
+    dense: faer::dyn_stack::MemBuffer,
+    /// This thread's updates of the top supernodes.
+    top_updates: Vec<f64>,
+}
+
+/// A pivot at `column` (in the factor's order) that is zero or not finite
+/// after regularisation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct PivotError {
+    pub column: usize,
+}
+
+/// faer's dynamic regularisation of one pivot.
+#[inline]
+fn regularise(d: f64, sign: i8, eps: f64, delta: f64) -> f64 {
+    let small_or_negative = d <= eps;
+    let minus_small_or_positive = d >= -eps;
+    if sign == 1 && small_or_negative {
+        delta
+    } else if sign == -1 && minus_small_or_positive {
+        -delta
+    } else if small_or_negative && minus_small_or_positive {
+        if d < 0.0 {
+            -delta
+        } else {
+            delta
+        }
+    } else {
+        d
+    }
+}
+
+impl FactorLayout {
+    /// The layout of faer's supernodal symbolic factor (None for a
+    /// simplicial one), with the update lists and the two threads' shares
+    /// of the elimination tree.
+    pub(crate) fn of(
+        symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+    ) -> Option<FactorLayout> {
+        Self::with_parallel_min_work(symbolic, PARALLEL_MIN_WORK)
+    }
+
+    /// [`FactorLayout::of`], two threads from `min_work` estimated
+    /// multiply-adds on (tests use both paths on small systems).
+    pub(crate) fn with_parallel_min_work(
+        symbolic: &faer::sparse::linalg::cholesky::SymbolicCholesky<usize>,
+        min_work: f64,
+    ) -> Option<FactorLayout> {
+        use faer::sparse::linalg::cholesky::SymbolicCholeskyRaw;
+        let s = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => return None,
+            SymbolicCholeskyRaw::Supernodal(s) => s,
+        };
+        let ns = s.n_supernodes();
+        if ns == 0 {
+            return None;
+        }
+        let begin: Vec<usize> = s.supernode_begin()[..ns]
+            .iter()
+            .copied()
+            .chain(std::iter::once(s.supernode_end()[ns - 1]))
+            .collect();
+        let row_ptr = s.col_ptr_for_row_idx().to_vec();
+        let row_idx = s.row_idx().to_vec();
+        let val_ptr = s.col_ptr_for_val().to_vec();
+        let n = begin[ns];
+        let mut supernode_of = vec![0usize; n];
+        for sn in 0..ns {
+            supernode_of[begin[sn]..begin[sn + 1]].fill(sn);
+        }
+        // Update lists: the runs of each supernode's pattern that fall in
+        // one ancestor's columns (a parent's index exceeds its child's, so
+        // descendants come first in index order).
+        let mut runs: Vec<(usize, usize, usize, usize)> = Vec::new();
+        for d in 0..ns {
+            let pattern = &row_idx[row_ptr[d]..row_ptr[d + 1]];
+            let mut first = 0;
+            while first < pattern.len() {
+                let t = supernode_of[pattern[first]];
+                let end = first + pattern[first..].partition_point(|&r| r < begin[t + 1]);
+                runs.push((t, d, first, end));
+                first = end;
+            }
+        }
+        let mut update_ptr = vec![0usize; ns + 1];
+        for &(t, ..) in &runs {
+            update_ptr[t + 1] += 1;
+        }
+        for t in 0..ns {
+            update_ptr[t + 1] += update_ptr[t];
+        }
+        let mut fill = update_ptr.clone();
+        let mut updates = vec![(0, 0, 0); runs.len()];
+        for &(t, d, first, end) in &runs {
+            updates[fill[t]] = (d, first, end);
+            fill[t] += 1;
+        }
+        let parent: Vec<Option<usize>> = (0..ns)
+            .map(|sn| (row_ptr[sn] < row_ptr[sn + 1]).then(|| supernode_of[row_idx[row_ptr[sn]]]))
+            .collect();
+        // Work estimate: a supernode of c columns and r rows in all costs
+        // about c·r² multiply-adds, in its own block and in its updates.
+        let work: Vec<f64> = (0..ns)
+            .map(|sn| {
+                let c = (begin[sn + 1] - begin[sn]) as f64;
+                let r = c + (row_ptr[sn + 1] - row_ptr[sn]) as f64;
+                c * r * r
+            })
+            .collect();
+        let (owner, parallel) = split_tree(&parent, &work, min_work);
+        let scratch = [(); 2].map(|_| Scratch {
+            map: vec![0; n],
+            column: Vec::new(),
+            weights: Vec::new(),
+            dense: faer::dyn_stack::MemBuffer::new(faer::dyn_stack::StackReq::EMPTY),
+            top_updates: Vec::new(),
+        });
+        let mut top = Vec::new();
+        let mut top_len = 0;
+        if parallel {
+            for sn in (0..ns).filter(|&sn| owner[sn] == TOP) {
+                let len = val_ptr[sn + 1] - val_ptr[sn];
+                top.push((sn, top_len, len));
+                top_len += len;
+            }
+        }
+        Some(FactorLayout {
+            begin,
+            row_ptr,
+            row_idx,
+            val_ptr,
+            perm_fwd: symbolic.perm().map(|p| p.arrays().0.to_vec()),
+            update_ptr,
+            updates,
+            owner,
+            parallel,
+            top,
+            top_len,
+            scratch,
+        })
+    }
+
+    /// The position in the factor's values of the entry (row, col) of the
+    /// permuted matrix, row ≥ col, or None where the symbolic factor has
+    /// no such entry.
+    pub(crate) fn position(&self, row: usize, col: usize) -> Option<usize> {
+        let sn = self.begin.partition_point(|&b| b <= col) - 1;
+        let (start, end) = (self.begin[sn], self.begin[sn + 1]);
+        let pattern = &self.row_idx[self.row_ptr[sn]..self.row_ptr[sn + 1]];
+        let nc = end - start;
+        let nr = nc + pattern.len();
+        let local = if row < end {
+            row - start
+        } else {
+            nc + pattern.binary_search(&row).ok()?
+        };
+        Some(self.val_ptr[sn] + (col - start) * nr + local)
+    }
+
+    /// Factorise in place: `values` holds the lower triangle of the
+    /// permuted matrix in the factor's layout (zero elsewhere) and becomes
+    /// L (unit diagonal not stored) with D on its diagonal. `signs` (in the
+    /// factor's order) are the expected pivot signs of the dynamic
+    /// regularisation; without them only pivots within ε of zero are
+    /// regularised.
+    pub(crate) fn factorise(
+        &mut self,
+        values: &mut [f64],
+        signs: Option<&[i8]>,
+        eps: f64,
+        delta: f64,
+    ) -> Result<(), PivotError> {
+        let ns = self.begin.len() - 1;
+        let mut blocks: Vec<&mut [f64]> = Vec::with_capacity(ns);
+        let mut rest = values;
+        for sn in 0..ns {
+            let (block, tail) = rest.split_at_mut(self.val_ptr[sn + 1] - self.val_ptr[sn]);
+            blocks.push(block);
+            rest = tail;
+        }
+        let tree = Tree {
+            begin: &self.begin,
+            row_ptr: &self.row_ptr,
+            row_idx: &self.row_idx,
+            update_ptr: &self.update_ptr,
+            updates: &self.updates,
+            signs,
+            eps,
+            delta,
+        };
+        let [s0, s1] = &mut self.scratch;
+        if !self.parallel {
+            return (0..ns).try_for_each(|sn| tree.supernode(sn, &mut blocks, s0, None));
+        }
+        let owner = &self.owner[..];
+        let top = &self.top[..];
+        let mut own: [Vec<&mut [f64]>; 2] = [0, 1].map(|_| {
+            let mut v: Vec<&mut [f64]> = Vec::with_capacity(ns);
+            v.resize_with(ns, Default::default);
+            v
+        });
+        for (sn, block) in blocks.iter_mut().enumerate() {
+            if owner[sn] != TOP {
+                own[owner[sn] as usize][sn] = std::mem::take(block);
+            }
+        }
+        // Each thread factorises its subtrees, then gathers their updates
+        // into the top supernodes, in a buffer of its own.
+        let run = |who: u8, blocks: &mut Vec<&mut [f64]>, scratch: &mut Scratch| {
+            (0..ns)
+                .filter(|&sn| owner[sn] == who)
+                .try_for_each(|sn| tree.supernode(sn, blocks, scratch, None))?;
+            let mut buffer = std::mem::take(&mut scratch.top_updates);
+            buffer.clear();
+            buffer.resize(self.top_len, 0.0);
+            for &(t, offset, len) in top {
+                tree.gather(
+                    t,
+                    &mut buffer[offset..offset + len],
+                    blocks,
+                    scratch,
+                    Some((owner, who)),
+                );
+            }
+            scratch.top_updates = buffer;
+            Ok(())
+        };
+        let [own0, own1] = &mut own;
+        let (r0, r1) = std::thread::scope(|scope| {
+            let second = scope.spawn(|| run(1, own1, s1));
+            let r0 = run(0, own0, s0);
+            // A panic of the second thread (a bug) reads as a failed
+            // factorisation, which the solver reports, not as a crash.
+            (r0, second.join().unwrap_or(Err(PivotError { column: 0 })))
+        });
+        r0?;
+        r1?;
+        for (sn, block) in blocks.iter_mut().enumerate() {
+            if owner[sn] != TOP {
+                *block = std::mem::take(&mut own[owner[sn] as usize][sn]);
+            }
+        }
+        for &(t, offset, len) in top {
+            let (u0, u1) = (
+                &s0.top_updates[offset..offset + len],
+                &s1.top_updates[offset..offset + len],
+            );
+            for ((v, a), b) in blocks[t].iter_mut().zip(u0).zip(u1) {
+                *v += a + b;
+            }
+            tree.supernode(t, &mut blocks, s0, Some((owner, TOP)))?;
+        }
+        Ok(())
+    }
+
+    /// Solve L D Lᵀ x = v in place (x, v in the factor's order). The
+    /// supernodes of a transcription's KKT system are mostly a column or
+    /// two wide, where plain loops beat faer's dense kernels (measured:
+    /// LEAP's QP set, `examples/ipm_bench`).
+    pub(crate) fn solve(&self, values: &[f64], x: &mut [f64], work: &mut Vec<f64>) {
+        let ns = self.begin.len() - 1;
+        // The rows below a supernode's diagonal block are gathered into
+        // (backward) or accumulated in (forward) the contiguous `work`, so
+        // that the inner loops run over contiguous memory (the jump's
+        // widest supernode has 172 columns).
+        for s in 0..ns {
+            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
+            let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let nr = nc + below.len();
+            let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
+            let (xs, _) = x[start..].split_at_mut(nc);
+            work.clear();
+            work.resize(below.len(), 0.0);
+            let mut any = false;
+            for j in 0..nc {
+                let col = &block[j * nr..(j + 1) * nr];
+                let xj = xs[j];
+                if xj == 0.0 {
+                    continue;
+                }
+                any = true;
+                for (xi, l) in xs[j + 1..].iter_mut().zip(&col[j + 1..nc]) {
+                    *xi -= l * xj;
+                }
+                for (w, l) in work.iter_mut().zip(&col[nc..]) {
+                    *w += l * xj;
+                }
+            }
+            if any {
+                for (&r, w) in below.iter().zip(work.iter()) {
+                    x[r] -= w;
+                }
+            }
+        }
+        for s in 0..ns {
+            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
+            let nr = nc + self.row_ptr[s + 1] - self.row_ptr[s];
+            let block = &values[self.val_ptr[s]..];
+            for j in 0..nc {
+                x[start + j] /= block[j * nr + j];
+            }
+        }
+        for s in (0..ns).rev() {
+            let (start, nc) = (self.begin[s], self.begin[s + 1] - self.begin[s]);
+            let below = &self.row_idx[self.row_ptr[s]..self.row_ptr[s + 1]];
+            let nr = nc + below.len();
+            let block = &values[self.val_ptr[s]..self.val_ptr[s] + nr * nc];
+            work.clear();
+            work.extend(below.iter().map(|&r| x[r]));
+            let xs = &mut x[start..start + nc];
+            for j in (0..nc).rev() {
+                let col = &block[j * nr..(j + 1) * nr];
+                xs[j] -= dot(&col[nc..], work) + dot(&col[j + 1..nc], &xs[j + 1..]);
+            }
+        }
+    }
+}
+
+/// Assign each supernode to thread 0 or 1 or to the top, minimising the
+/// estimated time: the top's work plus the larger thread's. Starting from
+/// the roots, the heaviest subtree root moves to the top and its children
+/// become subtrees, while that lowers the estimate. Returns the owners and
+/// whether two threads pay (against one thread's total work).
+fn split_tree(parent: &[Option<usize>], work: &[f64], min_work: f64) -> (Vec<u8>, bool) {
+    let ns = parent.len();
+    let mut subtree = work.to_vec();
+    let mut children: Vec<Vec<usize>> = vec![Vec::new(); ns];
+    for sn in 0..ns {
+        if let Some(p) = parent[sn] {
+            subtree[p] += subtree[sn];
+            children[p].push(sn);
+        }
+    }
+    let total: f64 = work.iter().sum();
+    let sequential = (vec![0u8; ns], false);
+    if total < min_work {
+        return sequential;
+    }
+    // Longest-processing-time assignment of the frontier's subtrees.
+    let assign = |frontier: &[usize]| {
+        let mut sorted = frontier.to_vec();
+        sorted.sort_by(|&a, &b| subtree[b].total_cmp(&subtree[a]));
+        let mut load = [0.0f64; 2];
+        let mut bins = Vec::with_capacity(sorted.len());
+        for sn in sorted {
+            let bin = usize::from(load[1] < load[0]);
+            load[bin] += subtree[sn];
+            bins.push((sn, bin as u8));
+        }
+        (load[0].max(load[1]), bins)
+    };
+    let mut frontier: Vec<usize> = (0..ns).filter(|&sn| parent[sn].is_none()).collect();
+    let mut top: Vec<usize> = Vec::new();
+    let mut top_work = 0.0;
+    let mut best = (f64::INFINITY, Vec::new(), Vec::new());
+    for _ in 0..ns.min(256) {
+        let (longest, bins) = assign(&frontier);
+        if top_work + longest < best.0 {
+            best = (top_work + longest, bins, top.clone());
+        }
+        let Some((k, _)) = frontier
+            .iter()
+            .enumerate()
+            .max_by(|a, b| subtree[*a.1].total_cmp(&subtree[*b.1]))
+        else {
+            break;
+        };
+        let sn = frontier.swap_remove(k);
+        top.push(sn);
+        top_work += work[sn];
+        frontier.extend(&children[sn]);
+    }
+    let (estimate, bins, top) = best;
+    // Two threads must save a fifth of the work to pay for their start.
+    if estimate > 0.8 * total {
+        return sequential;
+    }
+    let mut owner = vec![u8::MAX; ns];
+    for sn in top {
+        owner[sn] = TOP;
+    }
+    for (sn, bin) in bins {
+        owner[sn] = bin;
+    }
+    for sn in (0..ns).rev() {
+        if owner[sn] == u8::MAX {
+            // A parent's index exceeds its child's: set already.
+            owner[sn] = parent[sn].map_or(0, |p| owner[p]);
+        }
+    }
+    (owner, true)
+}
+
+/// The read-only parts of a factorisation, shared by both threads.
+struct Tree<'a> {
+    begin: &'a [usize],
+    row_ptr: &'a [usize],
+    row_idx: &'a [usize],
+    update_ptr: &'a [usize],
+    updates: &'a [(usize, usize, usize)],
+    signs: Option<&'a [i8]>,
+    eps: f64,
+    delta: f64,
+}
+
+impl Tree<'_> {
+    /// Gather the updates of supernode `sn`'s descendants into its block,
+    /// then factorise the block. `blocks[d]` holds every descendant d's
+    /// finished columns (owned by the caller's thread, or all of them for
+    /// the top).
+    fn supernode(
+        &self,
+        sn: usize,
+        blocks: &mut [&mut [f64]],
+        scratch: &mut Scratch,
+        from: Option<(&[u8], u8)>,
+    ) -> Result<(), PivotError> {
+        let (done, rest) = blocks.split_at_mut(sn);
+        let target: &mut [f64] = &mut *rest[0];
+        self.gather(sn, target, done, scratch, from);
+        self.block(sn, target, scratch)
+    }
+
+    /// Subtract from `target` (supernode `sn`'s block, or a buffer of its
+    /// shape) the updates of its descendants, of those whose owner is
+    /// `from.1` where given; `done[d]` holds descendant d's columns.
+    fn gather(
+        &self,
+        sn: usize,
+        target: &mut [f64],
+        done: &[&mut [f64]],
+        scratch: &mut Scratch,
+        from: Option<(&[u8], u8)>,
+    ) {
+        let (start, end) = (self.begin[sn], self.begin[sn + 1]);
+        let nc = end - start;
+        let pattern = &self.row_idx[self.row_ptr[sn]..self.row_ptr[sn + 1]];
+        let nr = nc + pattern.len();
+        let map = &mut scratch.map;
+        for (i, &row) in pattern.iter().enumerate() {
+            map[row] = nc + i;
+        }
+        let local = |map: &[usize], row: usize| if row < end { row - start } else { map[row] };
+        for &(d, first, last) in &self.updates[self.update_ptr[sn]..self.update_ptr[sn + 1]] {
+            if from.is_some_and(|(owner, who)| owner[d] != who) {
+                continue;
+            }
+            let ld: &[f64] = &*done[d];
+            let ncd = self.begin[d + 1] - self.begin[d];
+            let pd = &self.row_idx[self.row_ptr[d]..self.row_ptr[d + 1]];
+            let nrd = ncd + pd.len();
+            for jj in first..last {
+                let col = (pd[jj] - start) * nr;
+                let rows = &pd[jj..];
+                if ncd == 1 {
+                    let w = ld[0] * ld[1 + jj];
+                    if w != 0.0 {
+                        for (&row, l) in rows.iter().zip(&ld[1 + jj..]) {
+                            target[col + local(map, row)] -= w * l;
+                        }
+                    }
+                    continue;
+                }
+                let weights = &mut scratch.weights;
+                weights.clear();
+                weights.extend((0..ncd).map(|k| ld[k * nrd + k] * ld[k * nrd + ncd + jj]));
+                let column = &mut scratch.column;
+                column.clear();
+                column.resize(rows.len(), 0.0);
+                for (k, &w) in weights.iter().enumerate() {
+                    if w != 0.0 {
+                        let lk = &ld[k * nrd + ncd + jj..(k + 1) * nrd];
+                        for (c, l) in column.iter_mut().zip(lk) {
+                            *c += w * l;
+                        }
+                    }
+                }
+                for (&row, c) in rows.iter().zip(column.iter()) {
+                    target[col + local(map, row)] -= c;
+                }
+            }
+        }
+    }
+
+    /// Factorise supernode `sn`'s block, its updates gathered.
+    fn block(
+        &self,
+        sn: usize,
+        target: &mut [f64],
+        scratch: &mut Scratch,
+    ) -> Result<(), PivotError> {
+        let start = self.begin[sn];
+        let nc = self.begin[sn + 1] - start;
+        let nr = nc + self.row_ptr[sn + 1] - self.row_ptr[sn];
+        if nc >= DENSE_KERNEL_MIN_COLUMNS {
+            return self.dense_faer(start, nc, nr, target, scratch);
+        }
+        // The dense block: right-looking LDLᵀ over its columns, rows below
+        // the diagonal block included.
+        for j in 0..nc {
+            let sign = self.signs.map_or(0, |s| s[start + j]);
+            let d = regularise(target[j * nr + j], sign, self.eps, self.delta);
+            if d == 0.0 || !d.is_finite() {
+                return Err(PivotError { column: start + j });
+            }
+            target[j * nr + j] = d;
+            let inv = 1.0 / d;
+            let (left, right) = target.split_at_mut((j + 1) * nr);
+            let colj = &mut left[j * nr..];
+            for k in j + 1..nc {
+                let f = colj[k] * inv;
+                if f != 0.0 {
+                    let ck = &mut right[(k - j - 1) * nr + k..(k - j) * nr];
+                    for (c, a) in ck.iter_mut().zip(&colj[k..]) {
+                        *c -= f * a;
+                    }
+                }
+            }
+            for a in colj[j + 1..].iter_mut() {
+                *a *= inv;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Tree<'_> {
+    /// The dense block of a wide supernode by faer's blocked kernels: LDLᵀ
+    /// of the diagonal block, then the rows below by a triangular solve
+    /// and D⁻¹ (as faer's supernodal factorisation does).
+    fn dense_faer(
+        &self,
+        start: usize,
+        nc: usize,
+        nr: usize,
+        target: &mut [f64],
+        scratch: &mut Scratch,
+    ) -> Result<(), PivotError> {
+        use faer::linalg::cholesky::ldlt::factor::{
+            cholesky_in_place, cholesky_in_place_scratch, LdltRegularization,
+        };
+        use faer::reborrow::{Reborrow, ReborrowMut};
+        use faer::{dyn_stack::MemBuffer, dyn_stack::MemStack, MatMut, Par};
+        let req = cholesky_in_place_scratch::<f64>(nc, Par::Seq, Default::default());
+        if scratch.dense.len() < req.size_bytes() {
+            scratch.dense = MemBuffer::new(req);
+        }
+        let ls = MatMut::from_column_major_slice_mut(&mut target[..nr * nc], nr, nc);
+        let (mut top, mut bottom) = ls.split_at_row_mut(nc);
+        let reg = LdltRegularization {
+            dynamic_regularization_signs: self.signs.map(|s| &s[start..start + nc]),
+            dynamic_regularization_delta: self.delta,
+            dynamic_regularization_epsilon: self.eps,
+        };
+        cholesky_in_place(
+            top.rb_mut(),
+            reg,
+            Par::Seq,
+            MemStack::new(&mut scratch.dense),
+            Default::default(),
+        )
+        .map_err(|e| match e {
+            faer::linalg::cholesky::ldlt::factor::LdltError::ZeroPivot { index } => PivotError {
+                column: start + index,
+            },
+        })?;
+        for j in 1..nc {
+            for i in 0..j {
+                top[(i, j)] = 0.0;
+            }
+        }
+        if nr > nc {
+            faer::linalg::triangular_solve::solve_unit_lower_triangular_in_place(
+                top.rb(),
+                bottom.rb_mut().transpose_mut(),
+                Par::Seq,
+            );
+            for j in 0..nc {
+                let inv = 1.0 / top[(j, j)];
+                for i in 0..nr - nc {
+                    bottom[(i, j)] *= inv;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Σ a_i b_i over the shorter of the two, in four independent sums (a
+/// single running sum waits on each addition's latency).
+#[inline]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0; 4];
+    let (ac, bc) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail: f64 = ac
+        .remainder()
+        .iter()
+        .zip(bc.remainder())
+        .map(|(x, y)| x * y)
+        .sum();
+    for (x, y) in ac.zip(bc) {
+        for k in 0..4 {
+            acc[k] += x[k] * y[k];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
