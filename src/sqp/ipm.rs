@@ -1407,66 +1407,71 @@ mod tests {
         (q, b)
     }
 
-    /// The loop solve over faer's supernodal layout against faer's own
-    /// solve, on a stage-structured KKT system ([`stage_qp`]).
+    /// The loop solve over faer's supernodal layout (factorised on one
+    /// thread and on two) against faer's own solve, on a stage-structured KKT system
+    /// ([`stage_qp`]).
     #[test]
     fn supernodal_loop_solve_matches_faer() {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
         let (p, a, ne, r) = stage_qp(11);
-        let mut ipm = Ipm::with_threshold(
-            &p,
-            &a,
-            ne,
-            SupernodalThreshold::FORCE_SUPERNODAL,
-            KktOrdering::SmallerFactor,
-        )
-        .unwrap();
-        assert!(ipm.layout.is_some());
-        let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
-        assert!(ipm.factor(&p, &a, &d));
-        let dim = ipm.diag.len();
-        let rhs: Vec<f64> = (0..dim).map(|_| rng.random_range(-1.0..1.0)).collect();
-        let mut ours = rhs.clone();
-        ipm.ldlt_solve(&mut ours);
-        let mut theirs = rhs.clone();
-        LdltRef::new(&ipm.symbolic, &ipm.l_values).solve_in_place_with_conj(
-            Conj::No,
-            MatMut::from_column_major_slice_mut(&mut theirs, dim, 1),
-            Par::Seq,
-            MemStack::new(&mut ipm.work),
-        );
-        // The factor holds pivots of −1e-9 (equality rows, static
-        // regularisation): both solves lose digits to rounding alike, so
-        // they agree to 1e-7 and leave residuals of the same size against
-        // the unregularised matrix.
-        let scale = norm_inf(&theirs);
-        for (k, (x, y)) in ours.iter().zip(&theirs).enumerate() {
-            assert!((x - y).abs() <= 1e-7 * scale, "entry {k}: {x} against {y}");
-        }
-        let residual = |x: &[f64]| {
-            let mut kx = vec![0.0; dim];
-            ipm.reduced_mul(&p, &a, &d, x, &mut kx);
-            kx.iter()
-                .zip(&rhs)
-                .fold(0.0f64, |w, (k, r)| w.max((k - r).abs()))
-        };
-        // The product from the assembled KKT matrix (the refinement's)
-        // against the one formed from P, A and D.
-        let (mut from_kkt, mut from_parts) = (vec![0.0; dim], vec![0.0; dim]);
-        ipm.kkt_mul(&rhs, &mut from_kkt);
-        ipm.reduced_mul(&p, &a, &d, &rhs, &mut from_parts);
-        for (k, (x, y)) in from_kkt.iter().zip(&from_parts).enumerate() {
+        for threads in [1, 2] {
+            let mut ipm = Ipm::with_threshold(
+                &p,
+                &a,
+                ne,
+                SupernodalThreshold::FORCE_SUPERNODAL,
+                KktOrdering::SmallerFactor,
+            )
+            .unwrap();
+            let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
+            ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
+            assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
+            let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
+            assert!(ipm.factor(&p, &a, &d));
+            let dim = ipm.diag.len();
+            let rhs: Vec<f64> = (0..dim).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut ours = rhs.clone();
+            ipm.ldlt_solve(&mut ours);
+            let mut theirs = rhs.clone();
+            LdltRef::new(&ipm.symbolic, &ipm.l_values).solve_in_place_with_conj(
+                Conj::No,
+                MatMut::from_column_major_slice_mut(&mut theirs, dim, 1),
+                Par::Seq,
+                MemStack::new(&mut ipm.work),
+            );
+            // The factor holds pivots of −1e-9 (equality rows, static
+            // regularisation): both solves lose digits to rounding alike, so
+            // they agree to 1e-7 and leave residuals of the same size against
+            // the unregularised matrix.
+            let scale = norm_inf(&theirs);
+            for (k, (x, y)) in ours.iter().zip(&theirs).enumerate() {
+                assert!((x - y).abs() <= 1e-7 * scale, "entry {k}: {x} against {y}");
+            }
+            let residual = |x: &[f64]| {
+                let mut kx = vec![0.0; dim];
+                ipm.reduced_mul(&p, &a, &d, x, &mut kx);
+                kx.iter()
+                    .zip(&rhs)
+                    .fold(0.0f64, |w, (k, r)| w.max((k - r).abs()))
+            };
+            // The product from the assembled KKT matrix (the refinement's)
+            // against the one formed from P, A and D.
+            let (mut from_kkt, mut from_parts) = (vec![0.0; dim], vec![0.0; dim]);
+            ipm.kkt_mul(&rhs, &mut from_kkt);
+            ipm.reduced_mul(&p, &a, &d, &rhs, &mut from_parts);
+            for (k, (x, y)) in from_kkt.iter().zip(&from_parts).enumerate() {
+                assert!(
+                    (x - y).abs() <= 1e-12 * (1.0 + y.abs()),
+                    "row {k}: {x} against {y}"
+                );
+            }
+            let (ro, rt) = (residual(&ours), residual(&theirs));
             assert!(
-                (x - y).abs() <= 1e-12 * (1.0 + y.abs()),
-                "row {k}: {x} against {y}"
+                ro <= 2.0 * rt + 1e-12,
+                "residual {ro:e} against faer's {rt:e}"
             );
         }
-        let (ro, rt) = (residual(&ours), residual(&theirs));
-        assert!(
-            ro <= 2.0 * rt + 1e-12,
-            "residual {ro:e} against faer's {rt:e}"
-        );
     }
 
     /// The supernodal factorisation (left-looking loops, one thread and
