@@ -44,7 +44,7 @@
 //! constraints (IPOPT's rule for τ), reading the inertia off the LDLᵀ
 //! factor's D.
 
-use super::ldlt::FactorLayout;
+use super::ldlt::{FactorLayout, SolveScratch};
 use super::norm_inf;
 use clarabel::algebra::CscMatrix;
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
@@ -202,7 +202,9 @@ pub struct Ipm {
     /// Permuted right-hand side of a solve.
     perm_work: Vec<f64>,
     /// Scratch of the triangular solves.
-    solve_work: Vec<f64>,
+    solve_scratch: SolveScratch,
+    /// The factor's ordering (new i = old factor_perm[i]).
+    factor_perm: Option<Vec<usize>>,
     /// Scratch of `solve_kkt`: right-hand side, solution, residual, trial.
     kkt_scratch: [Vec<f64>; 4],
     l_values: Vec<f64>,
@@ -443,7 +445,8 @@ impl Ipm {
             l_slot,
             factor_signs,
             perm_work: vec![0.0; dim],
-            solve_work: Vec::new(),
+            solve_scratch: SolveScratch::default(),
+            factor_perm: symbolic.perm().map(|p| p.arrays().0.to_vec()),
             kkt_scratch: Default::default(),
             n,
             m,
@@ -676,18 +679,18 @@ impl Ipm {
     }
 
     fn ldlt_solve(&mut self, v: &mut [f64]) {
-        if let Some(layout) = &self.layout {
-            match &layout.perm_fwd {
+        if let Some(layout) = &mut self.layout {
+            match &self.factor_perm {
                 Some(fwd) => {
                     for (w, &f) in self.perm_work.iter_mut().zip(fwd) {
                         *w = v[f];
                     }
-                    layout.solve(&self.l_values, &mut self.perm_work, &mut self.solve_work);
+                    layout.solve(&self.l_values, &mut self.perm_work, &mut self.solve_scratch);
                     for (&w, &f) in self.perm_work.iter().zip(fwd) {
                         v[f] = w;
                     }
                 }
-                None => layout.solve(&self.l_values, v, &mut self.solve_work),
+                None => layout.solve(&self.l_values, v, &mut self.solve_scratch),
             }
             return;
         }
@@ -1407,8 +1410,8 @@ mod tests {
         (q, b)
     }
 
-    /// The loop solve over faer's supernodal layout (factorised on one
-    /// thread and on two) against faer's own solve, on a stage-structured KKT system
+    /// The loop solve over faer's supernodal layout (one thread and two)
+    /// against faer's own solve, on a stage-structured KKT system
     /// ([`stage_qp`]).
     #[test]
     fn supernodal_loop_solve_matches_faer() {

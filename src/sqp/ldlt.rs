@@ -21,18 +21,19 @@
 //! of the wrong sign for its row (or, without signs, of magnitude at most
 //! ε) becomes ±δ.
 
+use super::helper::Helper;
+
 /// Where the supernodes of faer's supernodal LDLᵀ factor keep their
 /// values: supernode s holds columns `begin[s]..begin[s + 1]` of L (unit
 /// lower, D on its diagonal) as a column-major block from `val_ptr[s]`,
 /// of its columns' count plus as many rows as lie below the diagonal
-/// block, `row_idx[row_ptr[s]..row_ptr[s + 1]]` (ascending); the system is
-/// permuted by `perm_fwd` (new i = old perm_fwd[i]).
+/// block, `row_idx[row_ptr[s]..row_ptr[s + 1]]` (ascending), of the
+/// system permuted by the symbolic factor's ordering.
 pub(crate) struct FactorLayout {
     begin: Vec<usize>,
     row_ptr: Vec<usize>,
     row_idx: Vec<usize>,
     val_ptr: Vec<usize>,
-    pub(crate) perm_fwd: Option<Vec<usize>>,
     /// The updates each supernode gathers: `updates[update_ptr[s]..
     /// update_ptr[s + 1]]` holds (d, first, end): descendant d's pattern
     /// rows `first..end` are columns of s.
@@ -43,6 +44,8 @@ pub(crate) struct FactorLayout {
     owner: Vec<u8>,
     /// Whether the factorisation uses the second thread.
     pub(crate) parallel: bool,
+    /// The second thread, where two pay.
+    helper: Option<Helper>,
     /// The top supernodes in order, with the offset and length of their
     /// blocks in a thread's buffer of updates from its subtrees.
     top: Vec<(usize, usize, usize)>,
@@ -169,16 +172,27 @@ impl FactorLayout {
         let parent: Vec<Option<usize>> = (0..ns)
             .map(|sn| (row_ptr[sn] < row_ptr[sn + 1]).then(|| supernode_of[row_idx[row_ptr[sn]]]))
             .collect();
-        // Work estimate: a supernode of c columns and r rows in all costs
-        // about c·r² multiply-adds, in its own block and in its updates.
+        // Work estimate of a supernode of c columns and p rows below them:
+        // its updates of its ancestors, c multiply-adds and one scattered
+        // subtraction for each of the p(p + 1)/2 entries they reach, and
+        // its dense block, c²(c/3 + p), a fifth of that for blocks that
+        // faer's blocked kernels factorise (the jump's 271-column root takes
+        // 0.36 ms, against 2.4–2.9 ms for each thread's subtrees).
         let work: Vec<f64> = (0..ns)
             .map(|sn| {
-                let c = (begin[sn + 1] - begin[sn]) as f64;
-                let r = c + (row_ptr[sn + 1] - row_ptr[sn]) as f64;
-                c * r * r
+                let c = begin[sn + 1] - begin[sn];
+                let dense_rate = if c >= DENSE_KERNEL_MIN_COLUMNS {
+                    0.2
+                } else {
+                    1.0
+                };
+                let (c, p) = (c as f64, (row_ptr[sn + 1] - row_ptr[sn]) as f64);
+                (c + 1.0) * p * (p + 1.0) / 2.0 + dense_rate * c * c * (c / 3.0 + p)
             })
             .collect();
         let (owner, parallel) = split_tree(&parent, &work, min_work);
+        let helper = if parallel { Helper::new() } else { None };
+        let parallel = helper.is_some();
         let scratch = [(); 2].map(|_| Scratch {
             map: vec![0; n],
             column: Vec::new(),
@@ -200,11 +214,11 @@ impl FactorLayout {
             row_ptr,
             row_idx,
             val_ptr,
-            perm_fwd: symbolic.perm().map(|p| p.arrays().0.to_vec()),
             update_ptr,
             updates,
             owner,
             parallel,
+            helper,
             top,
             top_len,
             scratch,
@@ -297,13 +311,16 @@ impl FactorLayout {
             Ok(())
         };
         let [own0, own1] = &mut own;
-        let (r0, r1) = std::thread::scope(|scope| {
-            let second = scope.spawn(|| run(1, own1, s1));
-            let r0 = run(0, own0, s0);
-            // A panic of the second thread (a bug) reads as a failed
-            // factorisation, which the solver reports, not as a crash.
-            (r0, second.join().unwrap_or(Err(PivotError { column: 0 })))
-        });
+        let Some(helper) = &mut self.helper else {
+            return Err(PivotError { column: 0 });
+        };
+        let mut r1 = Ok(());
+        // A panic of the second thread's half (a bug) reads as a failed
+        // factorisation, which the solver reports, not as a crash.
+        let (r0, returned) = helper.join(&mut || r1 = run(1, own1, s1), || run(0, own0, s0));
+        if !returned {
+            r1 = Err(PivotError { column: 0 });
+        }
         r0?;
         r1?;
         for (sn, block) in blocks.iter_mut().enumerate() {
@@ -327,13 +344,13 @@ impl FactorLayout {
     /// Solve L D Lᵀ x = v in place (x, v in the factor's order). The
     /// supernodes of a transcription's KKT system are mostly a column or
     /// two wide, where plain loops beat faer's dense kernels (measured:
-    /// LEAP's QP set, `examples/ipm_bench`). One thread: a solve takes
-    /// about 0.2 ms on the jump's KKT system, and a second thread's start
-    /// and join about 45 µs, twice per solve (the subtrees in parallel
-    /// forward, then backward): the jump's QPs 1–30 took 4.2–4.3 s so
-    /// against 3.8–3.9 s on one thread.
-    pub(crate) fn solve(&self, values: &[f64], x: &mut [f64], work: &mut Vec<f64>) {
+    /// LEAP's QP set, `examples/ipm_bench`). With two threads, each
+    /// substitutes through its subtrees (forward: its updates of the top
+    /// rows in a vector of its own, added after), and the top supernodes
+    /// run in between.
+    pub(crate) fn solve(&mut self, values: &[f64], x: &mut [f64], scratch: &mut SolveScratch) {
         let ns = self.begin.len() - 1;
+        let SolveScratch { work: [w0, w1], x1 } = scratch;
         let tree = Substitution {
             begin: &self.begin,
             row_ptr: &self.row_ptr,
@@ -341,10 +358,73 @@ impl FactorLayout {
             val_ptr: &self.val_ptr,
             values,
         };
-        (0..ns).for_each(|sn| tree.forward(sn, x, work));
+        let (owner, helper) = (&self.owner[..], &mut self.helper);
+        let Some(helper) = helper.as_mut().filter(|_| self.parallel) else {
+            (0..ns).for_each(|sn| tree.forward(sn, x, w0));
+            tree.diagonal(x);
+            (0..ns).rev().for_each(|sn| tree.backward(sn, x, w0));
+            return;
+        };
+        let mine = |who: u8| (0..ns).filter(move |&sn| owner[sn] == who);
+        // The second thread's vector: its columns, zero on the top ones.
+        x1.clear();
+        x1.resize(x.len(), 0.0);
+        for sn in mine(1) {
+            let cols = self.begin[sn]..self.begin[sn + 1];
+            x1[cols.clone()].copy_from_slice(&x[cols]);
+        }
+        let (_, returned) = helper.join(
+            &mut || mine(1).for_each(|sn| tree.forward(sn, x1, w1)),
+            || mine(0).for_each(|sn| tree.forward(sn, x, w0)),
+        );
+        for sn in 0..ns {
+            let cols = self.begin[sn]..self.begin[sn + 1];
+            match owner[sn] {
+                1 => x[cols.clone()].copy_from_slice(&x1[cols]),
+                TOP => x[cols.clone()]
+                    .iter_mut()
+                    .zip(&x1[cols])
+                    .for_each(|(a, b)| *a += b),
+                _ => {}
+            }
+        }
+        mine(TOP).for_each(|sn| tree.forward(sn, x, w0));
         tree.diagonal(x);
-        (0..ns).rev().for_each(|sn| tree.backward(sn, x, work));
+        for sn in (0..ns).rev().filter(|&sn| owner[sn] == TOP) {
+            tree.backward(sn, x, w0);
+        }
+        // The second thread reads the top rows and writes its own.
+        x1.copy_from_slice(x);
+        let (_, returned_too) = helper.join(
+            &mut || {
+                for sn in (0..ns).rev().filter(|&sn| owner[sn] == 1) {
+                    tree.backward(sn, x1, w1);
+                }
+            },
+            || {
+                for sn in (0..ns).rev().filter(|&sn| owner[sn] == 0) {
+                    tree.backward(sn, x, w0);
+                }
+            },
+        );
+        for sn in mine(1) {
+            let cols = self.begin[sn]..self.begin[sn + 1];
+            x[cols.clone()].copy_from_slice(&x1[cols]);
+        }
+        if !(returned && returned_too) {
+            // A bug in the second thread's half: NaN, which the solver's
+            // residual checks report.
+            x.fill(f64::NAN);
+        }
     }
+}
+
+/// The vectors of [`FactorLayout::solve`], kept between calls: each
+/// thread's gathered rows, the second thread's copy of x.
+#[derive(Default)]
+pub(crate) struct SolveScratch {
+    work: [Vec<f64>; 2],
+    x1: Vec<f64>,
 }
 
 /// The triangular solves' view of a factor.

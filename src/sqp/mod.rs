@@ -38,6 +38,7 @@
 //!   2016) at a scaled dual infeasibility of at most
 //!   `paper_criterion_dual_infeasibility`.
 
+mod helper;
 pub mod ipm;
 mod ldlt;
 pub mod qp;
