@@ -16,15 +16,17 @@
 //!   plus the equality and general rows only (the jump: 4,145 instead of
 //!   about 9,000);
 //! * the fill-reducing ordering (the smaller factor of AMD and METIS's
-//!   nested dissection, [`KktOrdering`]) and the supernodal symbolic
-//!   factorisation (faer's LDLᵀ: dense kernels on the stage blocks of a
-//!   transcription) are computed once per SQP solve, since the pattern is
+//!   nested dissection, [`KktOrdering`]) and faer's supernodal symbolic
+//!   factorisation are computed once per SQP solve, since the pattern is
 //!   fixed;
-//! * the triangular solves with that factor run as plain loops over its
+//! * the numeric factorisation and the triangular solves are leap's own
+//!   (`sqp::ldlt`), over faer's supernodal layout: plain loops over the
 //!   supernodes (most of the jump's are one or two columns wide, where
-//!   faer's dense kernels cost more in setup than in arithmetic): 15%
-//!   less time per interior-point iteration on the jump's QPs
-//!   (`examples/ipm_bench`), the same answers to rounding;
+//!   faer's dense kernels cost more in setup than in arithmetic), faer's
+//!   kernels for the wide ones, and the elimination tree's subtrees on two
+//!   threads. The jump's QPs 1–30 take 3.6–3.8 s instead of 4.7–4.9 s with
+//!   faer's factorisation (`CHAIN=1 examples/ipm_bench`), with the same
+//!   interior-point iterations;
 //! * the iterative refinement's residuals multiply by the assembled KKT
 //!   matrix, one pass over its entries.
 //!
