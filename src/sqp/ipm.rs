@@ -1412,6 +1412,23 @@ mod tests {
         (q, b)
     }
 
+    /// A solver of the QP with these patterns, its KKT matrix factorised
+    /// supernodally on `threads` (1 or 2) threads, whatever its size.
+    fn supernodal_ipm(p: &CscMatrix<f64>, a: &CscMatrix<f64>, ne: usize, threads: usize) -> Ipm {
+        let mut ipm = Ipm::with_threshold(
+            p,
+            a,
+            ne,
+            SupernodalThreshold::FORCE_SUPERNODAL,
+            KktOrdering::SmallerFactor,
+        )
+        .unwrap();
+        let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
+        ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
+        assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
+        ipm
+    }
+
     /// The loop solve over faer's supernodal layout (one thread and two)
     /// against faer's own solve, on a stage-structured KKT system
     /// ([`stage_qp`]).
@@ -1421,17 +1438,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
         let (p, a, ne, r) = stage_qp(11);
         for threads in [1, 2] {
-            let mut ipm = Ipm::with_threshold(
-                &p,
-                &a,
-                ne,
-                SupernodalThreshold::FORCE_SUPERNODAL,
-                KktOrdering::SmallerFactor,
-            )
-            .unwrap();
-            let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
-            ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
-            assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
+            let mut ipm = supernodal_ipm(&p, &a, ne, threads);
             let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
             assert!(ipm.factor(&p, &a, &d));
             let dim = ipm.diag.len();
@@ -1488,18 +1495,8 @@ mod tests {
     fn supernodal_factorisation_matches_faer() {
         let (p, a, ne, r) = stage_qp(5);
         for (threads, inertia) in [(1, false), (2, false), (2, true)] {
-            let mut ipm = Ipm::with_threshold(
-                &p,
-                &a,
-                ne,
-                SupernodalThreshold::FORCE_SUPERNODAL,
-                KktOrdering::SmallerFactor,
-            )
-            .unwrap();
+            let mut ipm = supernodal_ipm(&p, &a, ne, threads);
             ipm.inertia_correction = inertia;
-            let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
-            ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
-            assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
             let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
             assert!(ipm.factor(&p, &a, &d));
             let ours = ipm.l_values.clone();

@@ -6,16 +6,21 @@
 //! The factorisation is left-looking, as faer's: each supernode gathers the
 //! updates of the descendants whose rows reach its columns, then factorises
 //! its dense column block. What differs:
-//! * the updates and the dense block are plain loops over contiguous
-//!   columns (the jump's supernodes are mostly one or two columns wide,
-//!   where faer's dense kernels cost more in setup than in arithmetic);
+//! * the updates, and the dense blocks narrower than
+//!   [`DENSE_KERNEL_MIN_COLUMNS`], are plain loops over contiguous columns
+//!   (the jump's supernodes are mostly one or two columns wide, where
+//!   faer's dense kernels cost more in setup than in arithmetic); wider
+//!   blocks use faer's blocked kernels;
 //! * a supernode reads only its own descendants, so disjoint subtrees of the
-//!   supernodal elimination tree factorise independently: the subtrees
-//!   below the top separators of the nested-dissection ordering are shared
-//!   between two threads by their estimated work, and the top supernodes
-//!   run after both (Duff & Reid's tree parallelism, as in MA57 and
-//!   PARDISO). Small systems (the Hock–Schittkowski problems) stay on one
-//!   thread.
+//!   supernodal elimination tree factorise independently (the tree-level
+//!   parallelism of sparse direct solvers): the subtrees below the top
+//!   separators of the nested-dissection ordering are shared between two
+//!   threads by their estimated work; each thread then gathers its
+//!   subtrees' updates of the top supernodes into a buffer of its own, and
+//!   the top supernodes run after both, on the buffers' sum. Small systems
+//!   (the Hock–Schittkowski problems) stay on one thread;
+//! * the triangular solves run through the same subtrees on the same two
+//!   threads, the second a persistent one ([`Helper`]).
 //!
 //! The pivots are regularised as faer's `LdltRegularization` does: a pivot
 //! of the wrong sign for its row (or, without signs, of magnitude at most
@@ -61,7 +66,8 @@ const DENSE_KERNEL_MIN_COLUMNS: usize = 32;
 const TOP: u8 = 2;
 
 /// Estimated multiply-adds below which a factorisation stays on one thread
-/// (a thread's start costs tens of microseconds).
+/// (about a millisecond: below it, the split's bookkeeping and a second
+/// thread that spins for work cost more than they save).
 const PARALLEL_MIN_WORK: f64 = 2e6;
 
 struct Scratch {
