@@ -1495,9 +1495,16 @@ mod tests {
     #[test]
     fn supernodal_factorisation_matches_faer() {
         let (p, a, ne, r) = stage_qp(5);
-        for (threads, inertia) in [(1, false), (2, false), (2, true)] {
+        // faer's dense kernels for every supernode, for the wide ones (the
+        // default) and for none.
+        let widths = [1, crate::sqp::ldlt::DENSE_KERNEL_MIN_COLUMNS, usize::MAX];
+        let cases = [(1, false), (2, false), (2, true)];
+        for ((threads, inertia), dense_min) in
+            cases.into_iter().flat_map(|c| widths.map(|w| (c, w)))
+        {
             let mut ipm = supernodal_ipm(&p, &a, ne, threads);
             ipm.inertia_correction = inertia;
+            ipm.layout.as_mut().unwrap().dense_min = dense_min;
             let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
             assert!(ipm.factor(&p, &a, &d));
             let ours = ipm.l_values.clone();
@@ -1525,7 +1532,7 @@ mod tests {
             for (k, (x, y)) in ours.iter().zip(&ipm.l_values).enumerate() {
                 assert!(
                     (x - y).abs() <= 1e-10 * scale,
-                    "{threads} thread(s), inertia {inertia}: value {k}: {x} against faer's {y}"
+                    "{threads} thread(s), inertia {inertia}, dense from {dense_min}: value {k}: {x} against faer's {y}"
                 );
             }
         }

@@ -6,11 +6,11 @@
 //! The factorisation is left-looking, as faer's: each supernode gathers the
 //! updates of the descendants whose rows reach its columns, then factorises
 //! its dense column block. What differs:
-//! * the updates, and the dense blocks narrower than
-//!   [`DENSE_KERNEL_MIN_COLUMNS`], are plain loops over contiguous columns
-//!   (the jump's supernodes are mostly one or two columns wide, where
-//!   faer's dense kernels cost more in setup than in arithmetic); wider
-//!   blocks use faer's blocked kernels;
+//! * the supernodes narrower than [`DENSE_KERNEL_MIN_COLUMNS`] factorise
+//!   their blocks and send their updates by plain loops over contiguous
+//!   columns (the jump's supernodes are mostly one or two columns wide,
+//!   where faer's dense kernels cost more in setup than in arithmetic);
+//!   wider ones use faer's blocked LDLᵀ and matrix product;
 //! * a supernode reads only its own descendants, so disjoint subtrees of the
 //!   supernodal elimination tree factorise independently (the tree-level
 //!   parallelism of sparse direct solvers): the subtrees below the top
@@ -49,6 +49,9 @@ pub(crate) struct FactorLayout {
     owner: Vec<u8>,
     /// Whether the factorisation uses the second thread.
     pub(crate) parallel: bool,
+    /// Supernodes at least this wide use faer's dense kernels
+    /// ([`DENSE_KERNEL_MIN_COLUMNS`]).
+    pub(crate) dense_min: usize,
     /// The second thread, where two pay.
     helper: Option<Helper>,
     /// The top supernodes in order, with the offset and length of their
@@ -58,9 +61,9 @@ pub(crate) struct FactorLayout {
     scratch: [Scratch; 2],
 }
 
-/// Supernodes at least this wide factorise their dense block with faer's
-/// blocked kernels.
-const DENSE_KERNEL_MIN_COLUMNS: usize = 32;
+/// Supernodes at least this wide factorise their dense block, and compute
+/// their updates of their ancestors, with faer's blocked kernels.
+pub(crate) const DENSE_KERNEL_MIN_COLUMNS: usize = 32;
 
 /// Supernodes factorised after both subtree sets.
 const TOP: u8 = 2;
@@ -181,19 +184,23 @@ impl FactorLayout {
         // Work estimate of a supernode of c columns and p rows below them:
         // its updates of its ancestors, c multiply-adds and one scattered
         // subtraction for each of the p(p + 1)/2 entries they reach, and
-        // its dense block, c²(c/3 + p), a fifth of that for blocks that
-        // faer's blocked kernels factorise (the jump's 271-column root takes
-        // 0.36 ms, against 2.4–2.9 ms for each thread's subtrees).
+        // its dense block, c²(c/3 + p), counted at a fifth where faer's
+        // kernels factorise it (the jump's 271-column root takes 0.36 ms,
+        // against about 2 ms for each thread's subtrees). Counting the wide
+        // supernodes' updates, also faer's products, at a fifth as well
+        // split the jump's tree no better (its QPs 1–30, alternating runs:
+        // 3.04–3.49 s against 2.96–3.46 s).
         let work: Vec<f64> = (0..ns)
             .map(|sn| {
                 let c = begin[sn + 1] - begin[sn];
-                let dense_rate = if c >= DENSE_KERNEL_MIN_COLUMNS {
+                let rate = if c >= DENSE_KERNEL_MIN_COLUMNS {
                     0.2
                 } else {
                     1.0
                 };
                 let (c, p) = (c as f64, (row_ptr[sn + 1] - row_ptr[sn]) as f64);
-                (c + 1.0) * p * (p + 1.0) / 2.0 + dense_rate * c * c * (c / 3.0 + p)
+                let reached = p * (p + 1.0) / 2.0;
+                (c + 1.0) * reached + rate * c * c * (c / 3.0 + p)
             })
             .collect();
         let (owner, parallel) = split_tree(&parent, &work, min_work);
@@ -224,6 +231,7 @@ impl FactorLayout {
             updates,
             owner,
             parallel,
+            dense_min: DENSE_KERNEL_MIN_COLUMNS,
             helper,
             top,
             top_len,
@@ -278,6 +286,7 @@ impl FactorLayout {
             signs,
             eps,
             delta,
+            dense_min: self.dense_min,
         };
         let [s0, s1] = &mut self.scratch;
         if !self.parallel {
@@ -601,6 +610,10 @@ struct Tree<'a> {
     signs: Option<&'a [i8]>,
     eps: f64,
     delta: f64,
+    /// Supernodes at least this wide use faer's kernels, for their dense
+    /// block and their updates ([`DENSE_KERNEL_MIN_COLUMNS`]; the tests
+    /// set 1 and usize::MAX to check both paths).
+    dense_min: usize,
 }
 
 impl Tree<'_> {
@@ -636,9 +649,8 @@ impl Tree<'_> {
         let nc = end - start;
         let pattern = &self.row_idx[self.row_ptr[sn]..self.row_ptr[sn + 1]];
         let nr = nc + pattern.len();
-        let map = &mut scratch.map;
         for (i, &row) in pattern.iter().enumerate() {
-            map[row] = nc + i;
+            scratch.map[row] = nc + i;
         }
         let local = |map: &[usize], row: usize| if row < end { row - start } else { map[row] };
         for &(d, first, last) in &self.updates[self.update_ptr[sn]..self.update_ptr[sn + 1]] {
@@ -649,6 +661,19 @@ impl Tree<'_> {
             let ncd = self.begin[d + 1] - self.begin[d];
             let pd = &self.row_idx[self.row_ptr[d]..self.row_ptr[d + 1]];
             let nrd = ncd + pd.len();
+            if ncd >= self.dense_min {
+                self.gather_dense(
+                    ld,
+                    ncd,
+                    &pd[first..],
+                    last - first,
+                    target,
+                    nr,
+                    scratch,
+                    |map, row| local(map, row),
+                );
+                continue;
+            }
             for jj in first..last {
                 let col = (pd[jj] - start) * nr;
                 let rows = &pd[jj..];
@@ -656,7 +681,7 @@ impl Tree<'_> {
                     let w = ld[0] * ld[1 + jj];
                     if w != 0.0 {
                         for (&row, l) in rows.iter().zip(&ld[1 + jj..]) {
-                            target[col + local(map, row)] -= w * l;
+                            target[col + local(&scratch.map, row)] -= w * l;
                         }
                     }
                     continue;
@@ -676,7 +701,7 @@ impl Tree<'_> {
                     }
                 }
                 for (&row, c) in rows.iter().zip(column.iter()) {
-                    target[col + local(map, row)] -= c;
+                    target[col + local(&scratch.map, row)] -= c;
                 }
             }
         }
@@ -692,7 +717,7 @@ impl Tree<'_> {
         let start = self.begin[sn];
         let nc = self.begin[sn + 1] - start;
         let nr = nc + self.row_ptr[sn + 1] - self.row_ptr[sn];
-        if nc >= DENSE_KERNEL_MIN_COLUMNS {
+        if nc >= self.dense_min {
             return self.dense_faer(start, nc, nr, target, scratch);
         }
         // The dense block: right-looking LDLᵀ over its columns, rows below
@@ -725,6 +750,60 @@ impl Tree<'_> {
 }
 
 impl Tree<'_> {
+    /// Subtract from `target` (rows `nr` per column) the update of a wide
+    /// descendant (`ncd` columns, values `ld`) whose pattern rows `rows`
+    /// reach it, the first `k` of them its columns: the product
+    /// L_rows·D·L_firstᵀ by faer's matrix product, then scattered through
+    /// `local` (the target's row of a global row).
+    #[allow(clippy::too_many_arguments)]
+    fn gather_dense(
+        &self,
+        ld: &[f64],
+        ncd: usize,
+        rows: &[usize],
+        k: usize,
+        target: &mut [f64],
+        nr: usize,
+        scratch: &mut Scratch,
+        local: impl Fn(&[usize], usize) -> usize,
+    ) {
+        use faer::{Accum, MatMut, MatRef, Par};
+        let (m, nrd) = (rows.len(), ld.len() / ncd);
+        let first = nrd - m;
+        let l = MatRef::from_column_major_slice(ld, nrd, ncd);
+        let below = l.subrows(first, m);
+        // W = L_first·D, k × ncd.
+        let weights = &mut scratch.weights;
+        weights.clear();
+        weights.resize(k * ncd, 0.0);
+        let mut w = MatMut::from_column_major_slice_mut(weights, k, ncd);
+        for c in 0..ncd {
+            let dc = l[(c, c)];
+            for j in 0..k {
+                w[(j, c)] = below[(j, c)] * dc;
+            }
+        }
+        let column = &mut scratch.column;
+        column.clear();
+        column.resize(m * k, 0.0);
+        let mut product = MatMut::from_column_major_slice_mut(column, m, k);
+        faer::linalg::matmul::matmul(
+            product.as_mut(),
+            Accum::Replace,
+            below,
+            w.as_ref().transpose(),
+            1.0,
+            Par::Seq,
+        );
+        let map = &scratch.map;
+        for j in 0..k {
+            let col = local(map, rows[j]) * nr;
+            for i in j..m {
+                target[col + local(map, rows[i])] -= product[(i, j)];
+            }
+        }
+    }
+
     /// The dense block of a wide supernode by faer's blocked kernels: LDLᵀ
     /// of the diagonal block, then the rows below by a triangular solve
     /// and D⁻¹ (as faer's supernodal factorisation does).
