@@ -25,7 +25,7 @@
 //!   supernodes (most of the jump's are one or two columns wide, where
 //!   faer's dense kernels cost more in setup than in arithmetic), faer's
 //!   kernels for the wide ones, and the elimination tree's subtrees on two
-//!   threads. The jump's QPs 1–30 take 3.6–3.8 s instead of 4.7–4.9 s with
+//!   threads. The jump's QPs 1–30 take 3.0–3.3 s instead of 4.7–4.9 s with
 //!   faer's factorisation (`CHAIN=1 examples/ipm_bench`), with the same
 //!   interior-point iterations;
 //! * the iterative refinement's residuals multiply by the assembled KKT
