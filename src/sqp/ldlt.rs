@@ -670,7 +670,7 @@ impl Tree<'_> {
                     target,
                     nr,
                     scratch,
-                    |map, row| local(map, row),
+                    local,
                 );
                 continue;
             }
