@@ -206,8 +206,6 @@ pub struct Ipm {
     perm_work: Vec<f64>,
     /// Scratch of the triangular solves.
     solve_scratch: SolveScratch,
-    /// The factor's ordering (new i = old factor_perm[i]).
-    factor_perm: Option<Vec<usize>>,
     /// Scratch of `solve_kkt`: right-hand side, solution, residual, trial.
     kkt_scratch: [Vec<f64>; 4],
     l_values: Vec<f64>,
@@ -449,7 +447,6 @@ impl Ipm {
             factor_signs,
             perm_work: vec![0.0; dim],
             solve_scratch: SolveScratch::default(),
-            factor_perm: symbolic.perm().map(|p| p.arrays().0.to_vec()),
             kkt_scratch: Default::default(),
             n,
             m,
@@ -683,7 +680,7 @@ impl Ipm {
 
     fn ldlt_solve(&mut self, v: &mut [f64]) {
         if let Some(layout) = &mut self.layout {
-            match &self.factor_perm {
+            match self.symbolic.perm().map(|p| p.arrays().0) {
                 Some(fwd) => {
                     for (w, &f) in self.perm_work.iter_mut().zip(fwd) {
                         *w = v[f];
@@ -1426,7 +1423,7 @@ mod tests {
         .unwrap();
         let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };
         ipm.layout = FactorLayout::with_parallel_min_work(&ipm.symbolic, min_work);
-        assert_eq!(ipm.layout.as_ref().unwrap().parallel, threads == 2);
+        assert_eq!(ipm.layout.as_ref().unwrap().parallel(), threads == 2);
         ipm
     }
 

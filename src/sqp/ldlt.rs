@@ -47,12 +47,10 @@ pub(crate) struct FactorLayout {
     /// Which thread factorises each supernode: 0 or 1 (disjoint subtrees),
     /// or [`TOP`] (after both).
     owner: Vec<u8>,
-    /// Whether the factorisation uses the second thread.
-    pub(crate) parallel: bool,
     /// Supernodes at least this wide use faer's dense kernels
     /// ([`DENSE_KERNEL_MIN_COLUMNS`]).
     pub(crate) dense_min: usize,
-    /// The second thread, where two pay.
+    /// The second thread, where two pay (None: one thread).
     helper: Option<Helper>,
     /// The top supernodes in order, with the offset and length of their
     /// blocks in a thread's buffer of updates from its subtrees.
@@ -205,7 +203,6 @@ impl FactorLayout {
             .collect();
         let (owner, parallel) = split_tree(&parent, &work, min_work);
         let helper = if parallel { Helper::new() } else { None };
-        let parallel = helper.is_some();
         let scratch = [(); 2].map(|_| Scratch {
             map: vec![0; n],
             column: Vec::new(),
@@ -215,7 +212,7 @@ impl FactorLayout {
         });
         let mut top = Vec::new();
         let mut top_len = 0;
-        if parallel {
+        if helper.is_some() {
             for sn in (0..ns).filter(|&sn| owner[sn] == TOP) {
                 let len = val_ptr[sn + 1] - val_ptr[sn];
                 top.push((sn, top_len, len));
@@ -230,13 +227,18 @@ impl FactorLayout {
             update_ptr,
             updates,
             owner,
-            parallel,
             dense_min: DENSE_KERNEL_MIN_COLUMNS,
             helper,
             top,
             top_len,
             scratch,
         })
+    }
+
+    /// Whether the factorisation and the solves use a second thread.
+    #[cfg(test)]
+    pub(crate) fn parallel(&self) -> bool {
+        self.helper.is_some()
     }
 
     /// The position in the factor's values of the entry (row, col) of the
@@ -289,9 +291,9 @@ impl FactorLayout {
             dense_min: self.dense_min,
         };
         let [s0, s1] = &mut self.scratch;
-        if !self.parallel {
+        let Some(helper) = &mut self.helper else {
             return (0..ns).try_for_each(|sn| tree.supernode(sn, &mut blocks, s0, None));
-        }
+        };
         let owner = &self.owner[..];
         let top = &self.top[..];
         let mut own: [Vec<&mut [f64]>; 2] = [0, 1].map(|_| {
@@ -326,9 +328,6 @@ impl FactorLayout {
             Ok(())
         };
         let [own0, own1] = &mut own;
-        let Some(helper) = &mut self.helper else {
-            return Err(PivotError { column: 0 });
-        };
         let mut r1 = Ok(());
         // A panic of the second thread's half (a bug) reads as a failed
         // factorisation, which the solver reports, not as a crash.
@@ -373,8 +372,8 @@ impl FactorLayout {
             val_ptr: &self.val_ptr,
             values,
         };
-        let (owner, helper) = (&self.owner[..], &mut self.helper);
-        let Some(helper) = helper.as_mut().filter(|_| self.parallel) else {
+        let owner = &self.owner[..];
+        let Some(helper) = &mut self.helper else {
             (0..ns).for_each(|sn| tree.forward(sn, x, w0));
             tree.diagonal(x);
             (0..ns).rev().for_each(|sn| tree.backward(sn, x, w0));
