@@ -553,7 +553,7 @@ fn check_mirror(
         ]
     };
     if params(a) != params(b) {
-        return Err(OdeError::Symmetry(format!("{}: muscle '{}' has parameters different from '{}'; the symmetric system needs mirror images", model.file.display(), b.name, a.name)));
+        return Err(OdeError::Symmetry(format!("{}: forces.muscles[{j}]: muscle '{}' has parameters different from '{}' (forces.muscles[{i}]); the symmetric system needs mirror images", model.file.display(), b.name, a.name)));
     }
     let n = system.nq();
     let mut ws = mb.workspace::<f64>();
@@ -584,7 +584,7 @@ fn check_mirror(
             .length;
         if (li - lj).abs() > 1e-12 * li.abs().max(1.0) {
             return Err(OdeError::Symmetry(format!(
-                "{}: muscle '{}' is not the mirror image of '{}' (path lengths {lj} m and {li} m at the same symmetric pose)",
+                "{}: forces.muscles[{j}].path: muscle '{}' is not the mirror image of '{}' (forces.muscles[{i}]): path lengths {lj} m and {li} m at the same symmetric pose",
                 model.file.display(),
                 b.name,
                 a.name

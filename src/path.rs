@@ -248,6 +248,34 @@ impl GeometryPath {
             };
             out.push(pp);
         }
+        // Two points fixed on the same body at the same location, with at
+        // most conditional points between them, can make a segment of zero
+        // length: its direction, and with it the lengthening speed and the
+        // forces, would be 0/0.
+        let fixed_on = |p: &PathPoint| match p.kind {
+            PointKind::Moving { .. } => None,
+            _ => Some((p.body, p.location)),
+        };
+        for j in 1..out.len() {
+            for i in (0..j).rev() {
+                if let (Some(a), Some(b)) = (fixed_on(&out[i]), fixed_on(&out[j])) {
+                    if a == b {
+                        return Err((
+                            j,
+                            "location".into(),
+                            format!(
+                                "coincides with path point {i} on the same body ({:?}){}: a segment of zero length has no direction",
+                                b.1,
+                                if j > i + 1 { " when the conditional points between them are inactive" } else { "" }
+                            ),
+                        ));
+                    }
+                }
+                if !matches!(out[i].kind, PointKind::Conditional { .. }) {
+                    break;
+                }
+            }
+        }
         let conditional: Vec<usize> = out
             .iter()
             .enumerate()

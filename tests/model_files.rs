@@ -402,3 +402,71 @@ fn a_jump_model_with_paired_muscles_needs_symmetry_pairs() {
         "{e}"
     );
 }
+
+/// Two path points fixed at the same place on the same body make a segment
+/// of zero length, whose direction (and so the lengthening speed and the
+/// forces) would be 0/0: refused, also across a conditional point that can
+/// switch off between them, and the error names the point.
+#[test]
+fn coincident_path_points_are_refused() {
+    let i = 3;
+    let v = jumper_json();
+    assert_eq!(v["forces"]["muscles"][i]["name"], "iliacus_r");
+    assert_eq!(v["forces"]["muscles"][i]["path"][2]["type"], "conditional");
+    // Neighbours.
+    let mut w = v.clone();
+    w["forces"]["muscles"][i]["path"][1]["location"] =
+        w["forces"]["muscles"][i]["path"][0]["location"].clone();
+    let e = refused(&w);
+    assert_eq!(e.field(), format!("forces.muscles[{i}].path[1].location"));
+    assert!(
+        e.to_string()
+            .contains("coincides with path point 0 on the same body"),
+        "{e}"
+    );
+    // Across the conditional point 2, which switches off outside its range.
+    let mut w = v.clone();
+    w["forces"]["muscles"][i]["path"][3]["body"] = "pelvis".into();
+    w["forces"]["muscles"][i]["path"][3]["location"] =
+        w["forces"]["muscles"][i]["path"][1]["location"].clone();
+    let e = refused(&w);
+    assert_eq!(e.field(), format!("forces.muscles[{i}].path[3].location"));
+    assert!(
+        e.to_string()
+            .contains("coincides with path point 1 on the same body"),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("when the conditional points between them are inactive"),
+        "{e}"
+    );
+    // The same location on another body is a different point.
+    let mut w = v.clone();
+    w["forces"]["muscles"][i]["path"][3]["location"] =
+        w["forces"]["muscles"][i]["path"][1]["location"].clone();
+    assert!(Model::from_json_str(&w.to_string(), "m.json").is_ok());
+}
+
+/// The symmetric system carries a left muscle by its right partner only if
+/// their paths are mirror images: a left path point moved by a millimetre
+/// is refused when the system is built, naming the left muscle's path.
+#[test]
+fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_path() {
+    let mut v = jumper_json();
+    let (l, r) = (muscle_index(&v, "iliacus_l"), muscle_index(&v, "iliacus_r"));
+    let x = v["forces"]["muscles"][l]["path"][4]["location"][0]
+        .as_f64()
+        .unwrap();
+    v["forces"]["muscles"][l]["path"][4]["location"][0] = (x + 1e-3).into();
+    let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    let e = leap::ode::StateEquation::new(&model, true, leap::path::PathSmoothing::Exact)
+        .err()
+        .expect("refused");
+    assert!(
+        e.to_string().starts_with(&format!(
+            "m.json: forces.muscles[{l}].path: muscle 'iliacus_l' is not the mirror image of 'iliacus_r' (forces.muscles[{r}]): path lengths"
+        )),
+        "{e}"
+    );
+}
