@@ -460,9 +460,10 @@ fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_path() {
         .unwrap();
     v["forces"]["muscles"][l]["path"][4]["location"][0] = (x + 1e-3).into();
     let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
-    let e = leap::ode::StateEquation::new(&model, true, leap::path::PathSmoothing::Exact)
-        .err()
-        .expect("refused");
+    let Err(e) = leap::ode::StateEquation::new(&model, true, leap::path::PathSmoothing::Exact)
+    else {
+        panic!("a left path a millimetre off its mirror image was accepted");
+    };
     assert!(
         e.to_string().starts_with(&format!(
             "m.json: forces.muscles[{l}].path: muscle 'iliacus_l' is not the mirror image of 'iliacus_r' (forces.muscles[{r}]): path lengths"
