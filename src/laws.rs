@@ -42,6 +42,54 @@ pub struct Thelen {
     /// ½ + ½·tanh(b·(u − a)), De Groote et al.'s (2016) smoothing, for
     /// gradient-based optimal control (see [`Thelen::activation_rate`]).
     pub activation_smoothing: Option<f64>,
+    /// None: OpenSim's clamp, which stops a shortening fibre at l_min (a
+    /// jump in the fibre velocity). Some: the clamp spread over a band above
+    /// a floor, for gradient-based optimal control (see
+    /// [`FiberClampSmoothing`]).
+    pub fiber_clamp_smoothing: Option<FiberClampSmoothing>,
+}
+
+/// Thelen's fibre clamp made smooth: between `floor` and `floor + width`
+/// (m) a shortening fibre velocity v is scaled by a C² ramp g, 0 at the
+/// floor, 1 at the band's top, and the switch between shortening and
+/// lengthening is blended over |v| ≈ [`CLAMP_VELOCITY_BLEND`]:
+/// v_eff = v − (1 − g)·½(v − √(v² + ε²)). Above the band the velocity is
+/// the model's own; at the floor a shortening fibre stops, as at OpenSim's
+/// l_min. With the tendon slack the inverted force-velocity curve asks a
+/// fibre to shorten at about v_max·(0.25 + 0.75·a) whatever its length; at
+/// OpenSim's clamp that velocity drops to zero in a step, which a Newton
+/// step cannot cross (an explicit fibre-length defect evaluated at a node
+/// where the tendon is slack, as Hermite–Simpson and trapezoidal
+/// collocation do at lift-off).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FiberClampSmoothing {
+    pub floor: f64,
+    pub width: f64,
+}
+
+/// ε of [`FiberClampSmoothing`]'s blend between shortening and lengthening,
+/// in units of v_max·l_o.
+pub const CLAMP_VELOCITY_BLEND: f64 = 0.01;
+
+impl FiberClampSmoothing {
+    /// The smoothed normalised fibre velocity at fibre length `lm`.
+    fn apply<S: Scalar>(&self, lm: S, vn: S) -> S {
+        let r = (lm.re() - self.floor) / self.width;
+        if r >= 1.0 {
+            return vn;
+        }
+        // 1 − g with g = 6r⁵ − 15r⁴ + 10r³ (C² at both ends of the band).
+        let stop = if r <= 0.0 {
+            S::one()
+        } else {
+            let r = (lm - self.floor) / self.width;
+            let g = r * r * r * (r * (r * 6.0 - 15.0) + 10.0);
+            g * -1.0 + 1.0
+        };
+        let shortening =
+            (vn - (vn * vn + CLAMP_VELOCITY_BLEND * CLAMP_VELOCITY_BLEND).sqrt()) * 0.5;
+        vn - stop * shortening
+    }
 }
 
 /// Everything Thelen2003Muscle computes at one state (OpenSim's names).
@@ -87,6 +135,7 @@ impl Thelen {
             e_toe,
             k_lin: 0.67 / (m.FmaxTendonStrain - e_toe),
             activation_smoothing: None,
+            fiber_clamp_smoothing: None,
         }
     }
 
@@ -166,6 +215,9 @@ impl Thelen {
         let (cos_phi, ln, fse) = self.fibre_and_tendon(lm_state, lmt);
         let f = fse / cos_phi - self.fpe(ln);
         let mut vn = self.dlce_n(ac, self.fal(ln), f);
+        if let Some(sm) = &self.fiber_clamp_smoothing {
+            vn = sm.apply(lm_state, vn);
+        }
         if lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0 {
             vn = S::zero();
         }
@@ -309,6 +361,9 @@ impl Thelen {
         let fpe = self.fpe(ln);
         let f = fse / cos_phi - fpe;
         let mut vn = self.dlce_n(ac, fal, f);
+        if let Some(sm) = &self.fiber_clamp_smoothing {
+            vn = sm.apply(lm_state, vn);
+        }
         let clamped = lm_state.re() <= self.min_fiber_length && vn.re() <= 0.0;
         if clamped {
             vn = S::zero();

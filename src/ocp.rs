@@ -132,7 +132,21 @@ pub struct OcpOptions {
     /// than its forward check, of which 1.13 cm vanished when the forward
     /// check used the blended switch too; at b = 50 the gap is 0.34 cm.
     pub activation_smoothing: Option<f64>,
+    /// Thelen's fibre clamp spread over a band (see
+    /// [`crate::laws::FiberClampSmoothing`]) from the fibre-length lower
+    /// bound, (1 + `min_fiber_length_margin`)·l_min, up by this fraction of
+    /// l_min, so that a fibre can rest on its bound with its tendon slack.
+    /// None (default): the model's velocity down to the bound. `leap solve`
+    /// takes [`FIBER_CLAMP_BAND`] for the schemes that evaluate the
+    /// dynamics at the nodes (trapezoidal, Hermite–Simpson, backward
+    /// Euler).
+    pub fiber_clamp_smoothing: Option<f64>,
 }
+
+/// The band of [`OcpOptions::fiber_clamp_smoothing`] that `leap solve`
+/// takes for the schemes that evaluate the dynamics at the nodes: 2% of
+/// l_min above the fibre-length bound (0.4 mm for soleus).
+pub const FIBER_CLAMP_BAND: f64 = 0.02;
 
 impl Default for OcpOptions {
     fn default() -> Self {
@@ -146,6 +160,7 @@ impl Default for OcpOptions {
             no_com_descent: true,
             liftoff: LiftOff::default(),
             activation_smoothing: Some(50.0),
+            fiber_clamp_smoothing: None,
         }
     }
 }
@@ -198,6 +213,13 @@ impl JumpOcp {
         for law in &mut laws.muscles {
             if let MuscleLaw::Thelen(t) = law {
                 t.activation_smoothing = options.activation_smoothing;
+                t.fiber_clamp_smoothing =
+                    options
+                        .fiber_clamp_smoothing
+                        .map(|w| crate::laws::FiberClampSmoothing {
+                            floor: t.min_fiber_length * (1.0 + options.min_fiber_length_margin),
+                            width: w * t.min_fiber_length,
+                        });
             }
         }
         let eq = StateEquation::new(model, true, options.smoothing)?;

@@ -23,7 +23,7 @@
 use crate::io::{Controls, StoError, StoTable};
 use crate::model::{Model, ModelError};
 use crate::nlp::Nlp;
-use crate::ocp::{JumpOcp, OcpError, OcpOptions};
+use crate::ocp::{JumpOcp, OcpError, OcpOptions, FIBER_CLAMP_BAND};
 use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
@@ -214,9 +214,14 @@ pub fn run(
     let big_n = config.transcription.num_mesh_intervals;
     let defaults = OcpOptions::default();
     // The paper constrains 7 intervals against countermovement (eq. 4); a
-    // coarser mesh constrains all it has.
+    // coarser mesh constrains all it has. Schemes that evaluate the
+    // dynamics at the nodes meet Thelen's fibre clamp where a fibre rests
+    // on its bound with the tendon slack (the ankle's muscles at lift-off):
+    // there the clamp is spread over a band.
     let options = OcpOptions {
         no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
+        fiber_clamp_smoothing: (config.transcription.scheme != Scheme::MidpointEuler)
+            .then_some(FIBER_CLAMP_BAND),
         ..defaults
     };
     progress("static squat and jump problem");
@@ -564,11 +569,12 @@ fn forward_check(
     let t_max = tf + FORWARD_FLIGHT_TIME;
     let eq = Arc::new(ocp.eq.clone());
     // The forward check integrates the model's own laws: OpenSim's
-    // activation switch, not the optimizer's smoothed one.
+    // activation switch and fibre clamp, not the optimizer's smoothed ones.
     let mut own_laws = ocp.laws.clone();
     for law in &mut own_laws.muscles {
         if let crate::laws::MuscleLaw::Thelen(t) = law {
             t.activation_smoothing = None;
+            t.fiber_clamp_smoothing = None;
         }
     }
     let laws = Arc::new(own_laws);

@@ -397,3 +397,93 @@ fn smoothed_activation_switch() {
         assert!(d.eps > left.min(right) && d.eps < left.max(right));
     }
 }
+
+/// Thelen's fibre clamp spread over a band above the fibre-length floor:
+/// the model's own velocity above the band, a shortening fibre stopped at
+/// the floor (as OpenSim's clamp stops it at l_min), and a velocity whose
+/// derivative in the fibre length is continuous (checked against central
+/// differences, and the one-sided slopes at the band's top).
+#[test]
+fn smoothed_fibre_clamp() {
+    use leap::laws::FiberClampSmoothing;
+    use leap::scalar::Dual64;
+    let p = serde_json::json!({"activation_time_constant": 0.01, "deactivation_time_constant": 0.04,
+        "FmaxTendonStrain": 0.033, "KshapeActive": 0.5, "KshapePassive": 4.0, "Af": 0.3, "Flen": 1.8});
+    let opensim = Thelen::new(&muscle(0.3, &p));
+    let lmin = opensim.min_fiber_length;
+    let (floor, width) = (1.001 * lmin, 0.02 * lmin);
+    let mut smooth = opensim.clone();
+    smooth.fiber_clamp_smoothing = Some(FiberClampSmoothing { floor, width });
+    let (a, u) = (0.8, 0.8);
+    // Muscle-tendon lengths with the tendon slack at the floor (0.19 m:
+    // the fibre alone is longer than the path minus the slack length) and
+    // with it stretched (0.21 m).
+    let v = |t: &Thelen, lm: f64, lmt: f64| -> f64 { t.rates(a, lm, lmt, u).fiber_velocity };
+    let dv = |t: &Thelen, lm: f64, lmt: f64| -> f64 {
+        t.rates(
+            Dual64::from(a),
+            Dual64::new(lm, 1.0),
+            Dual64::from(lmt),
+            Dual64::from(u),
+        )
+        .fiber_velocity
+        .eps
+    };
+    let slack = 0.19 + 0.0;
+    let vmax = 10.0 * 0.1;
+    // Above the band the velocity is the model's, bit for bit.
+    for lm in [floor + 1.0001 * width, 0.06, 0.1, 0.14] {
+        for lmt in [slack, 0.21, 0.25] {
+            assert_eq!(
+                v(&smooth, lm, lmt),
+                v(&opensim, lm, lmt),
+                "lm {lm} lmt {lmt}"
+            );
+        }
+    }
+    // At the floor with the tendon slack the model's fibre shortens at
+    // about v_max·(0.25 + 0.75 a); the smoothed one stops.
+    let v_model = v(&opensim, floor, slack);
+    assert!(v_model < -0.5 * vmax, "model velocity {v_model}");
+    let v_floor = v(&smooth, floor, slack);
+    assert!(
+        v_floor >= 0.0 && v_floor <= 1e-4 * v_model.abs(),
+        "at the floor: {v_floor} (model {v_model})"
+    );
+    // A lengthening fibre in the band keeps its velocity (to the blend).
+    let v_len = v(&opensim, floor + 0.5 * width, 0.25);
+    assert!(v_len > 0.1 * vmax, "lengthening {v_len}");
+    assert!((v(&smooth, floor + 0.5 * width, 0.25) - v_len).abs() <= 1e-3 * v_len);
+    // Derivatives in the fibre length across the band (dual numbers against
+    // central differences), and C¹ at the band's top.
+    let h = 1e-9;
+    for r in [0.05, 0.3, 0.5, 0.7, 0.95] {
+        let lm = floor + r * width;
+        for lmt in [slack, 0.205] {
+            let fd = (v(&smooth, lm + h, lmt) - v(&smooth, lm - h, lmt)) / (2.0 * h);
+            let d = dv(&smooth, lm, lmt);
+            assert!(
+                (d - fd).abs() <= 1e-5 * fd.abs().max(1.0),
+                "r {r} lmt {lmt}: {d} vs {fd}"
+            );
+        }
+    }
+    // C¹ at both ends of the band: the one-sided slopes agree to a
+    // millionth of the ramp's own slope |v|/width.
+    let h = 1e-8;
+    for edge in [floor, floor + width] {
+        let right = (v(&smooth, edge + h, slack) - v(&smooth, edge, slack)) / h;
+        let left = (v(&smooth, edge, slack) - v(&smooth, edge - h, slack)) / h;
+        assert!(
+            (right - left).abs() <= 1e-6 * v_model.abs() / width,
+            "slopes at {edge}: {left} vs {right}"
+        );
+    }
+    // ... where the ramp itself is steep: at mid-band the velocity falls
+    // with the length at 15/8 |v|/width (the ramp's slope there).
+    let mid = dv(&smooth, floor + 0.5 * width, slack);
+    assert!(
+        (mid + 1.875 * v_model.abs() / width).abs() <= 0.05 * mid.abs(),
+        "mid-band slope {mid}"
+    );
+}
