@@ -209,6 +209,13 @@ impl JumpOcp {
     /// The jump of `model`'s symmetric system from the static squat of its
     /// `squat` pose.
     pub fn new(model: &Model, options: OcpOptions) -> Result<Self, OcpError> {
+        if let Some(w) = options.fiber_clamp_smoothing {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(OcpError::Invalid(format!(
+                    "fiber_clamp_smoothing: the band must be a positive fraction of l_min, got {w}"
+                )));
+            }
+        }
         let mut laws = OpenSimLaws::new(model)?;
         for law in &mut laws.muscles {
             if let MuscleLaw::Thelen(t) = law {

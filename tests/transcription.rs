@@ -390,6 +390,19 @@ fn settings_errors_name_what_is_wrong() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("speed_bound"), "{e}");
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
+    for w in [0.0, -0.02, f64::NAN] {
+        let Err(e) = JumpOcp::new(
+            &model,
+            OcpOptions {
+                fiber_clamp_smoothing: Some(w),
+                ..Default::default()
+            },
+        ) else {
+            panic!("a fibre clamp band of {w} was accepted");
+        };
+        assert!(e.to_string().contains("fiber_clamp_smoothing"), "{e}");
+    }
     let e = with(OcpOptions {
         fiber_length_bounds: [0.2, 0.5],
         ..Default::default()
