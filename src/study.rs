@@ -31,6 +31,23 @@ use crate::simbody::SimbodyIntegrator;
 /// Relative eigenvalue floor of the exact element Hessians in the jump
 /// (see [`SolveStudy::resolve`]'s settings).
 pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
+
+/// The same for Hermite–Simpson, whose one element per interval composes
+/// the dynamics through the centre state: its largest eigenvalue is set by
+/// that stiff composition, and 1e-4 of it lifted every weak direction so
+/// far that the full jump crept (26.7 cm after 3,000 iterations); at 1e-6
+/// it solved in 580 iterations (32.3 cm), at 1e-7 in 525 (34.1 cm), at 1e-2
+/// it stalled in elastic mode (README, "Hermite–Simpson").
+pub const HERMITE_SIMPSON_EIGENVALUE_FLOOR: f64 = 1e-7;
+
+/// The eigenvalue floor a scheme gets unless the study names one.
+pub fn default_eigenvalue_floor(scheme: Scheme) -> f64 {
+    if scheme == Scheme::HermiteSimpson {
+        HERMITE_SIMPSON_EIGENVALUE_FLOOR
+    } else {
+        JUMP_EIGENVALUE_FLOOR
+    }
+}
 use crate::model::parse_json_object;
 use crate::simulate::{check_integrator_accuracy, parse_integrator, IntegratorChoice};
 use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
@@ -232,6 +249,9 @@ pub struct SolveConfig {
     pub output_directory: PathBuf,
     /// None: skipped.
     pub forward_check: Option<ForwardCheck>,
+    /// Whether the study named `hessian_eigenvalue_floor` (else a scheme
+    /// given on the command line brings its own default floor).
+    pub eigenvalue_floor_given: bool,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -354,14 +374,15 @@ impl SolveStudy {
         // jump_diag -- 28 400` against the same without HESSIAN). Their
         // eigenvalue floor is 1e-4 of each element's largest eigenvalue: at
         // the SQP's default 1e-8 the first QPs (λ = 0, so the Hessian is
-        // nearly the floor alone) fail in clarabel.
+        // nearly the floor alone) fail in clarabel. Hermite–Simpson takes
+        // its own ([`default_eigenvalue_floor`]).
         // Leap's interior-point QP solver by default (clarabel where it
         // fails): with implicit fibre dynamics the 28-interval jump solved
         // in 216 iterations, 113 s, against clarabel's 189, 290 s.
         let mut settings = SqpSettings {
             scale_variables_using_bounds: true,
             hessian: HessianMode::ExactConvexified,
-            eigenvalue_floor: JUMP_EIGENVALUE_FLOOR,
+            eigenvalue_floor: default_eigenvalue_floor(transcription.scheme),
             paper_criterion: true,
             qp_solver: QpSolver::InteriorPoint,
             ..Default::default()
@@ -470,6 +491,7 @@ impl SolveStudy {
             settings,
             output_directory,
             forward_check,
+            eigenvalue_floor_given: self.hessian_eigenvalue_floor.is_some(),
         })
     }
 }
@@ -513,6 +535,10 @@ impl SolveConfig {
             // command line brings the explicit rows with it.
             if self.transcription.scheme != Scheme::MidpointEuler {
                 self.transcription.fiber_dynamics = FiberDynamics::Explicit;
+            }
+            if !self.eigenvalue_floor_given {
+                self.settings.eigenvalue_floor =
+                    default_eigenvalue_floor(self.transcription.scheme);
             }
         }
         if let Some(s) = &o.fiber_dynamics {
@@ -958,6 +984,45 @@ mod tests {
             c.settings.optim_constraint_tolerance,
             d.optim_constraint_tolerance
         );
+    }
+
+    /// Hermite–Simpson gets its own eigenvalue floor from a study file and
+    /// from `--scheme`, and a floor the study names wins over both.
+    #[test]
+    fn hermite_simpson_brings_its_eigenvalue_floor() {
+        let from = |json: &str| {
+            serde_json::from_str::<SolveStudy>(json)
+                .unwrap()
+                .resolve(None)
+                .unwrap()
+        };
+        let hs = from(r#"{"mesh": {"scheme": "hermite-simpson"}}"#);
+        assert_eq!(
+            hs.settings.eigenvalue_floor,
+            HERMITE_SIMPSON_EIGENVALUE_FLOOR
+        );
+        let given =
+            from(r#"{"mesh": {"scheme": "hermite-simpson"}, "hessian_eigenvalue_floor": 1e-3}"#);
+        assert_eq!(given.settings.eigenvalue_floor, 1e-3);
+        let scheme = |c: &mut SolveConfig, s: &str| {
+            c.apply(&Overrides {
+                scheme: Some(s.into()),
+                ..Default::default()
+            })
+            .unwrap()
+        };
+        let mut c = SolveConfig::builtin().unwrap();
+        assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
+        scheme(&mut c, "hermite-simpson");
+        assert_eq!(
+            c.settings.eigenvalue_floor,
+            HERMITE_SIMPSON_EIGENVALUE_FLOOR
+        );
+        scheme(&mut c, "trapezoidal");
+        assert_eq!(c.settings.eigenvalue_floor, JUMP_EIGENVALUE_FLOOR);
+        let mut given = from(r#"{"hessian_eigenvalue_floor": 1e-3}"#);
+        scheme(&mut given, "hermite-simpson");
+        assert_eq!(given.settings.eigenvalue_floor, 1e-3);
     }
 
     #[test]
