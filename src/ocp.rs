@@ -138,14 +138,14 @@ pub struct OcpOptions {
     /// l_min, so that a fibre can rest on its bound with its tendon slack.
     /// None (default): the model's velocity down to the bound. `leap solve`
     /// takes [`FIBER_CLAMP_BAND`] for the schemes that evaluate the
-    /// dynamics at the nodes (trapezoidal, Hermite–Simpson, backward
-    /// Euler).
+    /// dynamics at the nodes
+    /// ([`crate::transcription::Scheme::evaluates_dynamics_at_nodes`]).
     pub fiber_clamp_smoothing: Option<f64>,
 }
 
 /// The band of [`OcpOptions::fiber_clamp_smoothing`] that `leap solve`
-/// takes for the schemes that evaluate the dynamics at the nodes: 2% of
-/// l_min above the fibre-length bound (0.4 mm for soleus).
+/// takes where the scheme evaluates the dynamics at the nodes: 2% of l_min
+/// above the fibre-length bound (0.4 mm for soleus).
 pub const FIBER_CLAMP_BAND: f64 = 0.02;
 
 impl Default for OcpOptions {

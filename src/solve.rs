@@ -30,7 +30,7 @@ use crate::simulate::{
 };
 use crate::sqp::{HessianMode, SqpResult, SqpStatus};
 use crate::study::{fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, SolveConfig};
-use crate::transcription::{MeshTrajectory, Scheme, Transcription, TranscriptionError};
+use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -215,12 +215,13 @@ pub fn run(
     let defaults = OcpOptions::default();
     // The paper constrains 7 intervals against countermovement (eq. 4); a
     // coarser mesh constrains all it has. Schemes that evaluate the
-    // dynamics at the nodes meet Thelen's fibre clamp where a fibre rests
-    // on its bound with the tendon slack (the ankle's muscles at lift-off):
-    // there the clamp is spread over a band.
+    // dynamics at the nodes get Thelen's fibre clamp spread over a band.
     let options = OcpOptions {
         no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
-        fiber_clamp_smoothing: (config.transcription.scheme != Scheme::MidpointEuler)
+        fiber_clamp_smoothing: config
+            .transcription
+            .scheme
+            .evaluates_dynamics_at_nodes()
             .then_some(FIBER_CLAMP_BAND),
         ..defaults
     };
@@ -352,7 +353,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
     let peak_nodes = max(&forces_of(&mesh));
     // The dynamics hold at the interval midpoints for midpoint Euler (mean
     // state and excitation), at the nodes otherwise.
-    let points = if tr.options().scheme == Scheme::MidpointEuler {
+    let points = if !tr.options().scheme.evaluates_dynamics_at_nodes() {
         let mean = |a: &[Vec<f64>]| -> Vec<Vec<f64>> {
             a.windows(2)
                 .map(|w| w[0].iter().zip(&w[1]).map(|(p, q)| 0.5 * (p + q)).collect())

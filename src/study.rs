@@ -26,7 +26,13 @@
 //! to the working directory. A bad study is reported with the file, the
 //! JSON path of the field and the reason ([`StudyError`]).
 
+use crate::model::parse_json_object;
 use crate::simbody::SimbodyIntegrator;
+use crate::simulate::{check_integrator_accuracy, parse_integrator, IntegratorChoice};
+use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
+use crate::transcription::{FiberDynamics, Scheme, TranscriptionOptions};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
 
 /// Relative eigenvalue floor of the exact element Hessians in the jump
 /// (see [`SolveStudy::resolve`]'s settings).
@@ -48,12 +54,6 @@ pub fn default_eigenvalue_floor(scheme: Scheme) -> f64 {
         JUMP_EIGENVALUE_FLOOR
     }
 }
-use crate::model::parse_json_object;
-use crate::simulate::{check_integrator_accuracy, parse_integrator, IntegratorChoice};
-use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
-use crate::transcription::{FiberDynamics, Scheme, TranscriptionOptions};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
 
 /// Methods a study may name; only collocation is implemented.
 pub const METHODS: [&str; 2] = ["collocation", "shooting"];

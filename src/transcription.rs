@@ -100,6 +100,16 @@ pub enum Scheme {
     BackwardEuler,
 }
 
+impl Scheme {
+    /// Whether the defects evaluate the dynamics at the mesh nodes (all
+    /// but midpoint Euler, which evaluates them at the interval means):
+    /// there a fibre may rest on its lower bound with its tendon slack, on
+    /// Thelen's clamp (see [`crate::ocp::OcpOptions::fiber_clamp_smoothing`]).
+    pub fn evaluates_dynamics_at_nodes(self) -> bool {
+        self != Scheme::MidpointEuler
+    }
+}
+
 /// How the defects state the fibre dynamics of the muscles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum FiberDynamics {
