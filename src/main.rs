@@ -5,6 +5,29 @@ use clap::{Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+/// Standard output closed or full (`leap solve | head`, `> /dev/full`): an
+/// error to report, not a panic. Results files are written before the
+/// summary is printed.
+#[derive(Debug, thiserror::Error)]
+#[error("writing to standard output: {0}")]
+struct StdoutError(std::io::Error);
+
+/// `println!` that returns a [`StdoutError`] instead of panicking.
+macro_rules! outln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*).map_err(StdoutError)?
+    }};
+}
+
+/// `print!` that returns a [`StdoutError`] instead of panicking.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        write!(std::io::stdout().lock(), $($arg)*).map_err(StdoutError)?
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "leap",
@@ -286,6 +309,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli) {
         Ok(code) => code,
+        Err(e) if e.is::<StdoutError>() => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(2)
@@ -313,9 +340,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let report = leap::crosscheck::run(&m, samples, seed)
                 .with_context(|| format!("cross-check of {}", model.display()))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{}", report.table());
+                outln!("{}", report.table());
             }
             Ok(if report.passed {
                 ExitCode::SUCCESS
@@ -380,9 +407,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let a = leap::analyze::analyze(&eq, &laws, &time, &xs, window)
                 .with_context(|| format!("{}", states.display()))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&a)?);
+                outln!("{}", serde_json::to_string_pretty(&a)?);
             } else {
-                print!("{}", a.to_text());
+                out!("{}", a.to_text());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -407,10 +434,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 } else {
                     serde_json::to_value(&reports)?
                 };
-                println!("{}", serde_json::to_string_pretty(&v)?);
+                outln!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 for (k, r) in reports.iter().enumerate() {
-                    println!("evaluation {k}");
+                    outln!("evaluation {k}");
                     let mut t = comfy_table::Table::new();
                     t.set_header([
                         "muscle",
@@ -439,21 +466,21 @@ fn run(cli: Cli) -> Result<ExitCode> {
                             arms.join(", "),
                         ]);
                     }
-                    println!("{t}");
+                    outln!("{t}");
                     let acc: Vec<String> = r
                         .accelerations
                         .iter()
                         .map(|(c, v)| format!("{c} {v:+.4e}"))
                         .collect();
-                    println!("q̈: {}", acc.join(", "));
+                    outln!("q̈: {}", acc.join(", "));
                     let lig: Vec<String> = r
                         .ligament_torques
                         .iter()
                         .map(|(c, v)| format!("{c} {v:+.3}"))
                         .collect();
-                    println!("passive torques (N·m): {}", lig.join(", "));
+                    outln!("passive torques (N·m): {}", lig.join(", "));
                     let fy: f64 = r.contact_forces.values().map(|f| f[1]).sum();
-                    println!("total vertical contact force: {fy:.2} N");
+                    outln!("total vertical contact force: {fy:.2} N");
                 }
             }
             Ok(ExitCode::SUCCESS)
@@ -471,7 +498,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let jumps = leap::eval::switch_jumps(&eq, &q);
             let largest = jumps.iter().map(|j| j.jump_m.abs()).fold(0.0, f64::max);
             if json {
-                println!(
+                outln!(
                     "{}",
                     serde_json::to_string_pretty(
                         &serde_json::json!({"pose": pose, "largest_jump_m": largest, "switches": jumps})
@@ -495,7 +522,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                         format!("{:+.4}", 1e3 * j.jump_m),
                     ]);
                 }
-                println!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
+                outln!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -521,7 +548,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .map(|(n, v)| (n, serde_json::json!(v)))
                 .collect();
             let v = serde_json::json!({"state": state, "excitation": exc, "max_abs_qdd": sq.max_abs_qdd, "vertical_grf_bw": sq.vertical_grf_bw, "qp_iterations": sq.qp_iterations});
-            println!("{}", serde_json::to_string_pretty(&v)?);
+            outln!("{}", serde_json::to_string_pretty(&v)?);
             Ok(ExitCode::SUCCESS)
         }
         Command::Bench {
@@ -530,9 +557,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::state_equation(&m)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{}", report.table());
+                outln!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -554,9 +581,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             ];
             let rows = leap::bench::integrators(&m, &cases).map_err(|e| anyhow::anyhow!(e))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&rows)?);
+                outln!("{}", serde_json::to_string_pretty(&rows)?);
             } else {
-                println!("{}", leap::bench::integrator_table(&rows));
+                outln!("{}", leap::bench::integrator_table(&rows));
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -565,9 +592,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let rows = leap::bench::sqp_test_set(repeats);
             if json {
-                println!("{}", serde_json::to_string_pretty(&rows)?);
+                outln!("{}", serde_json::to_string_pretty(&rows)?);
             } else {
-                println!("{}", leap::bench::sqp_table(&rows));
+                outln!("{}", leap::bench::sqp_table(&rows));
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -588,9 +615,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate)
                 .map_err(|e| anyhow::anyhow!(e))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{}", report.table());
+                outln!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -615,9 +642,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             )
             .map_err(|e| anyhow::anyhow!(e))?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{}", report.table());
+                outln!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -627,9 +654,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::dynamics(&m)?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&report)?);
+                outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{}", report.table());
+                outln!("{}", report.table());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -783,23 +810,24 @@ fn simulate(
                 serde_json::to_string_pretty(&v)?,
             )?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&v)?);
+                outln!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 let f = |o: Option<f64>, scale: f64, unit: &str| {
                     o.map(|v| format!("{:.3} {unit}", v * scale))
                         .unwrap_or_else(|| "-".into())
                 };
-                println!(
+                outln!(
                     "forward jump ({}, accuracy {:e}) from the static squat",
-                    summary.integrator, summary.accuracy
+                    summary.integrator,
+                    summary.accuracy
                 );
                 match summary.liftoff_time_s {
-                    Some(_) => println!(
+                    Some(_) => outln!(
                         "  jump height            {:.1} cm",
                         100.0 * summary.jump_height_m
                     ),
                     None => {
-                        println!("  jump height            - (no lift-off before t_max)");
+                        outln!("  jump height            - (no lift-off before t_max)");
                         eprintln!(
                             "warning: the feet did not leave the ground before t_max = {} s: no jump; the COM ended {:.1} cm from its standing height",
                             st.t_max,
@@ -807,23 +835,26 @@ fn simulate(
                         );
                     }
                 }
-                println!(
+                outln!(
                     "  lift-off time          {}",
                     f(summary.liftoff_time_s, 1.0, "s")
                 );
-                println!(
+                outln!(
                     "  lift-off COM velocity  {}",
                     f(summary.liftoff_com_velocity_mps, 1.0, "m/s")
                 );
-                println!(
+                outln!(
                     "  peak vertical GRF      {:.2} BW",
                     summary.peak_vertical_grf_bw
                 );
-                println!(
+                outln!(
                     "  steps {} (rejected {}), f evaluations {}, wall {:.3} s",
-                    summary.steps, summary.rejected_steps, summary.f_evals, summary.wall_time_s
+                    summary.steps,
+                    summary.rejected_steps,
+                    summary.f_evals,
+                    summary.wall_time_s
                 );
-                println!("  results in {}", out_dir.display());
+                outln!("  results in {}", out_dir.display());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -842,7 +873,7 @@ fn simulate(
                 serde_json::to_string_pretty(&v)?,
             )?;
             if json {
-                println!("{}", serde_json::to_string_pretty(&v)?);
+                outln!("{}", serde_json::to_string_pretty(&v)?);
             }
             eprintln!("error: integration failed at t = {} s: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
             Ok(ExitCode::from(1))
@@ -869,10 +900,10 @@ fn solve(
     };
     let report = leap::solve::run(&config, verbose, &mut progress)?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+        outln!("{}", serde_json::to_string_pretty(&report)?);
     } else if !quiet {
-        print!("{}", report.table());
-        println!("  results in {}", config.output_directory.display());
+        out!("{}", report.table());
+        outln!("  results in {}", config.output_directory.display());
     }
     Ok(if report.success {
         ExitCode::SUCCESS

@@ -294,3 +294,32 @@ fn eval_reads_a_spreadsheet_csv() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn a_closed_or_full_standard_output_is_an_error_not_a_panic() {
+    // `leap ... | head` closes the pipe; /dev/full refuses every write.
+    for args in [
+        vec!["squat", "--model", "models/jumper_reduced.json"],
+        vec![
+            "crosscheck",
+            "--model",
+            "models/jumper_reduced.json",
+            "--samples",
+            "1",
+            "--json",
+        ],
+    ] {
+        let full = std::fs::File::create("/dev/full").unwrap();
+        let out = std::process::Command::new(assert_cmd::cargo::cargo_bin("leap"))
+            .args(&args)
+            .stdout(full)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains("writing to standard output") && !err.contains("panicked"),
+            "{args:?}: {err}"
+        );
+    }
+}

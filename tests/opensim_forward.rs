@@ -76,7 +76,10 @@ fn simulate(integrator: &str, name: &str) -> (Value, StoTable, StoTable) {
 /// inside its bound).
 fn at(t: &StoTable, k: usize, dk: Option<usize>, time: f64) -> f64 {
     let i = t.time.partition_point(|&s| s <= time + 1e-12);
-    assert!(i > 0 && i <= t.time.len(), "t = {time} outside leap's output");
+    assert!(
+        i > 0 && i <= t.time.len(),
+        "t = {time} outside leap's output"
+    );
     if i == t.time.len() || (t.time[i - 1] - time).abs() < 1e-12 {
         return t.rows[i - 1][k];
     }
@@ -98,7 +101,10 @@ fn at(t: &StoTable, k: usize, dk: Option<usize>, time: f64) -> f64 {
 
 fn agrees_with_opensim(integrator: &str) {
     let g = golden();
-    assert!(g["opensim_version"].as_str().unwrap().starts_with("version 4.6"));
+    assert!(g["opensim_version"]
+        .as_str()
+        .unwrap()
+        .starts_with("version 4.6"));
     assert_eq!(g["controls"], "tests/data/controls/jump_optimal.sto");
     let (s, states, grf) = simulate(integrator, integrator);
     // The reference holds for leap's squat as it was when the data were made.
@@ -119,7 +125,12 @@ fn agrees_with_opensim(integrator: &str) {
     // The squat is at rest in OpenSim too, with OpenSim's muscle equilibrium.
     assert!(num(&g, "squat_max_abs_qdd") < 1e-6);
     assert!((num(&g, "squat_vertical_grf_bw") - 1.0).abs() < 1e-6);
-    assert!(num(&g, "squat_max_fibre_length_difference_to_opensim_equilibrium_m") < 1e-8);
+    assert!(
+        num(
+            &g,
+            "squat_max_fibre_length_difference_to_opensim_equilibrium_m"
+        ) < 1e-8
+    );
 
     let weight = num(&g, "body_weight_n");
     let col = |t: &StoTable, l: &str| t.labels.iter().position(|x| x == l).unwrap();
