@@ -187,6 +187,7 @@ struct SimbodySystem::Impl {
     RustForceImpl* rust_force = nullptr;  // owned by its Force::Custom
     std::unique_ptr<Integrator> integ;
     std::unique_ptr<TimeStepper> stepper;
+    std::int32_t max_steps = 0;  // of the persistent integration; 0: no cap
     std::vector<MobilizedBody> bodies;  // index 0 is Ground
     Impl() : matter(system), forces(system), discrete(forces, matter) {
         bodies.push_back(matter.Ground());
@@ -473,9 +474,11 @@ IntegratorStats stats_of(const Integrator& integ, double t) {
 }
 }  // namespace
 
-void SimbodySystem::integration_start(std::int32_t method, double accuracy, double min_step, double max_step) {
+void SimbodySystem::integration_start(std::int32_t method, double accuracy, double min_step, double max_step,
+                                      std::int32_t max_steps) {
     p->require_final("integration_start");
     p->stepper.reset();
+    p->max_steps = max_steps;
     p->integ = make_integrator(p->system, method, accuracy);
     if (method != 4) {
         if (min_step > 0) p->integ->setMinimumStepSize(min_step);
@@ -483,6 +486,9 @@ void SimbodySystem::integration_start(std::int32_t method, double accuracy, doub
     }
     p->integ->setAllowInterpolation(false);
     p->stepper.reset(new TimeStepper(p->system, *p->integ));
+    // Return to the loop below at the integrator's step limit instead of
+    // stepping on inside TimeStepper::stepTo.
+    p->stepper->setReportAllSignificantStates(true);
     p->stepper->initialize(p->state);
 }
 
@@ -490,6 +496,17 @@ IntegratorStats SimbodySystem::integration_step_to(double t) {
     if (!p->stepper) throw std::logic_error("integration_step_to: call integration_start first");
     if (!(t >= p->integ->getTime())) throw std::invalid_argument("integration_step_to: time goes backwards");
     while (p->integ->getTime() < t) {
+        if (p->max_steps > 0) {
+            // A stiff model (say, a contact transition velocity of 1e-9 m/s)
+            // would otherwise take steps without end.
+            const int used = p->integ->getNumStepsAttempted();
+            if (used >= p->max_steps)
+                throw std::runtime_error("more than " + std::to_string(p->max_steps) +
+                                         " integrator steps by t = " +
+                                         std::to_string(p->integ->getTime()) +
+                                         " s: the model is too stiff to integrate at this accuracy");
+            p->integ->setInternalStepLimit(p->max_steps - used);
+        }
         const Integrator::SuccessfulStepStatus st = p->stepper->stepTo(t);
         if (st == Integrator::EndOfSimulation) break;
         if (p->integ->isSimulationOver()) break;

@@ -87,8 +87,10 @@ public:
     IntegratorStats integrate(std::int32_t method, double accuracy, double t_final);
     // A persistent integration: start from the current state, then advance
     // to successive times (the integrator keeps its step size between them).
-    // min_step/max_step <= 0 leave Simbody's defaults.
-    void integration_start(std::int32_t method, double accuracy, double min_step, double max_step);
+    // min_step/max_step <= 0 leave Simbody's defaults; max_steps > 0 caps
+    // the steps attempted (integration_step_to then throws).
+    void integration_start(std::int32_t method, double accuracy, double min_step, double max_step,
+                           std::int32_t max_steps);
     IntegratorStats integration_step_to(double t);
 
     // For tests of the bridge itself: throws a SimTK or std exception.

@@ -49,7 +49,9 @@ pub enum IntegrationError {
         "at t = {t}: the step size fell below the minimum {min_step} (error estimate {err:.3e})"
     )]
     StepTooSmall { t: f64, min_step: f64, err: f64 },
-    #[error("at t = {t}: more than {max_steps} steps")]
+    #[error(
+        "at t = {t}: more than {max_steps} steps: the model is too stiff to integrate at this accuracy"
+    )]
     TooManySteps { t: f64, max_steps: usize },
     #[error("at t = {t}: the state is not finite")]
     NotFinite { t: f64 },

@@ -133,6 +133,7 @@ mod ffi {
             accuracy: f64,
             min_step: f64,
             max_step: f64,
+            max_steps: i32,
         ) -> Result<()>;
         fn integration_step_to(self: Pin<&mut SimbodySystem>, t: f64) -> Result<IntegratorStats>;
         fn throw_for_test(self: Pin<&mut SimbodySystem>, kind: i32) -> Result<()>;
@@ -670,18 +671,21 @@ impl SimbodyModel {
     }
 
     /// Start a persistent integration from the current state (and applied
-    /// forces); `min_step`/`max_step` ≤ 0 keep Simbody's defaults.
+    /// forces); `min_step`/`max_step` ≤ 0 keep Simbody's defaults;
+    /// `max_steps` > 0 caps the steps attempted from here, beyond which
+    /// [`Self::integration_step_to`] fails.
     pub fn integration_start(
         &mut self,
         integrator: SimbodyIntegrator,
         accuracy: f64,
         min_step: f64,
         max_step: f64,
+        max_steps: i32,
     ) -> Result<(), SimbodyError> {
         self.take_force_error();
         self.sys
             .pin_mut()
-            .integration_start(integrator.code(), accuracy, min_step, max_step)
+            .integration_start(integrator.code(), accuracy, min_step, max_step, max_steps)
             .map_err(|e| self.with_callback_error(e))
     }
 

@@ -496,7 +496,7 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
             .set_applied_forces(&vec![0.0; n], &[])
             .map_err(|e| e.to_string())?;
         sb.simbody
-            .integration_start(integrator, accuracy, 1e-8, 1.0)
+            .integration_start(integrator, accuracy, 1e-8, 1.0, MAX_INTEGRATOR_STEPS)
             .map_err(|e| e.to_string())
     };
     if let Err(e) = start_at(&mut sb, 0.0, x0) {
@@ -625,6 +625,12 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
 /// steps shrink without end (1e-300 never finished; 1e-12 takes the
 /// RungeKuttaMerson jump 28 000 steps, 9 s).
 pub const MIN_ACCURACY: f64 = 1e-12;
+/// Steps a Simbody integration may attempt, so that a model too stiff for
+/// the accuracy (a contact transition velocity of 1e-6 m/s took minutes)
+/// ends with an error instead of running on: five times OpenSim's
+/// `maximum_number_of_integrator_steps` (20 000), since at
+/// [`MIN_ACCURACY`] RungeKuttaMerson needs 28 000 for the jump. About 30 s.
+pub const MAX_INTEGRATOR_STEPS: i32 = 100_000;
 /// The smallest fixed step of ExplicitEuler (s): about 70 µs a step on the
 /// jumper, so a million steps to a second of motion take over a minute.
 pub const MIN_FIXED_STEP: f64 = 1e-6;

@@ -159,3 +159,43 @@ fn callback_errors_and_panics_become_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn a_persistent_integration_stops_at_its_step_cap_with_an_error() {
+    // A stiff decay z' = −z/τ, τ = 1e-6 s, at accuracy 1e-8 needs far more
+    // than 50 steps to 0.1 s: the integration must stop there, with an
+    // error, and stay usable; without a cap it runs to the end.
+    let model = Model::from_file("models/double_pendulum.json").unwrap();
+    let sys = model.system(false).unwrap();
+    let f: Box<leap::simbody::ForceFn> = Box::new(|_ctx, _t, _q, _u, z, zdot| {
+        zdot[0] = -z[0] / 1e-6;
+        Ok(())
+    });
+    let mut sb = SimbodyModel::with_force(&model, &sys, Some((f, 1))).unwrap();
+    for cap in [50, 0] {
+        sb.set_state(0.0, &[0.5, 0.0], &[0.0, 0.0]).unwrap();
+        sb.set_z(&[1.0]).unwrap();
+        sb.set_applied_forces(&[0.0, 0.0], &[]).unwrap();
+        sb.integration_start(SimbodyIntegrator::RungeKuttaMerson, 1e-8, 1e-12, 1.0, cap)
+            .unwrap();
+        let mut steps = 0;
+        let mut result = Ok(());
+        for k in 1..=10 {
+            match sb.integration_step_to(0.01 * k as f64) {
+                Ok(s) => steps = s.steps_attempted,
+                Err(e) => {
+                    result = Err(e.to_string());
+                    break;
+                }
+            }
+        }
+        if cap > 0 {
+            let e = result.unwrap_err();
+            assert!(e.contains("more than 50 integrator steps"), "{e}");
+            assert!(steps <= 50, "{steps}");
+        } else {
+            result.unwrap();
+            assert!(steps > 50, "{steps}");
+        }
+    }
+}
