@@ -69,7 +69,7 @@ pub fn read_inputs(
         place,
         reason,
     };
-    let text = std::fs::read_to_string(path).map_err(|e| err("(file)".into(), e.to_string()))?;
+    let text = crate::io::read_input_text(path).map_err(|e| err("(file)".into(), e.to_string()))?;
     // A byte-order mark (spreadsheet exports write one) is not data.
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let states = eq.state_names();

@@ -166,7 +166,7 @@ impl StoTable {
     /// a UTF-8 byte-order mark). Values are as in the file: see
     /// [`read_states`] for degrees.
     pub fn read(path: &Path) -> Result<Self, StoError> {
-        let bytes = std::fs::read(path).map_err(|error| StoError::Io {
+        let bytes = read_input(path).map_err(|error| StoError::Io {
             file: path.into(),
             error,
         })?;
@@ -249,8 +249,11 @@ impl StoTable {
                 ),
             ));
         }
+        // A hash map, not a scan of the columns before each: a file of
+        // 400,000 columns took over a minute.
+        let mut seen = std::collections::HashMap::with_capacity(labels.len());
         for (k, label) in labels.iter().enumerate() {
-            if let Some(first) = labels[..k].iter().position(|l| l == label) {
+            if let Some(&first) = seen.get(label.as_str()) {
                 return Err(perr(
                     label_line,
                     format!(
@@ -260,6 +263,7 @@ impl StoTable {
                     ),
                 ));
             }
+            seen.insert(label.as_str(), k);
         }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
@@ -391,6 +395,67 @@ impl StoTable {
         }
         Ok(out)
     }
+}
+
+/// The largest input file leap reads (1 GiB; a two-million-row guess is
+/// half of that).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// The bytes of an input file (model, study, storage, eval input): a
+/// directory or a device (`/dev/zero` would fill the memory) is refused with
+/// an error saying so, and so is a file or pipe longer than
+/// [`MAX_INPUT_BYTES`].
+pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let meta = std::fs::metadata(path)?;
+    let kind = meta.file_type();
+    if kind.is_dir() {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "is a directory, not a file",
+        ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() || kind.is_socket() {
+            return Err(Error::new(
+                ErrorKind::InvalidInput,
+                "is a device or socket, not a file",
+            ));
+        }
+    }
+    let too_long = || {
+        Error::new(
+            ErrorKind::InvalidInput,
+            format!("longer than {MAX_INPUT_BYTES} bytes, the most leap reads"),
+        )
+    };
+    if kind.is_file() && meta.len() > MAX_INPUT_BYTES {
+        return Err(too_long());
+    }
+    // A pipe has no length to check in advance: read one byte past the limit.
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_INPUT_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(too_long());
+    }
+    Ok(bytes)
+}
+
+/// [`read_input`] as UTF-8 text.
+pub fn read_input_text(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_input(path)?).map_err(|e| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "not UTF-8 text (invalid byte at offset {}; a binary file?)",
+                e.utf8_error().valid_up_to()
+            ),
+        )
+    })
 }
 
 /// Read a storage file with states of `eq`'s system (a solution, a forward

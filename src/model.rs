@@ -518,7 +518,7 @@ impl Model {
     /// Read and validate a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
         let path = path.as_ref();
-        let text = std::fs::read_to_string(path).map_err(|error| ModelError::Io {
+        let text = crate::io::read_input_text(path).map_err(|error| ModelError::Io {
             file: path.into(),
             error,
         })?;

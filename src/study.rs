@@ -274,7 +274,7 @@ pub struct Overrides {
 /// Read a study file of any kind (`leap solve`'s, `leap simulate`'s): one
 /// JSON object, its errors naming the file and the field's JSON path.
 pub fn read_study<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
-    let text = std::fs::read_to_string(path).map_err(|error| StudyError::Io {
+    let text = crate::io::read_input_text(path).map_err(|error| StudyError::Io {
         file: path.into(),
         error,
     })?;

@@ -313,3 +313,44 @@ fn controls_refuse_an_infinite_time_and_take_one_row() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn directories_and_devices_are_refused_as_input_files() {
+    // /dev/zero would fill the memory; a directory is not "not found".
+    let sto = leap::io::StoTable::read(Path::new("/dev/zero"))
+        .unwrap_err()
+        .to_string();
+    assert!(sto.contains("/dev/zero") && sto.contains("device"), "{sto}");
+    let model = leap::model::Model::from_file("/dev/zero")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        model.contains("/dev/zero") && model.contains("device"),
+        "{model}"
+    );
+    let dir = leap::model::Model::from_file("models")
+        .unwrap_err()
+        .to_string();
+    assert!(dir.contains("models") && dir.contains("directory"), "{dir}");
+    let study = leap::study::read_study::<serde_json::Value>(Path::new("tests"))
+        .unwrap_err()
+        .to_string();
+    assert!(study.contains("directory"), "{study}");
+    // A pipe is read (up to the limit): process substitution works.
+    let fifo = scratch("fifo").join("controls.sto");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(std::process::Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let writer = {
+        let fifo = fifo.clone();
+        std::thread::spawn(move || {
+            std::fs::write(&fifo, "endheader\ntime\ta\n0\t1\n0.1\t2\n").unwrap()
+        })
+    };
+    let t = StoTable::read(&fifo).unwrap();
+    writer.join().unwrap();
+    assert_eq!((t.labels.len(), t.time.len()), (1, 2));
+}
