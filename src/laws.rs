@@ -13,7 +13,7 @@ const MAX_PENNATION: f64 = 1.4706289056333368;
 /// Thelen's minimum activation (3.2: fixed; 4.x `minimum_activation`).
 pub const MIN_ACTIVATION: f64 = 0.01;
 /// Thelen's force-velocity extrapolation threshold (default, absent in 3.x files).
-const FV_THRESHOLD: f64 = 0.95;
+pub const FV_THRESHOLD: f64 = 0.95;
 
 /// Thelen2003Muscle with its constants precomputed.
 #[derive(Debug, Clone)]

@@ -827,6 +827,18 @@ impl Model {
                 }
                 q[ci] = v;
             }
+            // The symmetric system stands both legs on the right one's
+            // values: a left value that differs would be dropped unseen.
+            for (i, [r, l]) in spec.symmetry.iter().enumerate() {
+                if let (Some(&vr), Some(&vl)) = (values.get(r), values.get(l)) {
+                    if vr != vl {
+                        return Err(err(
+                            format!("poses.{pname}.{l}"),
+                            format!("{vl} differs from its symmetry partner {r} ({vr}, symmetry[{i}]): the symmetric system gives both sides one value"),
+                        ));
+                    }
+                }
+            }
             poses.insert(pname.clone(), q);
         }
         // Force elements.
@@ -853,6 +865,20 @@ impl Model {
                         format!("{name} must be positive and finite, got {v}"),
                     ));
                 }
+            }
+            // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
+            // lengthening force-velocity curve's asymptote) and a linear
+            // extrapolation threshold (0.95) not above 1/Flen.
+            if !(m.Flen > 1.0 / crate::laws::FV_THRESHOLD) {
+                return Err(err(
+                    p("Flen"),
+                    format!(
+                        "must be greater than 1/{} = {:.4} (OpenSim's Thelen2003Muscle: Flen > 1 and fv_linear_extrap_threshold > 1/Flen), got {}",
+                        crate::laws::FV_THRESHOLD,
+                        1.0 / crate::laws::FV_THRESHOLD,
+                        m.Flen
+                    ),
+                ));
             }
             let phi = m.pennation_angle_at_optimal;
             if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
@@ -909,6 +935,12 @@ impl Model {
                 return Err(err(
                     p("damping"),
                     format!("damping must be non-negative, got {}", l.damping),
+                ));
+            }
+            if let Some(j) = ligaments.iter().position(|g: &Ligament| g.coordinate == c) {
+                return Err(err(
+                    p("coordinate"),
+                    format!("coordinate '{}' already has a passive torque (forces.ligaments[{j}]): one per coordinate (OpenSim's export names it passive_{})", l.coordinate, l.coordinate),
                 ));
             }
             ligaments.push(Ligament {

@@ -173,6 +173,21 @@ impl GeometryPath {
                 format!("a path needs at least 2 points, got {}", points.len()),
             ));
         }
+        // Conditional points can all switch off, leaving no path (length 0,
+        // no direction to pull in).
+        let always = points
+            .iter()
+            .filter(|p| !matches!(p, PathPointSpec::Conditional { .. }))
+            .count();
+        if always < 2 {
+            return Err((
+                0,
+                String::new(),
+                format!(
+                    "a path needs at least 2 points that are always active (fixed or moving), got {always}: conditional points can all switch off"
+                ),
+            ));
+        }
         let mut out = Vec::with_capacity(points.len());
         for (i, p) in points.iter().enumerate() {
             let b = |name: &str| {

@@ -471,3 +471,54 @@ fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_path() {
         "{e}"
     );
 }
+
+/// What OpenSim refuses or what the symmetric jump would drop unseen.
+#[test]
+fn flen_paths_of_conditional_points_duplicate_passive_torques_and_asymmetric_poses_are_refused() {
+    let v = jumper_json();
+    // OpenSim's Thelen2003Muscle: Flen > 1 and 0.95 > 1/Flen.
+    let partner = muscle_index(&v, "glut_max1_l");
+    assert_eq!(v["forces"]["muscles"][5]["name"], "glut_max1_r");
+    for (flen, ok) in [(1.0, false), (1.05, false), (1.06, true), (1.4, true)] {
+        let mut w = v.clone();
+        w["forces"]["muscles"][5]["Flen"] = flen.into();
+        w["forces"]["muscles"][partner]["Flen"] = flen.into();
+        match Model::from_json_str(&w.to_string(), "m.json") {
+            Ok(_) => assert!(ok, "Flen {flen} accepted"),
+            Err(e) => {
+                assert!(!ok, "Flen {flen}: {e}");
+                assert_eq!(e.field(), "forces.muscles[5].Flen");
+            }
+        }
+    }
+    // A path whose points are all conditional can vanish.
+    let i = muscle_index(&v, "iliacus_r");
+    let mut w = v.clone();
+    let cond = w["forces"]["muscles"][i]["path"][2].clone();
+    assert_eq!(cond["type"], "conditional");
+    let mut second = cond.clone();
+    second["location"][1] = (cond["location"][1].as_f64().unwrap() - 0.05).into();
+    w["forces"]["muscles"][i]["path"] = serde_json::json!([cond, second]);
+    let e = refused(&w);
+    assert_eq!(e.field(), format!("forces.muscles[{i}].path"));
+    assert!(e.to_string().contains("always active"), "{e}");
+    // One passive torque per coordinate (the .osim names it by it).
+    let mut w = v.clone();
+    let first = w["forces"]["ligaments"][0].clone();
+    let n = w["forces"]["ligaments"].as_array().unwrap().len();
+    w["forces"]["ligaments"].as_array_mut().unwrap().push(first);
+    let e = refused(&w);
+    assert_eq!(e.field(), format!("forces.ligaments[{n}].coordinate"));
+    assert!(e.to_string().contains("forces.ligaments[0]"), "{e}");
+    // A pose whose left side differs from the right.
+    let mut w = v.clone();
+    let r = w["poses"]["squat"]["knee_angle_r"].as_f64().unwrap();
+    w["poses"]["squat"]["knee_angle_l"] = (r + 0.1).into();
+    let e = refused(&w);
+    assert_eq!(e.field(), "poses.squat.knee_angle_l");
+    assert!(e.to_string().contains("knee_angle_r"), "{e}");
+    // Equal sides stay accepted.
+    let mut w = v.clone();
+    w["poses"]["squat"]["knee_angle_l"] = r.into();
+    assert!(Model::from_json_str(&w.to_string(), "m.json").is_ok());
+}
