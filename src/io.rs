@@ -462,7 +462,8 @@ pub fn read_input_text(path: &Path) -> std::io::Result<String> {
 /// simulation's states) in radians: with `inDegrees=yes` the value and
 /// speed columns of its rotational coordinates are converted from degrees
 /// (deg/s); other columns are left as they are. Time must be finite and
-/// strictly increasing over at least 2 rows.
+/// strictly increasing over at least 2 rows; activations in [0, 1] and fibre
+/// lengths positive.
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
@@ -479,6 +480,31 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
         t.metadata.insert("inDegrees".into(), "no".into());
+    }
+    // The physical range of the muscle states, as `leap eval` checks it.
+    for (k, label) in t.labels.iter().enumerate() {
+        let (ok, what): (fn(f64) -> bool, &str) = if label.ends_with("/activation") {
+            (
+                |v| (0.0..=1.0).contains(&v),
+                "an activation must be in [0, 1]",
+            )
+        } else if label.ends_with("/fiber_length") {
+            (|v| v > 0.0, "a fibre length must be positive (m)")
+        } else {
+            continue;
+        };
+        if let Some(r) = t.rows.iter().position(|row| !ok(row[k])) {
+            return Err(StoError::Column {
+                file: path.into(),
+                column: label.clone(),
+                reason: format!(
+                    "row {} (t = {}): {what}, got {}",
+                    r + 1,
+                    t.time[r],
+                    t.rows[r][k]
+                ),
+            });
+        }
     }
     Ok(t)
 }

@@ -534,6 +534,12 @@ pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, Solv
         .collect();
     let controls = Controls::from_table(&t, path, &muscles)?.values;
     let tf = *t.time.last().unwrap_or(&0.0);
+    let [t_min, t_max] = tr.ocp.options.final_time_bounds;
+    if !(t_min..=t_max).contains(&tf) {
+        return Err(bad(format!(
+            "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the guess's last time is its t_f)"
+        )));
+    }
     tr.guess_from_trajectory(&t.time, &states, &controls, tf)
         .map_err(|e| bad(e.to_string()))
 }

@@ -75,6 +75,30 @@ fn analyze_names_the_missing_or_bad_column() {
         rows: vec![ocp.x0().to_vec(), ocp.x0().to_vec()],
         ..Default::default()
     };
+    // Out of the physical range, as `leap eval` refuses it.
+    let names = eq.state_names();
+    let act = names
+        .iter()
+        .position(|n| n.ends_with("/activation"))
+        .unwrap();
+    let fib = names
+        .iter()
+        .position(|n| n.ends_with("/fiber_length"))
+        .unwrap();
+    let mut ranges = Vec::new();
+    for (k, v, what) in [
+        (act, 7.0, "an activation must be in [0, 1], got 7"),
+        (fib, -0.1, "a fibre length must be positive (m), got -0.1"),
+    ] {
+        let mut t = table.clone();
+        t.rows[1][k] = v;
+        let file = dir.join(format!("range{k}.sto"));
+        t.write_sto(&file).unwrap();
+        ranges.push((
+            file,
+            format!("column '{}': row 2 (t = 0.01): {what}", names[k]),
+        ));
+    }
     table.rows[1][3] = f64::NAN;
     let bad = dir.join("nan.sto");
     table.write_sto(&bad).unwrap();
@@ -87,6 +111,8 @@ fn analyze_names_the_missing_or_bad_column() {
     for (file, want) in [
         (&bad, format!("column '{}'", eq.state_names()[3])),
         (&short, format!("column '{}'", eq.state_names()[0])),
+        (&ranges[0].0, ranges[0].1.clone()),
+        (&ranges[1].0, ranges[1].1.clone()),
     ] {
         let out = Command::cargo_bin("leap")
             .unwrap()

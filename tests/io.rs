@@ -29,12 +29,22 @@ fn states_table(eq: &StateEquation, x0: &[f64]) -> StoTable {
     t.metadata.insert("inDegrees".into(), "no".into());
     t.labels = eq.state_names();
     t.labels.extend(eq.control_names());
+    // Rows that differ in the coordinates and speeds; the muscle states
+    // stay at x0's, inside their physical range.
+    let nqu = 2 * eq.nq();
     for r in 0..4 {
         t.time.push(0.05 * r as f64);
         let mut row: Vec<f64> = x0
             .iter()
             .enumerate()
-            .map(|(i, v)| v + 0.01 * (r as f64) * ((i % 7) as f64 - 3.0) / 3.0)
+            .map(|(i, v)| {
+                let d = if i < nqu {
+                    0.01 * (r as f64) * ((i % 7) as f64 - 3.0) / 3.0
+                } else {
+                    0.0
+                };
+                v + d
+            })
             .collect();
         row.extend(std::iter::repeat_n(0.3 + 0.1 * r as f64, eq.nm()));
         t.rows.push(row);
@@ -232,7 +242,26 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
     let soleus = "/forceset/soleus_r";
     let k = rad.labels.iter().position(|l| l == soleus).unwrap();
     strong.rows[2][k] = 5.0;
+    // An activation outside [0, 1]; a last time (the guess's t_f) beyond
+    // the final time's bounds.
+    let mut active = rad.clone();
+    let act = "/forceset/soleus_r/activation";
+    let ka = rad.labels.iter().position(|l| l == act).unwrap();
+    active.rows[2][ka] = 7.0;
+    let mut long = rad.clone();
+    long.time = vec![0.0, 5.0, 10.0, 15.0];
+    let tf = 15;
     for (name, table, want) in [
+        (
+            "active",
+            active,
+            format!("column '{act}': row 3 (t = 0.1): an activation must be in [0, 1], got 7"),
+        ),
+        (
+            "long",
+            long,
+            format!("time: ends at {tf} s, outside the final time's bounds [0.1, 1] s (the guess's last time is its t_f)"),
+        ),
         (
             "nan",
             nan,
