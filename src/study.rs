@@ -198,7 +198,7 @@ pub struct ForwardCheckSpec {
     #[serde(default)]
     pub integrator: Option<String>,
     /// Integrator accuracy (default 1e-5, OpenSim's): a relative error
-    /// tolerance in [1e-12, 1), or ExplicitEuler's fixed step
+    /// tolerance in [1e-12, 1e-2], or ExplicitEuler's fixed step
     /// ([`crate::simulate::check_integrator_accuracy`]).
     #[serde(default)]
     pub accuracy: Option<f64>,
@@ -901,7 +901,7 @@ mod tests {
             let (f, r) = field_error(&format!(r#"{{"forward_check": {{"accuracy": {a}}}}}"#));
             assert_eq!(f, "forward_check.accuracy");
             assert!(
-                r.contains("[1e-12, 1)") || r.contains("positive"),
+                r.contains("[1e-12, 1e-2]") || r.contains("positive"),
                 "{a}: {r}"
             );
         }

@@ -194,6 +194,7 @@ fn accuracies_that_would_abort_or_hang_are_refused() {
     let out = tmp("accuracy");
     for (args, want) in [
         (vec!["--accuracy", "1"], "accuracy: "),
+        (vec!["--accuracy", "0.1"], "accuracy: "),
         (vec!["--accuracy", "10"], "accuracy: "),
         (
             vec!["--integrator", "CPodes", "--accuracy", "10"],
@@ -216,7 +217,7 @@ fn accuracies_that_would_abort_or_hang_are_refused() {
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(want), "{args:?}: {err}");
         if !args.contains(&"ExplicitEuler") {
-            assert!(err.contains("[1e-12, 1)"), "{args:?}: {err}");
+            assert!(err.contains("[1e-12, 1e-2]"), "{args:?}: {err}");
         }
         assert!(!err.contains("Assertion"), "{args:?}: {err}");
     }
@@ -239,7 +240,12 @@ fn nonsense_simulate_study_settings_name_the_field() {
             "≥ 0",
         ),
         (r#"{"report_interval": 1e-9}"#, "report_interval", "rows"),
-        (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1)"),
+        (
+            r#"{"report_interval": 0.05}"#,
+            "report_interval",
+            "at most 0.01 s",
+        ),
+        (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1e-2]"),
     ] {
         let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
         v["model"] = model.display().to_string().into();

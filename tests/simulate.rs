@@ -104,9 +104,9 @@ fn study_error(json: &str) -> String {
 #[test]
 fn simulate_study_values_are_checked() {
     for (json, want) in [
-        (r#"{"accuracy": 1}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1), got 1e0"),
-        (r#"{"accuracy": 10}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1), got 1e1"),
-        (r#"{"accuracy": 1e-300}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1)"),
+        (r#"{"accuracy": 1}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1e-2], got 1e0"),
+        (r#"{"accuracy": 10}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1e-2], got 1e1"),
+        (r#"{"accuracy": 1e-300}"#, "sim.json: accuracy: must be a relative error tolerance in [1e-12, 1e-2]"),
         (r#"{"accuracy": 0}"#, "sim.json: accuracy: must be positive, got 0"),
         (r#"{"integrator": "DormandPrince", "accuracy": 2}"#, "sim.json: accuracy: must be a relative error tolerance"),
         (r#"{"integrator": "ExplicitEuler", "accuracy": 1e-12}"#, "sim.json: accuracy: ExplicitEuler's fixed step must be at least 1e-6 s"),
@@ -191,7 +191,7 @@ fn simbody_simulation_refuses_what_would_abort_or_hang() {
     assert_eq!(f.t, 0.0);
     assert!(
         f.cause
-            .starts_with("accuracy: must be a relative error tolerance in [1e-12, 1)"),
+            .starts_with("accuracy: must be a relative error tolerance in [1e-12, 1e-2]"),
         "{}",
         f.cause
     );
