@@ -85,11 +85,12 @@ pub struct JumpAnalysis {
 /// at least 2 rows, time strictly increasing, every value finite.
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec<f64>>), StoError> {
     let table = crate::io::read_states(eq, path)?;
-    let states = table.finite_columns(
-        path,
-        &eq.state_names(),
-        "missing (a states file of this model's symmetric system is needed; `--full` for the full one)",
-    )?;
+    let missing = if eq.system.symmetric {
+        "missing (a states file of this model's symmetric system is needed; `--full` for the full one)"
+    } else {
+        "missing (a states file of this model's full system, both legs, is needed; without `--full` for the symmetric one)"
+    };
+    let states = table.finite_columns(path, &eq.state_names(), missing)?;
     Ok((table.time, states))
 }
 

@@ -93,6 +93,25 @@ pub fn read_inputs(
             .split(',')
             .map(|c| c.trim().trim_matches('"'))
             .collect();
+        // As in the JSON form: every column is known, and named once.
+        for (k, c) in cols.iter().enumerate() {
+            if let Some(first) = cols[..k].iter().position(|d| d == c) {
+                return Err(err(
+                    "header".into(),
+                    format!(
+                        "column '{c}' appears twice: columns {} and {}",
+                        first + 1,
+                        k + 1
+                    ),
+                ));
+            }
+            if !states.iter().chain(&controls).any(|n| n == c) {
+                return Err(err(
+                    "header".into(),
+                    format!("unknown column '{c}' (column {}): not a state or excitation of this model's system", k + 1),
+                ));
+            }
+        }
         let find = |name: &str| cols.iter().position(|c| *c == name);
         let xi: Vec<usize> = states
             .iter()
@@ -164,6 +183,12 @@ pub fn read_inputs(
                 f.to_string()
             }
         };
+        if !item.is_object() {
+            return Err(err(
+                place("(evaluation)"),
+                format!("expected an object with 'state' (or 'x') and 'excitation' (or 'u'), got {item}"),
+            ));
+        }
         let vector = |key: &str,
                       named: &str,
                       names: &[String]|

@@ -793,12 +793,27 @@ impl SimulateStudy {
     /// are checked by [`SimulateStudy::check`] once command-line options
     /// have overridden them.
     pub fn from_file(path: &Path) -> Result<Self, StudyError> {
-        crate::study::read_study(path)
+        let text = crate::io::read_input_text(path).map_err(|error| StudyError::Io {
+            file: path.into(),
+            error,
+        })?;
+        Self::from_json_str(&text, &path.display().to_string())
     }
 
     /// Parse study JSON; `origin` names it in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
-        crate::study::parse_study(text, origin)
+        let study: Self = crate::study::parse_study(text, origin)?;
+        // One source of excitations per file (`--controls` on the command
+        // line still replaces the file's bang-bang pattern).
+        if study.controls.is_some() && study.bang_bang.is_some() {
+            return Err(StudyError::Field {
+                origin: origin.into(),
+                field: "bang_bang".into(),
+                reason: "given together with 'controls': the excitations come from one of them"
+                    .into(),
+            });
+        }
+        Ok(study)
     }
 
     /// Check every value and return the integrator; `origin` names the

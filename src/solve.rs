@@ -209,6 +209,17 @@ pub fn run(
     progress: &mut dyn FnMut(&str),
 ) -> Result<SolveReport, SolveError> {
     let dir = &config.output_directory;
+    // A file where the results directory should be is found before the
+    // squat and the guess are computed, not after.
+    if dir.exists() && !dir.is_dir() {
+        return Err(SolveError::Io {
+            file: dir.clone(),
+            error: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "output_directory (--out): a file of that name exists, not a directory",
+            ),
+        });
+    }
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
     let big_n = config.transcription.num_mesh_intervals;

@@ -263,6 +263,29 @@ fn results_directory_taken_by_a_file_is_named() {
 }
 
 #[test]
+fn a_file_in_place_of_the_results_directory_stops_the_solve_at_once() {
+    let (dir, _) = squat_input("solve-out-file");
+    let file = dir.join("taken");
+    std::fs::write(&file, "x").unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["solve", "models/jump_reduced.json", "--out"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("taken") && err.contains("output_directory (--out)"),
+        "{err}"
+    );
+    // Before the squat and the guess: nothing was computed or written.
+    assert!(!err.contains("static squat"), "{err}");
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn zero_repeats_are_refused() {
     let o = Command::cargo_bin("leap")
         .unwrap()
@@ -318,6 +341,34 @@ fn eval_reads_a_spreadsheet_csv() {
         run(&csv)["state_derivative"],
         run(&json)["state_derivative"]
     );
+    // As in the JSON form, a column named twice or unknown is an error.
+    for (name, extra_label, want) in [
+        ("dup", labels[0].clone(), "appears twice"),
+        ("unknown", "\"foo\"".to_string(), "unknown column 'foo'"),
+    ] {
+        let bad = dir.join(format!("{name}.csv"));
+        std::fs::write(
+            &bad,
+            format!(
+                "{},{extra_label}\n{},0\n",
+                labels.join(","),
+                values.join(",")
+            ),
+        )
+        .unwrap();
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&bad)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        assert!(
+            err.contains("header") && err.contains(want),
+            "{name}: {err}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

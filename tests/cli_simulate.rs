@@ -246,6 +246,11 @@ fn nonsense_simulate_study_settings_name_the_field() {
             "at most 0.01 s",
         ),
         (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1e-2]"),
+        (
+            r#"{"controls": "tests/data/controls/jump_optimal.sto", "bang_bang": {"on_time": 0, "off_time": 0.3}}"#,
+            "bang_bang",
+            "given together with 'controls'",
+        ),
     ] {
         let mut v: serde_json::Value = serde_json::from_str(json).unwrap();
         v["model"] = model.display().to_string().into();
