@@ -640,6 +640,8 @@ pub const MAX_FIXED_STEPS: f64 = 1e6;
 /// each costs about half a millisecond and a kilobyte of output (the
 /// default 1e-3 s reports 1000 rows a second).
 pub const MAX_REPORTED_ROWS: f64 = 1e5;
+/// The latest end of a forward simulation (s).
+pub const MAX_T_MAX: f64 = 10.0;
 /// The coarsest relative accuracy: at 1e-1 the bang-bang jump comes out at
 /// 16.1 cm against 23.5 cm at 1e-2 to 1e-4.
 pub const MAX_ACCURACY: f64 = 1e-2;
@@ -825,10 +827,13 @@ impl SimulateStudy {
             reason,
         };
         let choice = parse_integrator(&self.integrator).map_err(|r| err("integrator", r))?;
-        if !(self.t_max.is_finite() && self.t_max > 0.0) {
+        if !(self.t_max.is_finite() && self.t_max > 0.0 && self.t_max <= MAX_T_MAX) {
             return Err(err(
                 "t_max",
-                format!("must be positive, got {}", self.t_max),
+                format!(
+                    "must be a time in (0, {MAX_T_MAX}] s (a jump lifts off and reaches its apex within about a second), got {:e}",
+                    self.t_max
+                ),
             ));
         }
         check_integrator_accuracy(self.accuracy, &choice, Some(self.t_max))
