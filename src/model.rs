@@ -868,8 +868,9 @@ impl Model {
             }
             // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
             // lengthening force-velocity curve's asymptote) and a linear
-            // extrapolation threshold (0.95) not above 1/Flen.
-            if !(m.Flen > 1.0 / crate::laws::FV_THRESHOLD) {
+            // extrapolation threshold (0.95) not above 1/Flen (Flen is
+            // finite and positive by now).
+            if m.Flen <= 1.0 / crate::laws::FV_THRESHOLD {
                 return Err(err(
                     p("Flen"),
                     format!(

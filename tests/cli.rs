@@ -241,47 +241,38 @@ fn simulate_refuses_accuracies_outside_their_range() {
 
 /// A results directory whose name a regular file holds is named as such
 /// (the OS says only "File exists").
+/// `leap simulate` and `leap solve` (before its squat and guess) name a
+/// file that stands where the results directory should be, and leave it.
 #[test]
 fn results_directory_taken_by_a_file_is_named() {
     let (dir, _) = squat_input("out-file");
     let file = dir.join("taken");
     std::fs::write(&file, "x").unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["simulate", "--t-max", "0.05", "--out"])
-        .arg(&file)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("taken") && err.contains("a file of that name exists"),
-        "{err}"
-    );
-    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
-    std::fs::remove_dir_all(&dir).ok();
-}
-
-#[test]
-fn a_file_in_place_of_the_results_directory_stops_the_solve_at_once() {
-    let (dir, _) = squat_input("solve-out-file");
-    let file = dir.join("taken");
-    std::fs::write(&file, "x").unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["solve", "models/jump_reduced.json", "--out"])
-        .arg(&file)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("taken") && err.contains("output_directory (--out)"),
-        "{err}"
-    );
-    // Before the squat and the guess: nothing was computed or written.
-    assert!(!err.contains("static squat"), "{err}");
-    assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    for (args, want) in [
+        (
+            &["simulate", "--t-max", "0.05"][..],
+            "a file of that name exists",
+        ),
+        (
+            &["solve", "models/jump_reduced.json"],
+            "output_directory (--out): a file of that name exists",
+        ),
+    ] {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(args)
+            .arg("--out")
+            .arg(&file)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("taken") && err.contains(want),
+            "{args:?}: {err}"
+        );
+        assert_eq!(std::fs::read_to_string(&file).unwrap(), "x");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
