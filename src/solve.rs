@@ -585,9 +585,22 @@ fn forward_check(
         values: mesh.controls.clone(),
     };
     let t_max = tf + FORWARD_FLIGHT_TIME;
-    let eq = Arc::new(ocp.eq.clone());
-    // The forward check integrates the model's own laws: OpenSim's
-    // activation switch and fibre clamp, not the optimizer's smoothed ones.
+    // The forward check integrates the model as OpenSim does: conditional
+    // path points that switch (not the optimizer's smoothed switch; that
+    // put the default solve's forward jump 0.16 mm lower), OpenSim's
+    // activation switch and fibre clamp. `tests/opensim_forward.rs`
+    // compares this model with OpenSim's own forward simulation.
+    let eq = match crate::ode::StateEquation::new(
+        &ocp.eq.model,
+        true,
+        crate::path::PathSmoothing::Exact,
+    ) {
+        Ok(eq) => Arc::new(eq),
+        Err(e) => {
+            report.errors.push(format!("no forward check: {e}"));
+            return Ok((report, Vec::new()));
+        }
+    };
     let mut own_laws = ocp.laws.clone();
     for law in &mut own_laws.muscles {
         if let crate::laws::MuscleLaw::Thelen(t) = law {
@@ -632,7 +645,7 @@ fn forward_check(
         t_max,
     };
     match simulate_rust(
-        &ocp.eq,
+        &eq,
         laws.as_ref(),
         &controls,
         ocp.x0(),
