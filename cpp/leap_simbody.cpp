@@ -497,12 +497,14 @@ IntegratorStats SimbodySystem::integration_step_to(double t) {
     if (!(t >= p->integ->getTime())) throw std::invalid_argument("integration_step_to: time goes backwards");
     while (p->integ->getTime() < t) {
         if (p->max_steps > 0) {
-            // A stiff model (say, a contact transition velocity of 1e-9 m/s)
-            // would otherwise take steps without end.
+            // A stiff model (say, a contact transition velocity of 1e-6 m/s)
+            // would otherwise take steps without end. (CPodes reads the
+            // internal limit only when initialised; this check still stops
+            // it between reports.)
             const int used = p->integ->getNumStepsAttempted();
             if (used >= p->max_steps)
-                throw std::runtime_error("more than " + std::to_string(p->max_steps) +
-                                         " integrator steps by t = " +
+                throw std::runtime_error("the step limit of " + std::to_string(p->max_steps) +
+                                         " integrator steps reached at t = " +
                                          std::to_string(p->integ->getTime()) +
                                          " s: the model is too stiff to integrate at this accuracy");
             p->integ->setInternalStepLimit(p->max_steps - used);

@@ -490,13 +490,17 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
     if let Err(cause) = checked {
         return Err(fail(0.0, x0, cause, traj));
     }
+    let step_cap = match integrator {
+        crate::simbody::SimbodyIntegrator::ExplicitEuler => 0,
+        _ => MAX_INTEGRATOR_STEPS,
+    };
     let start_at = |sb: &mut SimbodyStateEquation, t: f64, x: &[f64]| -> Result<(), String> {
         sb.set_state(t, x).map_err(|e| e.to_string())?;
         sb.simbody
             .set_applied_forces(&vec![0.0; n], &[])
             .map_err(|e| e.to_string())?;
         sb.simbody
-            .integration_start(integrator, accuracy, 1e-8, 1.0, MAX_INTEGRATOR_STEPS)
+            .integration_start(integrator, accuracy, 1e-8, 1.0, step_cap)
             .map_err(|e| e.to_string())
     };
     if let Err(e) = start_at(&mut sb, 0.0, x0) {
@@ -625,11 +629,15 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
 /// steps shrink without end (1e-300 never finished; 1e-12 takes the
 /// RungeKuttaMerson jump 28 000 steps, 9 s).
 pub const MIN_ACCURACY: f64 = 1e-12;
-/// Steps a Simbody integration may attempt, so that a model too stiff for
-/// the accuracy (a contact transition velocity of 1e-6 m/s took minutes)
-/// ends with an error instead of running on: five times OpenSim's
-/// `maximum_number_of_integrator_steps` (20 000), since at
-/// [`MIN_ACCURACY`] RungeKuttaMerson needs 28 000 for the jump. About 30 s.
+/// Steps an error-controlled Simbody integration may attempt (from its
+/// start, and again from lift-off), so that a model too stiff for the
+/// accuracy (a contact transition velocity of 1e-6 m/s ran for minutes)
+/// ends with an error instead of running on (14 s for that model): five
+/// times OpenSim's `maximum_number_of_integrator_steps` (20 000), since at
+/// [`MIN_ACCURACY`] RungeKuttaMerson needs 28 000 for the jump and
+/// RungeKuttaFeldberg 16 000 (RungeKutta3 has its own floor,
+/// [`MIN_ACCURACY_RK3`]). ExplicitEuler's fixed steps are bounded by
+/// [`MAX_FIXED_STEPS`] instead.
 pub const MAX_INTEGRATOR_STEPS: i32 = 100_000;
 /// The smallest fixed step of ExplicitEuler (s): about 70 µs a step on the
 /// jumper, so a million steps to a second of motion take over a minute.
@@ -642,6 +650,8 @@ pub const MAX_FIXED_STEPS: f64 = 1e6;
 pub const MAX_REPORTED_ROWS: f64 = 1e5;
 /// The latest end of a forward simulation (s).
 pub const MAX_T_MAX: f64 = 10.0;
+/// The finest relative accuracy of the third-order RungeKutta3.
+pub const MIN_ACCURACY_RK3: f64 = 1e-10;
 /// The coarsest relative accuracy: at 1e-1 the bang-bang jump comes out at
 /// 16.1 cm against 23.5 cm at 1e-2 to 1e-4.
 pub const MAX_ACCURACY: f64 = 1e-2;
@@ -677,6 +687,12 @@ pub fn check_integrator_accuracy(
                 t_max / accuracy
             ));
         }
+    } else if let (IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::RungeKutta3), true) =
+        (integrator, accuracy < MIN_ACCURACY_RK3)
+    {
+        return Err(format!(
+            "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {accuracy:e}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)"
+        ));
     } else if !(MIN_ACCURACY..=MAX_ACCURACY).contains(&accuracy) {
         return Err(format!(
             "must be a relative error tolerance in [{MIN_ACCURACY:e}, {MAX_ACCURACY:e}], got {accuracy:e}: below {MIN_ACCURACY:e} the error control works on rounding error and the steps shrink without end; above {MAX_ACCURACY:e} the jump is off by centimetres (bang-bang at 1e-1: 16.1 cm instead of 23.5)"
