@@ -176,6 +176,24 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
         Some(d.abs() <= 0.01),
         "{v}"
     );
+    // The forward check is `leap simulate` of the solution's excitations:
+    // OpenSim's model (tests/opensim_forward.rs), switching path points.
+    // Not to the bit (the file's times, t_max and the squat's own solve
+    // differ in the last digits, and the steps adapt): within 1e-6 m, where
+    // the optimizer's smoothed paths put the default solve's 1.6e-4 m off.
+    let sim_out = fresh_dir("forward_as_simulate");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["simulate", "--json", "--controls"])
+        .arg(out.join("jump_solution.sto"))
+        .arg("--out")
+        .arg(&sim_out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let hs = s["jump_height_m"].as_f64().unwrap();
+    assert!((hs - hf).abs() < 1e-6, "leap simulate {hs}, forward check {hf}");
 
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
     let expected = [
