@@ -258,8 +258,8 @@ pub fn read_inputs(
     Ok(out)
 }
 
-/// The physical range of the inputs: activations and excitations in
-/// [0, 1], fibre lengths positive. (name, reason) of the first outside it.
+/// The physical range of the inputs: activations (to 1e-6) and excitations
+/// in [0, 1], fibre lengths positive. (name, reason) of the first outside it.
 fn check_ranges(
     states: &[String],
     controls: &[String],
@@ -267,17 +267,8 @@ fn check_ranges(
     u: &[f64],
 ) -> Result<(), (String, String)> {
     for (name, &v) in states.iter().zip(x) {
-        if name.ends_with("/activation") && !(0.0..=1.0).contains(&v) {
-            return Err((
-                name.clone(),
-                format!("an activation must be in [0, 1], got {v}"),
-            ));
-        }
-        if name.ends_with("/fiber_length") && v <= 0.0 {
-            return Err((
-                name.clone(),
-                format!("a fibre length must be positive, got {v} m"),
-            ));
+        if let Some(reason) = crate::io::muscle_state_out_of_range(name, v) {
+            return Err((name.clone(), reason));
         }
     }
     for (name, &v) in controls.iter().zip(u) {

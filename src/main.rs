@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// Standard output closed or full (`leap solve | head`, `> /dev/full`): an
-/// error to report, not a panic. Results files are written before the
-/// summary is printed.
+/// error to report, not a panic, with exit code 3 (1 and 2 say how a solve
+/// or simulation ended). Results files are written before the summary is
+/// printed.
 #[derive(Debug, thiserror::Error)]
 #[error("writing to standard output: {0}")]
 struct StdoutError(std::io::Error);
@@ -311,7 +312,7 @@ fn main() -> ExitCode {
         Ok(code) => code,
         Err(e) if e.is::<StdoutError>() => {
             eprintln!("error: {e:#}");
-            ExitCode::from(1)
+            ExitCode::from(3)
         }
         Err(e) => {
             eprintln!("error: {e:#}");

@@ -869,8 +869,10 @@ impl Model {
             // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
             // lengthening force-velocity curve's asymptote) and a linear
             // extrapolation threshold (0.95) not above 1/Flen (Flen is
-            // finite and positive by now).
-            if m.Flen <= 1.0 / crate::laws::FV_THRESHOLD {
+            // finite and positive by now). DeGroote's muscle has no Flen.
+            if spec.forces.muscle_model == MuscleModel::Thelen2003Muscle
+                && m.Flen <= 1.0 / crate::laws::FV_THRESHOLD
+            {
                 return Err(err(
                     p("Flen"),
                     format!(

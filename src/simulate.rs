@@ -687,8 +687,10 @@ pub fn check_integrator_accuracy(
                 t_max / accuracy
             ));
         }
-    } else if let (IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::RungeKutta3), true) =
-        (integrator, accuracy < MIN_ACCURACY_RK3)
+    } else if let (
+        IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::RungeKutta3),
+        true,
+    ) = (integrator, accuracy < MIN_ACCURACY_RK3)
     {
         return Err(format!(
             "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {accuracy:e}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)"
@@ -765,7 +767,8 @@ pub struct SimulateStudy {
     #[serde(default)]
     pub bang_bang: Option<BangBangSpec>,
     /// Report interval of the Simbody integrators (s), at least
-    /// `t_max / 1e5` ([`MAX_REPORTED_ROWS`]).
+    /// `t_max / 1e5` ([`MAX_REPORTED_ROWS`]) and at most 10 ms
+    /// ([`MAX_REPORT_INTERVAL`]).
     #[serde(default = "default_report")]
     pub report_interval: f64,
 }
@@ -811,19 +814,20 @@ impl SimulateStudy {
     /// are checked by [`SimulateStudy::check`] once command-line options
     /// have overridden them.
     pub fn from_file(path: &Path) -> Result<Self, StudyError> {
-        let text = crate::io::read_input_text(path).map_err(|error| StudyError::Io {
-            file: path.into(),
-            error,
-        })?;
-        Self::from_json_str(&text, &path.display().to_string())
+        let study: Self = crate::study::read_study(path)?;
+        study.one_source_of_excitations(&path.display().to_string())
     }
 
     /// Parse study JSON; `origin` names it in errors.
     pub fn from_json_str(text: &str, origin: &str) -> Result<Self, StudyError> {
         let study: Self = crate::study::parse_study(text, origin)?;
-        // One source of excitations per file (`--controls` on the command
-        // line still replaces the file's bang-bang pattern).
-        if study.controls.is_some() && study.bang_bang.is_some() {
+        study.one_source_of_excitations(origin)
+    }
+
+    /// One source of excitations per file (`--controls` on the command line
+    /// still replaces the file's bang-bang pattern).
+    fn one_source_of_excitations(self, origin: &str) -> Result<Self, StudyError> {
+        if self.controls.is_some() && self.bang_bang.is_some() {
             return Err(StudyError::Field {
                 origin: origin.into(),
                 field: "bang_bang".into(),
@@ -831,7 +835,7 @@ impl SimulateStudy {
                     .into(),
             });
         }
-        Ok(study)
+        Ok(self)
     }
 
     /// Check every value and return the integrator; `origin` names the

@@ -519,9 +519,10 @@ pub fn solution_table(
 
 /// A guess from a `.sto` with every state and excitation column (a
 /// previous solution), from t = 0, resampled onto the mesh with t_f its
-/// last time. Angles in degrees (`inDegrees=yes`) are converted to radians;
-/// time must be finite and strictly increasing over at least 2 rows, and
-/// every value used finite.
+/// last time, which must lie within the final time's bounds. Angles in
+/// degrees (`inDegrees=yes`) are converted to radians; time must be finite
+/// and strictly increasing over at least 2 rows, every value used finite,
+/// activations in [0, 1] and fibre lengths positive.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
     let t = crate::io::read_states(&tr.ocp.eq, path)?;
     let bad = |reason: String| SolveError::Guess {

@@ -88,7 +88,7 @@ fn analyze_names_the_missing_or_bad_column() {
     let mut ranges = Vec::new();
     for (k, v, what) in [
         (act, 7.0, "an activation must be in [0, 1], got 7"),
-        (fib, -0.1, "a fibre length must be positive (m), got -0.1"),
+        (fib, -0.1, "a fibre length must be positive, got -0.1 m"),
     ] {
         let mut t = table.clone();
         t.rows[1][k] = v;
@@ -384,7 +384,7 @@ fn a_closed_or_full_standard_output_is_an_error_not_a_panic() {
             .output()
             .unwrap();
         let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert_eq!(out.status.code(), Some(3), "{args:?}: {err}");
         assert!(
             err.contains("writing to standard output") && !err.contains("panicked"),
             "{args:?}: {err}"

@@ -193,7 +193,10 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     let hs = s["jump_height_m"].as_f64().unwrap();
-    assert!((hs - hf).abs() < 1e-6, "leap simulate {hs}, forward check {hf}");
+    assert!(
+        (hs - hf).abs() < 1e-6,
+        "leap simulate {hs}, forward check {hf}"
+    );
 
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
     let expected = [

@@ -76,13 +76,11 @@ fn simulate(integrator: &str, name: &str) -> (Value, StoTable, StoTable) {
 /// inside its bound).
 fn at(t: &StoTable, k: usize, dk: Option<usize>, time: f64) -> f64 {
     let i = t.time.partition_point(|&s| s <= time + 1e-12);
-    assert!(
-        i > 0 && i <= t.time.len(),
-        "t = {time} outside leap's output"
-    );
-    if i == t.time.len() || (t.time[i - 1] - time).abs() < 1e-12 {
+    assert!(i > 0, "t = {time} before leap's output");
+    if (t.time[i - 1] - time).abs() < 1e-12 {
         return t.rows[i - 1][k];
     }
+    assert!(i < t.time.len(), "t = {time} after leap's output");
     let (t0, t1) = (t.time[i - 1], t.time[i]);
     let (y0, y1) = (t.rows[i - 1][k], t.rows[i][k]);
     let (h, s) = (t1 - t0, (time - t0) / (t1 - t0));
