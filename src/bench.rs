@@ -333,9 +333,7 @@ pub struct IntegratorRow {
 pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<IntegratorRow>, String> {
     use crate::simulate::*;
     use std::sync::Arc;
-    let eq = crate::ode::StateEquation::new(model, true, crate::path::PathSmoothing::Exact)
-        .map_err(|e| e.to_string())?;
-    let laws = crate::laws::OpenSimLaws::new(model).map_err(|e| e.to_string())?;
+    let (laws, eq) = crate::ode::StateEquation::opensim(model, true).map_err(|e| e.to_string())?;
     let pose = model
         .poses
         .get("squat")

@@ -94,17 +94,18 @@ pub fn read_inputs(
             .map(|c| c.trim().trim_matches('"'))
             .collect();
         // As in the JSON form: every column is known, and named once.
+        if let Some((first, k)) = crate::io::first_repeat(&cols) {
+            return Err(err(
+                "header".into(),
+                format!(
+                    "column '{}' appears twice: columns {} and {}",
+                    cols[k],
+                    first + 1,
+                    k + 1
+                ),
+            ));
+        }
         for (k, c) in cols.iter().enumerate() {
-            if let Some(first) = cols[..k].iter().position(|d| d == c) {
-                return Err(err(
-                    "header".into(),
-                    format!(
-                        "column '{c}' appears twice: columns {} and {}",
-                        first + 1,
-                        k + 1
-                    ),
-                ));
-            }
             if !states.iter().chain(&controls).any(|n| n == c) {
                 return Err(err(
                     "header".into(),

@@ -291,9 +291,7 @@ fn opensim_system(
     full: bool,
 ) -> anyhow::Result<(leap::laws::OpenSimLaws, leap::ode::StateEquation)> {
     let m = leap::model::Model::from_file(model)?;
-    let laws = leap::laws::OpenSimLaws::new(&m)?;
-    let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
-    Ok((laws, eq))
+    Ok(leap::ode::StateEquation::opensim(&m, !full)?)
 }
 
 fn main() -> ExitCode {
@@ -529,8 +527,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         }
         Command::Squat { model, full } => {
             let m = leap::model::Model::from_file(&model)?;
-            let laws = leap::laws::OpenSimLaws::new(&m)?;
-            let eq = leap::ode::StateEquation::new(&m, !full, leap::path::PathSmoothing::Exact)?;
+            let (laws, eq) = leap::ode::StateEquation::opensim(&m, !full)?;
             let pose =
                 m.poses.get("squat").cloned().ok_or_else(|| {
                     anyhow::anyhow!("{}: poses: no 'squat' pose", model.display())
@@ -720,8 +717,7 @@ fn simulate(
     let where_ = format!("{origin}: ");
     let choice = st.check(&origin)?;
     let m = leap::model::Model::from_file(&model_path)?;
-    let laws = leap::laws::OpenSimLaws::new(&m)?;
-    let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
+    let (laws, eq) = leap::ode::StateEquation::opensim(&m, true)?;
     let pose = m.poses.get("squat").cloned().ok_or_else(|| {
         anyhow::anyhow!(
             "{}: poses: the model has no 'squat' pose to start from",

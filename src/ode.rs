@@ -57,6 +57,8 @@ pub enum OdeError {
     Muscle { muscle: String, reason: String },
     #[error(transparent)]
     Singular(#[from] SingularMassMatrix),
+    #[error(transparent)]
+    Law(#[from] crate::laws::UnsupportedLaw),
     #[error("wrong length of {what}: {got} (expected {want})")]
     Length {
         what: &'static str,
@@ -133,6 +135,21 @@ impl<S: Scalar> Default for GivenPaths<S> {
 }
 
 impl StateEquation {
+    /// The model as OpenSim integrates it: its own laws (OpenSim's
+    /// activation switch and fibre clamp, no optimizer smoothing) and the
+    /// state equation of its symmetric (or full) system with conditional
+    /// path points that switch. `leap simulate`, `eval`, `analyze`, `squat`
+    /// and `leap solve`'s forward check integrate this; `tests/opensim_forward.rs`
+    /// compares it with OpenSim's own forward simulation.
+    pub fn opensim(
+        model: &Model,
+        symmetric: bool,
+    ) -> Result<(crate::laws::OpenSimLaws, Self), OdeError> {
+        let laws = crate::laws::OpenSimLaws::new(model)?;
+        let eq = StateEquation::new(model, symmetric, PathSmoothing::Exact)?;
+        Ok((laws, eq))
+    }
+
     /// The state equation of `model`'s symmetric (or full) system.
     pub fn new(model: &Model, symmetric: bool, smoothing: PathSmoothing) -> Result<Self, OdeError> {
         let system = model.system(symmetric)?;

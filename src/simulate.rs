@@ -687,10 +687,11 @@ pub fn check_integrator_accuracy(
                 t_max / accuracy
             ));
         }
-    } else if let (
-        IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::RungeKutta3),
-        true,
-    ) = (integrator, accuracy < MIN_ACCURACY_RK3)
+    } else if accuracy < MIN_ACCURACY_RK3
+        && matches!(
+            integrator,
+            IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::RungeKutta3)
+        )
     {
         return Err(format!(
             "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {accuracy:e}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)"

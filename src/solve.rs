@@ -68,19 +68,25 @@ pub enum SolveError {
 /// that says what stands in the way (the OS's own, "File exists", does not
 /// say that a regular file has the directory's name).
 pub fn create_results_dir(dir: &Path) -> Result<(), std::io::Error> {
-    use std::io::{Error, ErrorKind};
-    if dir.exists() && !dir.is_dir() {
-        return Err(Error::new(
-            ErrorKind::AlreadyExists,
-            "cannot create the results directory: a file of that name exists",
-        ));
-    }
+    check_results_dir(dir)?;
     std::fs::create_dir_all(dir).map_err(|e| {
-        Error::new(
+        std::io::Error::new(
             e.kind(),
             format!("cannot create the results directory: {e}"),
         )
     })
+}
+
+/// Whether a file stands where the results directory `dir` should be (an
+/// error saying so), without creating anything.
+pub fn check_results_dir(dir: &Path) -> Result<(), std::io::Error> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            "cannot create the results directory: a file of that name exists",
+        ));
+    }
+    Ok(())
 }
 
 /// The forward check: the optimal excitations (linear between the nodes,
@@ -211,15 +217,10 @@ pub fn run(
     let dir = &config.output_directory;
     // A file where the results directory should be is found before the
     // squat and the guess are computed, not after.
-    if dir.exists() && !dir.is_dir() {
-        return Err(SolveError::Io {
-            file: dir.clone(),
-            error: std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                "output_directory (--out): a file of that name exists, not a directory",
-            ),
-        });
-    }
+    check_results_dir(dir).map_err(|e| SolveError::Io {
+        file: dir.clone(),
+        error: std::io::Error::new(e.kind(), format!("output_directory (--out): {e}")),
+    })?;
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
     let big_n = config.transcription.num_mesh_intervals;
@@ -586,30 +587,17 @@ fn forward_check(
         values: mesh.controls.clone(),
     };
     let t_max = tf + FORWARD_FLIGHT_TIME;
-    // The forward check integrates the model as OpenSim does: conditional
-    // path points that switch (not the optimizer's smoothed switch; that
-    // put the default solve's forward jump 0.16 mm lower), OpenSim's
-    // activation switch and fibre clamp. `tests/opensim_forward.rs`
-    // compares this model with OpenSim's own forward simulation.
-    let eq = match crate::ode::StateEquation::new(
-        &ocp.eq.model,
-        true,
-        crate::path::PathSmoothing::Exact,
-    ) {
-        Ok(eq) => Arc::new(eq),
+    // The forward check integrates the model as OpenSim does, as `leap
+    // simulate` does: not the optimizer's smoothed activation switch, fibre
+    // clamp and conditional path points (the smoothed paths had put the
+    // default solve's forward jump 0.16 mm lower).
+    let (laws, eq) = match crate::ode::StateEquation::opensim(&ocp.eq.model, true) {
+        Ok((laws, eq)) => (Arc::new(laws), Arc::new(eq)),
         Err(e) => {
             report.errors.push(format!("no forward check: {e}"));
             return Ok((report, Vec::new()));
         }
     };
-    let mut own_laws = ocp.laws.clone();
-    for law in &mut own_laws.muscles {
-        if let crate::laws::MuscleLaw::Thelen(t) = law {
-            t.activation_smoothing = None;
-            t.fiber_clamp_smoothing = None;
-        }
-    }
-    let laws = Arc::new(own_laws);
     let simbody = simulate_simbody(
         &eq,
         &laws,

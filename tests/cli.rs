@@ -255,7 +255,7 @@ fn results_directory_taken_by_a_file_is_named() {
         ),
         (
             &["solve", "models/jump_reduced.json"],
-            "output_directory (--out): a file of that name exists",
+            "output_directory (--out): cannot create the results directory: a file of that name exists",
         ),
     ] {
         let o = Command::cargo_bin("leap")
