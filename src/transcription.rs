@@ -1584,27 +1584,23 @@ impl Transcription {
     /// short keeps its best point and the next goes on from it.
     pub fn integrate_on_mesh(&mut self, v: &mut [f64]) -> Result<MeshIntegration, EvalError> {
         let (nx, big_n) = (self.nx, self.num_intervals());
-        let (n, m) = (self.num_variables(), self.num_constraints());
+        let n = self.num_variables();
         if v.len() != n {
             return Err(EvalError::new(
                 "guess",
                 format!("{} values, the problem has {n} variables", v.len()),
             ));
         }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(EvalError::new(
+                "guess",
+                format!("{} is {}", self.variable_name(i), v[i]),
+            ));
+        }
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
-        // Per interval: the Jacobian entries of its rows in node k's states.
-        let mut block_entries: Vec<Vec<(usize, usize, usize)>> = vec![Vec::new(); big_n];
-        for (e, &(r, c)) in self.structure.iter().enumerate() {
-            if r < big_n * nx {
-                if let Some((k, i)) = self.node_column(c).filter(|&(_, i)| i < nx) {
-                    if k == r / nx + 1 {
-                        block_entries[k - 1].push((e, r % nx, i));
-                    }
-                }
-            }
-        }
-        let (mut c, mut jv) = (vec![0.0; m], vec![0.0; self.structure.len()]);
+        let mut rows = vec![0.0; nx];
+        let mut jac = nalgebra::DMatrix::<f64>::zeros(nx, nx);
         let mut trial = v.to_vec();
         let mut report = MeshIntegration {
             intervals: big_n,
@@ -1613,7 +1609,6 @@ impl Transcription {
             worst_interval: 0,
             worst_state: 0,
         };
-        let norm = |c: &[f64], k: usize| crate::sqp::norm_inf(&c[(k - 1) * nx..k * nx]);
         for k in 1..=big_n {
             let cols = (0..nx)
                 .map(|i| self.state_index(k, i))
@@ -1621,35 +1616,31 @@ impl Transcription {
                 .ok_or_else(|| {
                     EvalError::new("guess", format!("node {k} has no state variables"))
                 })?;
-            self.constraints(v, &mut c)?;
-            let mut res = norm(&c, k);
+            let mut res = self.interval_residual(v, k, &mut rows)?;
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
                     break;
                 }
-                self.jacobian_values(v, &mut jv)?;
-                let mut jac = nalgebra::DMatrix::<f64>::zeros(nx, nx);
-                for &(e, r, i) in &block_entries[k - 1] {
-                    jac[(r, i)] += jv[e];
-                }
-                let rhs = nalgebra::DVector::from_iterator(
-                    nx,
-                    c[(k - 1) * nx..k * nx].iter().map(|r| -r),
-                );
-                let Some(step) = jac.lu().solve(&rhs) else {
+                self.interval_state_jacobian(v, k, &mut jac)?;
+                let rhs = nalgebra::DVector::from_iterator(nx, rows.iter().map(|r| -r));
+                let Some(step) = jac.clone().lu().solve(&rhs) else {
                     break;
                 };
+                if step.iter().any(|s| !s.is_finite()) {
+                    break;
+                }
                 let mut alpha = 1.0;
                 let mut taken = false;
                 for _ in 0..MESH_NEWTON_BACKTRACKS {
-                    trial.copy_from_slice(v);
                     for (i, &col) in cols.iter().enumerate() {
                         trial[col] = (v[col] + alpha * step[i]).clamp(lo[col], hi[col]);
                     }
-                    if self.constraints(&trial, &mut c).is_ok() {
-                        let r = norm(&c, k);
+                    // A trial the model cannot evaluate is a rejected step.
+                    if let Ok(r) = self.interval_residual(&trial, k, &mut rows) {
                         if r < res {
-                            v.copy_from_slice(&trial);
+                            for &col in &cols {
+                                v[col] = trial[col];
+                            }
                             res = r;
                             taken = true;
                             break;
@@ -1657,14 +1648,17 @@ impl Transcription {
                     }
                     alpha *= 0.5;
                 }
+                for &col in &cols {
+                    trial[col] = v[col];
+                }
+                // rows hold the defects of the step taken, now v's.
                 if !taken {
                     break;
                 }
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
             if res > report.worst_defect {
-                self.constraints(v, &mut c)?;
-                let rows = &c[(k - 1) * nx..k * nx];
+                self.interval_residual(v, k, &mut rows)?;
                 report.worst_state = (0..nx)
                     .max_by(|&a, &b| rows[a].abs().total_cmp(&rows[b].abs()))
                     .unwrap_or(0);
@@ -1861,67 +1855,284 @@ impl Transcription {
     ///   ∂d/∂t_f     = −(f_{k−1} + 4f_c + f_k)/(6N) − (h/(12N))·F_c^x·(f_{k−1} − f_k)
     /// ```
     fn hermite_simpson_jacobian(&mut self, h: f64, values: &mut [f64]) {
+        for k in 1..=self.num_intervals() {
+            let e = self.defect_entries(k);
+            self.hermite_simpson_interval_jacobian(k, h, &mut values[e]);
+        }
+    }
+
+    /// The entries (a range of [`Nlp::jacobian_structure`]) of interval k's
+    /// defect rows, which the structure holds interval by interval.
+    fn defect_entries(&self, k: usize) -> std::ops::Range<usize> {
+        let block = &self.structure[..self.block_offsets[1]];
+        let nx = self.nx;
+        block.partition_point(|&(r, _)| r < (k - 1) * nx)
+            ..block.partition_point(|&(r, _)| r < k * nx)
+    }
+
+    /// [`Self::hermite_simpson_jacobian`] of interval k into `values`, its
+    /// entries, from the point evaluations of its nodes and centre.
+    fn hermite_simpson_interval_jacobian(&mut self, k: usize, h: f64, values: &mut [f64]) {
         let (nx, big_n) = (self.nx, self.num_intervals());
         let nout = nx + 2;
         let nnz = self.compiled.entries.len();
         let inv_n = 1.0 / big_n as f64;
         let mut scratch = std::mem::take(&mut self.scratch);
         let mut out = values.iter_mut();
-        for k in 1..=big_n {
-            let pc = self.interval_point[k - 1];
-            let jc = &self.point_jac[pc * nnz..(pc + 1) * nnz];
-            let fc = &self.point_vals[pc * nout..pc * nout + nx];
-            let fval = |k: usize| -> &[f64] {
-                match self.node_point[k] {
-                    Some(p) => &self.point_vals[p * nout..p * nout + nx],
-                    None => &self.node0[..nx],
-                }
-            };
-            let (fa, fb) = (fval(k - 1), fval(k));
-            let pb = self.node_point[k].unwrap_or(0);
-            let jb = &self.point_jac[pb * nnz..(pb + 1) * nnz];
-            for r in 0..nx {
-                let cols = &self.hs_rows[r];
-                let prods = &self.hs_prods[r];
-                for (node_jac, sign) in [
-                    (
-                        if k >= 2 {
-                            self.node_point[k - 1].map(|p| &self.point_jac[p * nnz..(p + 1) * nnz])
-                        } else {
-                            None
-                        },
-                        -1.0,
-                    ),
-                    (Some(jb), 1.0),
-                ] {
-                    let Some(jn) = node_jac else { continue };
-                    // scratch = row r of F_c^x·F_node.
-                    for &(sr, e_rs) in prods {
-                        let a = jc[e_rs];
-                        for e in self.compiled.row_start[sr]..self.compiled.row_start[sr + 1] {
-                            scratch[self.compiled.entries[e].1] += a * jn[e];
-                        }
-                    }
-                    for &(c, e, d) in cols {
-                        let (fnode, fcen) = e.map_or((0.0, 0.0), |e| (jn[e], jc[e]));
-                        let v = sign * d - h / 6.0 * fnode - h / 3.0 * fcen
-                            + sign * h * h / 12.0 * scratch[c];
-                        scratch[c] = 0.0;
-                        if let Some(o) = out.next() {
-                            *o = v;
-                        }
-                    }
-                }
-                let mut corr = 0.0;
+        let pc = self.interval_point[k - 1];
+        let jc = &self.point_jac[pc * nnz..(pc + 1) * nnz];
+        let fc = &self.point_vals[pc * nout..pc * nout + nx];
+        let fval = |k: usize| -> &[f64] {
+            match self.node_point[k] {
+                Some(p) => &self.point_vals[p * nout..p * nout + nx],
+                None => &self.node0[..nx],
+            }
+        };
+        let (fa, fb) = (fval(k - 1), fval(k));
+        let pb = self.node_point[k].unwrap_or(0);
+        let jb = &self.point_jac[pb * nnz..(pb + 1) * nnz];
+        for r in 0..nx {
+            let cols = &self.hs_rows[r];
+            let prods = &self.hs_prods[r];
+            for (node_jac, sign) in [
+                (
+                    if k >= 2 {
+                        self.node_point[k - 1].map(|p| &self.point_jac[p * nnz..(p + 1) * nnz])
+                    } else {
+                        None
+                    },
+                    -1.0,
+                ),
+                (Some(jb), 1.0),
+            ] {
+                let Some(jn) = node_jac else { continue };
+                // scratch = row r of F_c^x·F_node.
                 for &(sr, e_rs) in prods {
-                    corr += jc[e_rs] * (fa[sr] - fb[sr]);
+                    let a = jc[e_rs];
+                    for e in self.compiled.row_start[sr]..self.compiled.row_start[sr + 1] {
+                        scratch[self.compiled.entries[e].1] += a * jn[e];
+                    }
                 }
-                if let Some(o) = out.next() {
-                    *o = -(fa[r] + 4.0 * fc[r] + fb[r]) * inv_n / 6.0 - h * inv_n / 12.0 * corr;
+                for &(c, e, d) in cols {
+                    let (fnode, fcen) = e.map_or((0.0, 0.0), |e| (jn[e], jc[e]));
+                    let v = sign * d - h / 6.0 * fnode - h / 3.0 * fcen
+                        + sign * h * h / 12.0 * scratch[c];
+                    scratch[c] = 0.0;
+                    if let Some(o) = out.next() {
+                        *o = v;
+                    }
                 }
+            }
+            let mut corr = 0.0;
+            for &(sr, e_rs) in prods {
+                corr += jc[e_rs] * (fa[sr] - fb[sr]);
+            }
+            if let Some(o) = out.next() {
+                *o = -(fa[r] + 4.0 * fc[r] + fb[r]) * inv_n / 6.0 - h * inv_n / 12.0 * corr;
             }
         }
         self.scratch = scratch;
+    }
+
+    /// Evaluate the points interval k's defect rows read (with `jac`, their
+    /// Jacobians too): its midpoint, or its nodes and then its
+    /// Hermite–Simpson centre, which reads their values.
+    fn eval_interval(&mut self, v: &[f64], k: usize, jac: bool) -> Result<(), EvalError> {
+        let points = match self.options.scheme {
+            Scheme::MidpointEuler => [Some(self.interval_point[k - 1]), None, None],
+            Scheme::BackwardEuler => [self.node_point[k], None, None],
+            Scheme::Trapezoidal => [self.node_point[k - 1], self.node_point[k], None],
+            Scheme::HermiteSimpson => [
+                self.node_point[k - 1],
+                self.node_point[k],
+                Some(self.interval_point[k - 1]),
+            ],
+        };
+        for p in points.into_iter().flatten() {
+            self.eval_stage(v, jac, p, p + 1)
+                .map_err(|e| EvalError::new(if jac { "jacobian" } else { "constraints" }, e))?;
+        }
+        Ok(())
+    }
+
+    /// Interval k's defects (1..N) at v into `rows` (n_x values), and their
+    /// largest magnitude: the values of those rows of [`Nlp::constraints`],
+    /// from the interval's own points alone.
+    pub fn interval_residual(
+        &mut self,
+        v: &[f64],
+        k: usize,
+        rows: &mut [f64],
+    ) -> Result<f64, EvalError> {
+        self.check_interval(v, k)?;
+        check_len("constraints", "rows", rows.len(), self.nx)?;
+        self.eval_interval(v, k, false)?;
+        self.interval_defects(v, k, rows);
+        if let Some(r) = rows.iter().position(|x| !x.is_finite()) {
+            let row = (k - 1) * self.nx + r;
+            return Err(EvalError::new(
+                "constraints",
+                format!("{} is {}", self.constraint_name(row), rows[r]),
+            ));
+        }
+        Ok(crate::sqp::norm_inf(rows))
+    }
+
+    /// The n_x × n_x block of interval k's defect rows (1..N) in node k's
+    /// states at v: those entries of [`Nlp::jacobian_values`], from the
+    /// interval's own points alone.
+    pub fn interval_state_jacobian(
+        &mut self,
+        v: &[f64],
+        k: usize,
+        jac: &mut nalgebra::DMatrix<f64>,
+    ) -> Result<(), EvalError> {
+        self.check_interval(v, k)?;
+        let nx = self.nx;
+        if jac.shape() != (nx, nx) {
+            return Err(EvalError::new(
+                "jacobian",
+                format!("a {:?} block, the states are {nx}", jac.shape()),
+            ));
+        }
+        self.eval_interval(v, k, true)?;
+        let h = self.final_time(v) / self.num_intervals() as f64;
+        let range = self.defect_entries(k);
+        let mut hs = Vec::new();
+        if self.options.scheme == Scheme::HermiteSimpson {
+            hs = vec![0.0; range.len()];
+            self.hermite_simpson_interval_jacobian(k, h, &mut hs);
+        }
+        jac.fill(0.0);
+        for e in range.clone() {
+            let (r, c) = self.structure[e];
+            let Some((node, i)) = self.node_column(c) else {
+                continue;
+            };
+            if node != k || i >= nx {
+                continue;
+            }
+            jac[(r % nx, i)] += match self.source_value(self.sources[e], v, h) {
+                Some(value) => value,
+                None => hs.get(e - range.start).copied().unwrap_or(f64::NAN),
+            };
+        }
+        Ok(())
+    }
+
+    fn check_interval(&self, v: &[f64], k: usize) -> Result<(), EvalError> {
+        check_len("interval", "v", v.len(), self.num_variables())?;
+        if k == 0 || k > self.num_intervals() {
+            return Err(EvalError::new(
+                "interval",
+                format!(
+                    "interval {k}: the mesh has intervals 1..={}",
+                    self.num_intervals()
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The defect rows of interval `k` (1..N) into `c` (n_x values), from
+    /// the point values of the last evaluation that covered its points.
+    fn interval_defects(&self, x: &[f64], k: usize, c: &mut [f64]) {
+        let nx = self.nx;
+        let h = self.final_time(x) / self.num_intervals() as f64;
+        let (xa, xb) = (self.node_state(x, k - 1), self.node_state(x, k));
+        match self.options.scheme {
+            Scheme::MidpointEuler => {
+                let p = self.interval_point[k - 1];
+                let f = &self.point_vals[p * (nx + 2)..p * (nx + 2) + nx];
+                for r in 0..nx {
+                    c[r] = if self.is_balance_row(r) {
+                        f[r]
+                    } else {
+                        xb[r] - xa[r] - h * f[r]
+                    };
+                }
+            }
+            Scheme::BackwardEuler => {
+                let pb = self.node_point[k];
+                for r in 0..nx {
+                    c[r] = xb[r] - xa[r] - h * self.point_val(pb, r);
+                }
+            }
+            Scheme::Trapezoidal => {
+                let (pa, pb) = (self.node_point[k - 1], self.node_point[k]);
+                for r in 0..nx {
+                    c[r] =
+                        xb[r] - xa[r] - 0.5 * h * (self.point_val(pa, r) + self.point_val(pb, r));
+                }
+            }
+            Scheme::HermiteSimpson => {
+                let (pa, pb, pc) = (
+                    self.node_point[k - 1],
+                    self.node_point[k],
+                    Some(self.interval_point[k - 1]),
+                );
+                for r in 0..nx {
+                    c[r] = xb[r]
+                        - xa[r]
+                        - h / 6.0
+                            * (self.point_val(pa, r)
+                                + 4.0 * self.point_val(pc, r)
+                                + self.point_val(pb, r));
+                }
+            }
+        }
+    }
+
+    /// Jacobian entry `src` from the point evaluations at x (h = t_f/N);
+    /// None for the entries filled block by block (Hermite–Simpson defects,
+    /// Ẏ_C rows).
+    fn source_value(&self, src: Src, x: &[f64], h: f64) -> Option<f64> {
+        let nout = self.nx + 2;
+        let nnz = self.compiled.entries.len();
+        Some(match src {
+            Src::Hs | Src::ComVelocity => return None,
+            Src::Dyn {
+                point,
+                entry,
+                diag,
+                weight,
+            } => match entry {
+                Some(e) => diag - weight * h * self.point_jac[point * nnz + e],
+                None => diag,
+            },
+            Src::Tf { a, b, row, scale } => {
+                let fa = match a {
+                    Term::Point(p) => self.point_vals[p * nout + row],
+                    Term::Start => self.node0[row],
+                    Term::None => 0.0,
+                };
+                -(fa + self.point_vals[b * nout + row]) * scale
+            }
+            Src::Out {
+                point,
+                entry,
+                scale,
+            } => scale * self.point_jac[point * nnz + entry],
+            Src::Balance {
+                point,
+                entry,
+                speed,
+            } => {
+                let j = &self.point_jac[point * nnz..(point + 1) * nnz];
+                entry.map_or(0.0, |e| 0.5 * j[e]) + speed.map_or(0.0, |(e, s)| j[e] * s / h)
+            }
+            Src::BalanceTf {
+                point,
+                entry,
+                row,
+                k,
+                inv_speed,
+            } => {
+                let dl = self.node_state(x, k)[row] - self.node_state(x, k - 1)[row];
+                let vbar = dl * inv_speed / h;
+                -self.point_jac[point * nnz + entry] * vbar / self.final_time(x)
+            }
+        })
     }
 
     fn point_val(&self, p: Option<usize>, r: usize) -> f64 {
@@ -2067,52 +2278,8 @@ impl Nlp for Transcription {
         let start = std::time::Instant::now();
         self.eval_points(x, false)?;
         let (nx, big_n) = (self.nx, self.num_intervals());
-        let h = self.final_time(x) / big_n as f64;
         for k in 1..=big_n {
-            let (xa, xb) = (self.node_state(x, k - 1), self.node_state(x, k));
-            let row0 = (k - 1) * nx;
-            match self.options.scheme {
-                Scheme::MidpointEuler => {
-                    let p = self.interval_point[k - 1];
-                    let f = &self.point_vals[p * (nx + 2)..p * (nx + 2) + nx];
-                    for r in 0..nx {
-                        c[row0 + r] = if self.is_balance_row(r) {
-                            f[r]
-                        } else {
-                            xb[r] - xa[r] - h * f[r]
-                        };
-                    }
-                }
-                Scheme::BackwardEuler => {
-                    let pb = self.node_point[k];
-                    for r in 0..nx {
-                        c[row0 + r] = xb[r] - xa[r] - h * self.point_val(pb, r);
-                    }
-                }
-                Scheme::Trapezoidal => {
-                    let (pa, pb) = (self.node_point[k - 1], self.node_point[k]);
-                    for r in 0..nx {
-                        c[row0 + r] = xb[r]
-                            - xa[r]
-                            - 0.5 * h * (self.point_val(pa, r) + self.point_val(pb, r));
-                    }
-                }
-                Scheme::HermiteSimpson => {
-                    let (pa, pb, pc) = (
-                        self.node_point[k - 1],
-                        self.node_point[k],
-                        Some(self.interval_point[k - 1]),
-                    );
-                    for r in 0..nx {
-                        c[row0 + r] = xb[r]
-                            - xa[r]
-                            - h / 6.0
-                                * (self.point_val(pa, r)
-                                    + 4.0 * self.point_val(pc, r)
-                                    + self.point_val(pb, r));
-                    }
-                }
-            }
+            self.interval_defects(x, k, &mut c[(k - 1) * nx..k * nx]);
         }
         for j in 0..self.n_cm {
             c[big_n * nx + j] =
@@ -2142,56 +2309,13 @@ impl Nlp for Transcription {
         let start = std::time::Instant::now();
         self.eval_points(x, true)?;
         let h = self.final_time(x) / self.num_intervals() as f64;
-        let nout = self.nx + 2;
-        let nnz = self.compiled.entries.len();
         if self.options.scheme == Scheme::HermiteSimpson {
             self.hermite_simpson_jacobian(h, &mut values[..self.block_offsets[1]]);
         }
-        for (v, src) in values.iter_mut().zip(&self.sources) {
-            *v = match *src {
-                Src::Hs | Src::ComVelocity => continue,
-                Src::Dyn {
-                    point,
-                    entry,
-                    diag,
-                    weight,
-                } => match entry {
-                    Some(e) => diag - weight * h * self.point_jac[point * nnz + e],
-                    None => diag,
-                },
-                Src::Tf { a, b, row, scale } => {
-                    let fa = match a {
-                        Term::Point(p) => self.point_vals[p * nout + row],
-                        Term::Start => self.node0[row],
-                        Term::None => 0.0,
-                    };
-                    -(fa + self.point_vals[b * nout + row]) * scale
-                }
-                Src::Out {
-                    point,
-                    entry,
-                    scale,
-                } => scale * self.point_jac[point * nnz + entry],
-                Src::Balance {
-                    point,
-                    entry,
-                    speed,
-                } => {
-                    let j = &self.point_jac[point * nnz..(point + 1) * nnz];
-                    entry.map_or(0.0, |e| 0.5 * j[e]) + speed.map_or(0.0, |(e, s)| j[e] * s / h)
-                }
-                Src::BalanceTf {
-                    point,
-                    entry,
-                    row,
-                    k,
-                    inv_speed,
-                } => {
-                    let dl = self.node_state(x, k)[row] - self.node_state(x, k - 1)[row];
-                    let vbar = dl * inv_speed / h;
-                    -self.point_jac[point * nnz + entry] * vbar / self.final_time(x)
-                }
-            };
+        for (v, &src) in values.iter_mut().zip(&self.sources) {
+            if let Some(value) = self.source_value(src, x, h) {
+                *v = value;
+            }
         }
         if self.n_cv > 0 {
             let n2 = 2 * self.ocp.nq();

@@ -997,6 +997,83 @@ fn bang_bang_guess_integrated_on_the_mesh() {
     assert!(tr.integrate_on_mesh(&mut [0.0; 3]).is_err());
 }
 
+/// One interval's defects and their block in node k's states, as
+/// `integrate_on_mesh` evaluates them from the interval's own points, equal
+/// the same rows and entries of the whole problem's `constraints` and
+/// `jacobian_values` to the bit, for every scheme and both fibre-dynamics
+/// forms, at a guess whose states are perturbed off the defects (each
+/// interval evaluated after the whole problem at another guess); an
+/// interval outside the mesh is an error.
+#[test]
+fn one_interval_evaluates_as_the_whole_problem() {
+    let nx = 62;
+    for (scheme, fiber_dynamics) in [
+        (Scheme::MidpointEuler, FiberDynamics::Explicit),
+        (Scheme::MidpointEuler, FiberDynamics::Implicit),
+        (Scheme::Trapezoidal, FiberDynamics::Explicit),
+        (Scheme::HermiteSimpson, FiberDynamics::Explicit),
+        (Scheme::BackwardEuler, FiberDynamics::Explicit),
+    ] {
+        let n = 8;
+        let mut tr = if fiber_dynamics == FiberDynamics::Implicit {
+            implicit_transcription()
+        } else {
+            transcription(TranscriptionOptions {
+                num_mesh_intervals: n,
+                scheme,
+                ..Default::default()
+            })
+        };
+        let (mut v, _) = tr.bang_bang_guess().unwrap();
+        for k in 1..=n {
+            for i in 0..nx {
+                let j = tr.state_index(k, i).unwrap();
+                v[j] *= 1.0 + 1e-3 * (((7 * k + 3 * i) % 11) as f64 - 5.0) / 5.0;
+            }
+        }
+        let mut c = vec![0.0; tr.num_constraints()];
+        tr.constraints(&v, &mut c).unwrap();
+        let structure = tr.jacobian_structure();
+        let mut jv = vec![0.0; structure.len()];
+        tr.jacobian_values(&v, &mut jv).unwrap();
+        // Every point evaluated last at another guess: the interval's
+        // evaluation must cover all of its points.
+        let other: Vec<f64> = v.iter().map(|x| x * (1.0 + 1e-4)).collect();
+        let (mut c2, mut jv2) = (c.clone(), jv.clone());
+        let mut rows = vec![0.0; nx];
+        let mut block = nalgebra::DMatrix::zeros(nx, nx);
+        for k in 1..=n {
+            tr.jacobian_values(&other, &mut jv2).unwrap();
+            tr.constraints(&other, &mut c2).unwrap();
+            let worst = tr.interval_residual(&v, k, &mut rows).unwrap();
+            let whole = &c[(k - 1) * nx..k * nx];
+            assert_eq!(rows, whole, "{scheme:?} {fiber_dynamics:?}: interval {k}");
+            assert!(worst > 0.0);
+            assert_eq!(worst, whole.iter().fold(0.0f64, |a, b| a.max(b.abs())));
+            tr.jacobian_values(&other, &mut jv2).unwrap();
+            tr.interval_state_jacobian(&v, k, &mut block).unwrap();
+            let mut expected = nalgebra::DMatrix::zeros(nx, nx);
+            let mut entries = 0;
+            for (&(r, col), &value) in structure.iter().zip(&jv) {
+                if r / nx + 1 != k || r >= n * nx {
+                    continue;
+                }
+                let Some(i) = (0..nx).find(|&i| tr.state_index(k, i) == Some(col)) else {
+                    continue;
+                };
+                expected[(r % nx, i)] += value;
+                entries += 1;
+            }
+            assert!(entries >= nx, "{scheme:?}: {entries} entries");
+            assert_eq!(block, expected, "{scheme:?} {fiber_dynamics:?}: interval {k}");
+        }
+        assert!(tr.interval_residual(&v, 0, &mut rows).is_err());
+        assert!(tr.interval_residual(&v, n + 1, &mut rows).is_err());
+        assert!(tr.interval_state_jacobian(&v, n + 1, &mut block).is_err());
+        assert!(tr.interval_residual(&v[1..], 1, &mut rows).is_err());
+    }
+}
+
 /// Timings of the full 29-node problem (run with
 /// `cargo test --release --test integration -- --ignored --nocapture transcription::timing`).
 #[test]
