@@ -112,7 +112,7 @@ impl StoTable {
         );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|error| StoError::Io {
+        write_output(path, out).map_err(|error| StoError::Io {
             file: path.into(),
             error,
         })
@@ -139,7 +139,7 @@ impl StoTable {
         );
         let _ = writeln!(out, "endheader");
         self.write_body(&mut out);
-        std::fs::write(path, out).map_err(|error| StoError::Io {
+        write_output(path, out).map_err(|error| StoError::Io {
             file: path.into(),
             error,
         })
@@ -465,6 +465,61 @@ pub fn read_input_text(path: &Path) -> std::io::Result<String> {
             ),
         )
     })
+}
+
+/// Write an output file whole or not at all: `write` fills a new file
+/// beside `path`, which then replaces `path` by a rename. A failed or
+/// interrupted write leaves the previous file as it was (and no partial
+/// one), and a symbolic link at `path` is replaced, not followed: results
+/// land in the results directory and nowhere else.
+pub fn write_output_with(
+    path: &Path,
+    write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    use std::io::{Error, ErrorKind};
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static COUNTER: AtomicUsize = AtomicUsize::new(0);
+    let name = path
+        .file_name()
+        .ok_or_else(|| Error::new(ErrorKind::InvalidInput, "names no file"))?;
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+        return Err(Error::new(
+            ErrorKind::InvalidInput,
+            "is a directory, not a file",
+        ));
+    }
+    loop {
+        let tmp = dir.join(format!(
+            ".{}.{}-{}.tmp",
+            name.to_string_lossy(),
+            std::process::id(),
+            COUNTER.fetch_add(1, Ordering::Relaxed)
+        ));
+        let mut file = match std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)
+        {
+            Ok(f) => f,
+            Err(e) if e.kind() == ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(e),
+        };
+        let written = write(&mut file).and_then(|()| std::fs::rename(&tmp, path));
+        if written.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        return written;
+    }
+}
+
+/// [`write_output_with`] of `bytes`.
+pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()> {
+    use std::io::Write;
+    write_output_with(path, |f| f.write_all(bytes.as_ref()))
 }
 
 /// Read a storage file with states of `eq`'s system (a solution, a forward

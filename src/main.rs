@@ -802,8 +802,8 @@ fn simulate(
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>());
             v["static_squat_max_abs_qdd"] = serde_json::json!(squat.max_abs_qdd);
-            std::fs::write(
-                out_dir.join("jump_summary.json"),
+            leap::io::write_output(
+                &out_dir.join("jump_summary.json"),
                 serde_json::to_string_pretty(&v)?,
             )?;
             if json {
@@ -865,8 +865,8 @@ fn simulate(
                 .collect();
             let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
                 "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>()});
-            std::fs::write(
-                out_dir.join("jump_summary.json"),
+            leap::io::write_output(
+                &out_dir.join("jump_summary.json"),
                 serde_json::to_string_pretty(&v)?,
             )?;
             if json {

@@ -345,7 +345,7 @@ pub fn run(
     files.push(p.clone());
     report.output_files = files.iter().map(|f| f.display().to_string()).collect();
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
-    std::fs::write(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
+    crate::io::write_output(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
     Ok(report)
 }
 

@@ -303,3 +303,32 @@ fn a_model_with_duplicate_sphere_names_is_refused() {
     );
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// Results replace what a results directory held, links included: a
+/// symbolic link where `jump_states.sto` goes is replaced by the file, and
+/// the file it pointed to, outside the directory, is left as it was.
+#[cfg(unix)]
+#[test]
+fn results_replace_links_and_never_write_through_them() {
+    let out = tmp("links");
+    let outside = tmp("links-outside").join("precious.txt");
+    std::fs::write(&outside, "not leap's").unwrap();
+    for name in ["jump_states.sto", "jump_summary.json"] {
+        let link = out.join(name);
+        let _ = std::fs::remove_file(&link);
+        std::os::unix::fs::symlink(&outside, &link).unwrap();
+    }
+    let o = leap()
+        .args(["simulate", "--integrator", "DormandPrince", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(std::fs::read_to_string(&outside).unwrap(), "not leap's");
+    for name in ["jump_states.sto", "jump_summary.json"] {
+        let meta = std::fs::symlink_metadata(out.join(name)).unwrap();
+        assert!(meta.file_type().is_file(), "{name} is still a link");
+    }
+    let states = std::fs::read_to_string(out.join("jump_states.sto")).unwrap();
+    assert!(states.contains("endheader"), "{states}");
+}

@@ -383,3 +383,31 @@ fn directories_and_devices_are_refused_as_input_files() {
     writer.join().unwrap();
     assert_eq!((t.labels.len(), t.time.len()), (1, 2));
 }
+
+/// An output file is written whole or not at all: a write that fails
+/// midway leaves the previous file as it was and no partial file beside
+/// it; one that succeeds replaces it.
+#[test]
+fn output_files_are_written_whole_or_not_at_all() {
+    let dir = scratch("write_output");
+    let path = dir.join("jump_summary.json");
+    leap::io::write_output(&path, "old").unwrap();
+    let failed = leap::io::write_output_with(&path, |f| {
+        std::io::Write::write_all(f, b"half of the new")?;
+        Err(std::io::Error::other("disk full"))
+    });
+    assert_eq!(failed.unwrap_err().to_string(), "disk full");
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "old");
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("jump_summary.json")]);
+    leap::io::write_output(&path, "new").unwrap();
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
+    // A directory in the way is an error, and stays a directory.
+    std::fs::create_dir_all(dir.join("sub.sto")).unwrap();
+    let e = leap::io::write_output(&dir.join("sub.sto"), "x").unwrap_err();
+    assert!(e.to_string().contains("directory"), "{e}");
+    assert!(dir.join("sub.sto").is_dir());
+}

@@ -1065,7 +1065,10 @@ fn one_interval_evaluates_as_the_whole_problem() {
                 entries += 1;
             }
             assert!(entries >= nx, "{scheme:?}: {entries} entries");
-            assert_eq!(block, expected, "{scheme:?} {fiber_dynamics:?}: interval {k}");
+            assert_eq!(
+                block, expected,
+                "{scheme:?} {fiber_dynamics:?}: interval {k}"
+            );
         }
         assert!(tr.interval_residual(&v, 0, &mut rows).is_err());
         assert!(tr.interval_residual(&v, n + 1, &mut rows).is_err());

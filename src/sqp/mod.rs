@@ -489,13 +489,20 @@ fn lg_rg(shift: f64) -> String {
     }
 }
 
-/// Write iteration records as CSV (one header line, one row each).
+/// Write iteration records as CSV (one header line, one row each), whole
+/// or not at all ([`crate::io::write_output_with`]).
 pub fn write_history_csv(
     history: &[IterationRecord],
     path: &std::path::Path,
 ) -> std::io::Result<()> {
-    use std::io::Write;
-    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    crate::io::write_output_with(path, |file| {
+        let mut f = std::io::BufWriter::new(file);
+        history_csv(history, &mut f)?;
+        std::io::Write::flush(&mut f)
+    })
+}
+
+fn history_csv(history: &[IterationRecord], f: &mut impl std::io::Write) -> std::io::Result<()> {
     writeln!(f, "iter,objective,inf_pr,inf_du,complementarity,step_norm,step_bound,model_ratio,alpha,ls_trials,qp_iterations,qp_mode,penalty,merit,hessian_skips,hessian_shift,derivatives_s,qp_s,line_search_s,hessian_s,time_s,max_violation_constraint,max_multiplier_constraint,max_multiplier")?;
     // RFC 4180: a name holding a comma or quote is quoted, quotes doubled.
     let field = |name: &str| {
@@ -535,7 +542,7 @@ pub fn write_history_csv(
             r.max_multiplier
         )?;
     }
-    f.flush()
+    Ok(())
 }
 
 /// The problem's data fixed for a solve.

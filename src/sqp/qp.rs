@@ -611,8 +611,7 @@ impl Qp {
             self.settings.clone(),
         )
         .map_err(|e| e.to_string())?;
-        let mut f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        s.save_to_file(&mut f)
+        crate::io::write_output_with(path, |f| s.save_to_file(f))
             .map_err(|e| format!("{}: {e}", path.display()))
     }
 }
