@@ -107,6 +107,10 @@ pub struct JumpSummary {
     pub final_time_s: f64,
     pub steps: usize,
     pub rejected_steps: usize,
+    /// Dormand–Prince: steps accepted at the minimum step size with the
+    /// error above the accuracy ([`crate::integrator::IntegrationStats`]);
+    /// Simbody does the same but does not count them (None).
+    pub steps_over_tolerance: Option<usize>,
     pub f_evals: usize,
     pub wall_time_s: f64,
     pub integrator: String,
@@ -364,6 +368,7 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
         final_time_s: ig.t(),
         steps: ig.stats.steps,
         rejected_steps: ig.stats.rejected_steps,
+        steps_over_tolerance: Some(ig.stats.steps_over_tolerance),
         f_evals: ig.stats.f_evals,
         wall_time_s: start.elapsed().as_secs_f64(),
         integrator: "Dormand-Prince 5(4) (Rust-native)".into(),
@@ -616,6 +621,7 @@ pub fn simulate_simbody<E: ExcitationSource + Clone + Send + 'static>(
         final_time_s: t,
         steps,
         rejected_steps: attempted.saturating_sub(steps),
+        steps_over_tolerance: None,
         f_evals: (stats.realizations + extra.realizations) as usize,
         wall_time_s: start.elapsed().as_secs_f64(),
         integrator: format!("{integrator:?} (Simbody)"),

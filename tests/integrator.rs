@@ -82,3 +82,46 @@ fn rhs_errors_report_time_and_reason() {
     assert!(matches!(e, IntegrationError::Rhs { t, .. } if t > 0.5));
     assert!(e.to_string().contains("fibre length"));
 }
+
+/// ẋ = 1 below x = 1/2 and 10⁴ above: a jump of the right-hand side, as a
+/// knee spline's end or a path point switching makes.
+struct Jump;
+impl OdeSystem for Jump {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        dx[0] = if x[0] < 0.5 { 1.0 } else { 1e4 };
+        Ok(())
+    }
+}
+
+/// A jump of the right-hand side whose local error h·Δf stays above the
+/// accuracy at the minimum step is crossed by a step of the minimum size,
+/// accepted and counted, as Simbody does (x(t) = 1/2 + 10⁴(t − 1/2) after
+/// t = 1/2: the crossing costs at most h_min·Δf = 1e-4); with a minimum
+/// step small enough to resolve it, no step exceeds the accuracy and the
+/// crossing is a thousand times closer.
+#[test]
+fn a_jump_of_the_rhs_is_crossed_at_the_minimum_step() {
+    let run = |min_step: f64| {
+        let opts = Dopri5Options {
+            accuracy: 1e-10,
+            min_step,
+            max_steps: 1_000_000,
+            ..Default::default()
+        };
+        let mut ig = Dopri5::new(&mut Jump, 0.0, &[0.0], opts).unwrap();
+        while ig.t() < 0.5001 {
+            ig.step(&mut Jump, 0.5001).unwrap();
+        }
+        ((ig.x()[0] - 1.5).abs(), ig.stats)
+    };
+    let (err, stats) = run(1e-8);
+    assert!(stats.steps_over_tolerance >= 1, "{stats:?}");
+    assert!(err <= 1e-4, "{err}");
+    let (err, stats) = run(1e-16);
+    assert_eq!(stats.steps_over_tolerance, 0, "{stats:?}");
+    // The crossing time's error is multiplied by Δf = 1e4 in x.
+    assert!(err <= 1e-7, "{err}");
+}
