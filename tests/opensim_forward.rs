@@ -6,7 +6,10 @@
 //! `tests/data/opensim_forward_jump.json`).
 //!
 //! Both sides integrate to a relative accuracy of 1e-8 (RungeKuttaMerson in
-//! OpenSim and Simbody; leap's Dormand–Prince at the same setting): at
+//! OpenSim and Simbody); leap's Dormand–Prince runs at 1e-9, since at 1e-8
+//! its own error at lift-off is 1.2e-6 rad in the knee (measured against its
+//! runs at 1e-9 and 1e-10, which agree with OpenSim to 3e-7), above the
+//! bound below, which is for the model, not for an integrator's error. At
 //! `leap simulate`'s default 1e-5 the integrator's own error is some 3e-5 m
 //! in the jump height, the same in Simbody and OpenSim, and would hide model
 //! differences of that size. The bounds are a hundred times the accuracy on
@@ -53,7 +56,11 @@ fn simulate(integrator: &str, name: &str) -> (Value, StoTable, StoTable) {
             "--integrator",
             integrator,
             "--accuracy",
-            "1e-8",
+            if integrator == "DormandPrince" {
+                "1e-9"
+            } else {
+                "1e-8"
+            },
             "--json",
             "--out",
         ])
