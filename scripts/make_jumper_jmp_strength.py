@@ -81,10 +81,11 @@ def main():
                 m["optimal_fiber_length"] = lopt
                 m["tendon_slack_length"] = lts
     model["name"] = NAME
-    taken = (
-        "max_isometric_force (gait2392's fibre and tendon lengths kept)"
+    lengths = (
+        "gait2392's fibre and tendon lengths kept"
         if FORCES_ONLY
-        else "max_isometric_force, optimal_fiber_length and tendon_slack_length"
+        else "bifemlh, med_gas, soleus, tib_post and tib_ant also take the Jumper's "
+        "optimal_fiber_length and tendon_slack_length"
     )
     role = (
         "leap's default model"
@@ -95,11 +96,11 @@ def main():
         f"Muscle strengths, written by scripts/make_jumper_jmp_strength.py"
         f"{' --forces-only' if FORCES_ONLY else ''} ({role}): "
         "soleus and tib_post take the OpenSim Jumper's "
-        f"(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) {taken}; "
+        "(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) max_isometric_force; "
         "the groups that one Jumper muscle stands for (as gait10dof18musc's lumped muscles, "
         "shared/reference/model-data.md §7.2) take its force in all, in proportion to gait2392's: "
         "vasti (vas_int) 5000 N, hamstrings bifemlh + semimem + semiten (bifemlh) 2700 N, "
-        "gastrocnemii med_gas + lat_gas (med_gas) 2500 N, dorsiflexors tib_ant + ext_dig (tib_ant) 3000 N."
+        f"gastrocnemii med_gas + lat_gas (med_gas) 2500 N, dorsiflexors tib_ant + ext_dig (tib_ant) 3000 N; {lengths}."
     ]
     DST.write_text(json.dumps(model, indent=1, ensure_ascii=False) + "\n")
     print(f"wrote {DST.relative_to(ROOT)}")
