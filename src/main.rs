@@ -698,9 +698,14 @@ fn simulate(
             PathBuf::from(s)
         }
     };
-    let model_path = model.unwrap_or_else(|| rel(&st.model));
+    // What the study omits is relative to the working directory.
+    let model_path = model
+        .or_else(|| st.model.as_deref().map(rel))
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_MODEL));
     let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
-    let out_dir = out.unwrap_or_else(|| rel(&st.out));
+    let out_dir = out
+        .or_else(|| st.out.as_deref().map(rel))
+        .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT));
     if let Some(i) = integrator {
         st.integrator = i;
     }

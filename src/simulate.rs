@@ -746,12 +746,14 @@ pub fn standing_com_height(eq: &StateEquation) -> f64 {
     eq.multibody.com_position(&w)[1]
 }
 
-/// A forward-simulation study (JSON). Paths are relative to the study file.
+/// A forward-simulation study (JSON). Paths written in it are relative to
+/// the study file; those it omits take their defaults ([`DEFAULT_MODEL`],
+/// [`DEFAULT_OUT`]) relative to the working directory, as `leap solve`'s.
 #[derive(Debug, Clone, serde::Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimulateStudy {
-    #[serde(default = "default_model")]
-    pub model: String,
+    #[serde(default)]
+    pub model: Option<String>,
     /// `RungeKuttaMerson` (default, as OpenSim), `RungeKuttaFeldberg`,
     /// `RungeKutta3`, `CPodes`, `ExplicitEuler` (Simbody) or `DormandPrince`
     /// (Rust-native).
@@ -765,8 +767,8 @@ pub struct SimulateStudy {
     #[serde(default = "default_t_max")]
     pub t_max: f64,
     /// Results directory.
-    #[serde(default = "default_out")]
-    pub out: String,
+    #[serde(default)]
+    pub out: Option<String>,
     /// Excitations from an OpenSim controls or Moco solution file; else the
     /// bang-bang pattern.
     #[serde(default)]
@@ -794,9 +796,11 @@ pub struct BangBangSpec {
     pub off_time: f64,
 }
 
-fn default_model() -> String {
-    "models/jumper.json".into()
-}
+/// The model and results directory of a simulate study that names none
+/// (relative to the working directory).
+pub const DEFAULT_MODEL: &str = "models/jumper.json";
+pub const DEFAULT_OUT: &str = "results";
+
 fn default_integrator() -> String {
     "RungeKuttaMerson".into()
 }
@@ -805,9 +809,6 @@ fn default_accuracy() -> f64 {
 }
 fn default_t_max() -> f64 {
     1.0
-}
-fn default_out() -> String {
-    "results".into()
 }
 fn default_report() -> f64 {
     1e-3
@@ -894,11 +895,11 @@ impl SimulateStudy {
 impl Default for SimulateStudy {
     fn default() -> Self {
         SimulateStudy {
-            model: default_model(),
+            model: None,
             integrator: default_integrator(),
             accuracy: default_accuracy(),
             t_max: default_t_max(),
-            out: default_out(),
+            out: None,
             controls: None,
             bang_bang: None,
             report_interval: default_report(),

@@ -332,3 +332,41 @@ fn results_replace_links_and_never_write_through_them() {
     let states = std::fs::read_to_string(out.join("jump_states.sto")).unwrap();
     assert!(states.contains("endheader"), "{states}");
 }
+
+/// A simulate study that names no model uses the default model relative
+/// to the working directory, as `leap solve`'s study does, not relative to
+/// the study file; a model it names is relative to the study file.
+#[test]
+fn a_study_without_a_model_uses_the_working_directorys_default() {
+    let dir = tmp("study-defaults");
+    let study = dir.join("empty.json");
+    std::fs::write(&study, "{}").unwrap();
+    let o = leap()
+        .args([
+            "simulate",
+            "--integrator",
+            "DormandPrince",
+            "--json",
+            "--study",
+        ])
+        .arg(&study)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::write(&study, r#"{"model": "jumper.json"}"#).unwrap();
+    let o = leap()
+        .args(["simulate", "--study"])
+        .arg(&study)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&dir.join("jumper.json").display().to_string()),
+        "{err}"
+    );
+}
