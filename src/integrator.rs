@@ -51,10 +51,8 @@ pub struct IntegrationStats {
 pub enum IntegrationError {
     #[error("at t = {t}: the right-hand side failed: {reason}")]
     Rhs { t: f64, reason: String },
-    #[error(
-        "at t = {t}: the step size fell below the minimum {min_step} (error estimate {err:.3e})"
-    )]
-    StepTooSmall { t: f64, min_step: f64, err: f64 },
+    #[error("integrator settings: {0}")]
+    Options(String),
     #[error(
         "at t = {t}: more than {max_steps} steps: the model is too stiff to integrate at this accuracy"
     )]
@@ -130,6 +128,19 @@ impl Dopri5 {
         x0: &[f64],
         options: Dopri5Options,
     ) -> Result<Self, IntegrationError> {
+        let o = &options;
+        if !(o.accuracy > 0.0 && o.accuracy.is_finite()) {
+            return Err(IntegrationError::Options(format!(
+                "accuracy must be positive and finite, got {}",
+                o.accuracy
+            )));
+        }
+        if !(o.min_step > 0.0 && o.min_step <= o.max_step && o.max_step.is_finite()) {
+            return Err(IntegrationError::Options(format!(
+                "the steps must satisfy 0 < min_step <= max_step < inf, got {} and {}",
+                o.min_step, o.max_step
+            )));
+        }
         let n = x0.len();
         let mut me = Dopri5 {
             options,
@@ -226,11 +237,10 @@ impl Dopri5 {
             }
             if let Some((t_fail, reason)) = stage_error.take() {
                 self.stats.rejected_steps += 1;
-                let hn = h * 0.25;
-                if hn < self.options.min_step {
+                if h <= self.options.min_step {
                     return Err(IntegrationError::Rhs { t: t_fail, reason });
                 }
-                self.h = hn;
+                self.h = (h * 0.25).max(self.options.min_step);
                 continue;
             }
             // Error estimate (the 7th stage is f at the new point: FSAL), in
@@ -243,9 +253,15 @@ impl Dopri5 {
                     e += E[s] * self.k[s][i];
                 }
                 let sc = tol + tol * self.x[i].abs().max(self.xnew[i].abs());
-                err = err.max((h * e / sc).abs());
+                // NaN propagates (f64::max would skip it).
+                let ei = (h * e / sc).abs();
+                if ei.is_nan() || ei > err {
+                    err = ei;
+                }
             }
-            let finite = err.is_finite() && self.xnew.iter().all(|v| v.is_finite());
+            let finite = err.is_finite()
+                && self.xnew.iter().all(|v| v.is_finite())
+                && self.k[6].iter().all(|v| v.is_finite());
             let at_minimum = h <= self.options.min_step;
             if finite && (err <= 1.0 || at_minimum) {
                 if err > 1.0 {
@@ -275,14 +291,10 @@ impl Dopri5 {
             } else {
                 0.1
             };
-            // Down to the minimum, where the next try is accepted (if its
-            // state is finite).
+            // Down to the minimum, where the next try is accepted if its
+            // state and derivative are finite.
             if h <= self.options.min_step {
-                return Err(IntegrationError::StepTooSmall {
-                    t: self.t,
-                    min_step: self.options.min_step,
-                    err,
-                });
+                return Err(IntegrationError::NotFinite { t: self.t + h });
             }
             self.h = (h * fac).max(self.options.min_step);
         }

@@ -468,10 +468,13 @@ pub fn read_input_text(path: &Path) -> std::io::Result<String> {
 }
 
 /// Write an output file whole or not at all: `write` fills a new file
-/// beside `path`, which then replaces `path` by a rename. A failed or
-/// interrupted write leaves the previous file as it was (and no partial
-/// one), and a symbolic link at `path` is replaced, not followed: results
-/// land in the results directory and nowhere else.
+/// beside `path` (synced to disk, with the permissions of the file it
+/// replaces), which then replaces `path` by a rename. A failed write, or a
+/// panic in `write`, leaves the previous file as it was and removes the new
+/// one; a symbolic link at `path` is replaced, not followed: results land in
+/// the results directory and nowhere else. (A file that is itself a mount
+/// point, as a bind-mounted file in a container, cannot be renamed over: the
+/// rename's error says so.)
 pub fn write_output_with(
     path: &Path,
     write: impl FnOnce(&mut std::fs::File) -> std::io::Result<()>,
@@ -479,41 +482,62 @@ pub fn write_output_with(
     use std::io::{Error, ErrorKind};
     use std::sync::atomic::{AtomicUsize, Ordering};
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let name = path
-        .file_name()
-        .ok_or_else(|| Error::new(ErrorKind::InvalidInput, "names no file"))?;
+    /// Removes the new file unless the rename took it.
+    struct Pending(Option<PathBuf>);
+    impl Drop for Pending {
+        fn drop(&mut self) {
+            if let Some(p) = self.0.take() {
+                let _ = std::fs::remove_file(p);
+            }
+        }
+    }
+    let name = path.file_name().ok_or_else(|| {
+        Error::new(
+            ErrorKind::InvalidInput,
+            format!("{}: names no file", path.display()),
+        )
+    })?;
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(Path::new("."));
-    if std::fs::symlink_metadata(path).is_ok_and(|m| m.is_dir()) {
+    let old = std::fs::symlink_metadata(path).ok();
+    if old.as_ref().is_some_and(|m| m.is_dir()) {
         return Err(Error::new(
             ErrorKind::InvalidInput,
-            "is a directory, not a file",
+            format!("{}: is a directory, not a file", path.display()),
         ));
     }
-    loop {
+    // The new file's name: the first 64 characters of the old one's, so
+    // that a name near the file system's limit still fits.
+    let stem: String = name.to_string_lossy().chars().take(64).collect();
+    let mut tries = 0;
+    let (tmp, mut file) = loop {
         let tmp = dir.join(format!(
-            ".{}.{}-{}.tmp",
-            name.to_string_lossy(),
+            ".{stem}.{}-{}.tmp",
             std::process::id(),
             COUNTER.fetch_add(1, Ordering::Relaxed)
         ));
-        let mut file = match std::fs::OpenOptions::new()
+        match std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&tmp)
         {
-            Ok(f) => f,
-            Err(e) if e.kind() == ErrorKind::AlreadyExists => continue,
+            Ok(f) => break (tmp, f),
+            Err(e) if e.kind() == ErrorKind::AlreadyExists && tries < 100 => tries += 1,
             Err(e) => return Err(e),
-        };
-        let written = write(&mut file).and_then(|()| std::fs::rename(&tmp, path));
-        if written.is_err() {
-            let _ = std::fs::remove_file(&tmp);
         }
-        return written;
+    };
+    let mut pending = Pending(Some(tmp.clone()));
+    if let Some(m) = old.filter(|m| m.is_file()) {
+        file.set_permissions(m.permissions())?;
     }
+    write(&mut file)?;
+    file.sync_all()?;
+    drop(file);
+    std::fs::rename(&tmp, path)?;
+    pending.0 = None;
+    Ok(())
 }
 
 /// [`write_output_with`] of `bytes`.

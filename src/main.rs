@@ -807,10 +807,9 @@ fn simulate(
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>());
             v["static_squat_max_abs_qdd"] = serde_json::json!(squat.max_abs_qdd);
-            leap::io::write_output(
-                &out_dir.join("jump_summary.json"),
-                serde_json::to_string_pretty(&v)?,
-            )?;
+            let summary_file = out_dir.join("jump_summary.json");
+            leap::io::write_output(&summary_file, serde_json::to_string_pretty(&v)?)
+                .with_context(|| summary_file.display().to_string())?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             } else {
@@ -870,10 +869,9 @@ fn simulate(
                 .collect();
             let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
                 "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>()});
-            leap::io::write_output(
-                &out_dir.join("jump_summary.json"),
-                serde_json::to_string_pretty(&v)?,
-            )?;
+            let summary_file = out_dir.join("jump_summary.json");
+            leap::io::write_output(&summary_file, serde_json::to_string_pretty(&v)?)
+                .with_context(|| summary_file.display().to_string())?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             }

@@ -1591,15 +1591,10 @@ impl Transcription {
                 format!("{} values, the problem has {n} variables", v.len()),
             ));
         }
-        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(EvalError::new(
-                "guess",
-                format!("{} is {}", self.variable_name(i), v[i]),
-            ));
-        }
+        finite("guess", v, |i| self.variable_name(i))?;
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
-        let mut rows = vec![0.0; nx];
+        let (mut rows, mut scratch) = (vec![0.0; nx], vec![0.0; nx]);
         let mut jac = nalgebra::DMatrix::<f64>::zeros(nx, nx);
         let mut trial = v.to_vec();
         let mut report = MeshIntegration {
@@ -1635,9 +1630,10 @@ impl Transcription {
                     for (i, &col) in cols.iter().enumerate() {
                         trial[col] = (v[col] + alpha * step[i]).clamp(lo[col], hi[col]);
                     }
-                    // A trial the model cannot evaluate is a rejected step.
+                    // A trial the model cannot evaluate, here or in the
+                    // points after node k, is a rejected step.
                     if let Ok(r) = self.interval_residual(&trial, k, &mut rows) {
-                        if r < res {
+                        if r < res && self.node_evaluates(&trial, k, &mut scratch) {
                             for &col in &cols {
                                 v[col] = trial[col];
                             }
@@ -1651,10 +1647,10 @@ impl Transcription {
                 for &col in &cols {
                     trial[col] = v[col];
                 }
-                // rows hold the defects of the step taken, now v's.
                 if !taken {
                     break;
                 }
+                // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
             if res > report.worst_defect {
@@ -2020,6 +2016,8 @@ impl Transcription {
         Ok(())
     }
 
+    /// v's length, k in 1..=N, and the values interval k reads (nodes k−1
+    /// and k, t_f) finite, a bad one named.
     fn check_interval(&self, v: &[f64], k: usize) -> Result<(), EvalError> {
         check_len("interval", "v", v.len(), self.num_variables())?;
         if k == 0 || k > self.num_intervals() {
@@ -2031,7 +2029,37 @@ impl Transcription {
                 ),
             ));
         }
-        Ok(())
+        let nv = self.node_size();
+        let first = k.saturating_sub(2) * nv;
+        finite("interval", &v[first..k * nv], |i| {
+            self.variable_name(first + i)
+        })?;
+        let tf = self.final_time_index();
+        finite("interval", &v[tf..=tf], |_| self.variable_name(tf))
+    }
+
+    /// Whether the points outside interval k that read node k (interval
+    /// k + 1's, and node k's own point, whose Ÿ_C and ground force feed the
+    /// no-countermovement and lift-off rows) evaluate to finite values at
+    /// v: a step of node k in [`Self::integrate_on_mesh`] must keep the
+    /// whole problem evaluable, not only its interval. `rows`: scratch.
+    fn node_evaluates(&mut self, v: &[f64], k: usize, rows: &mut [f64]) -> bool {
+        if k < self.num_intervals() && self.interval_residual(v, k + 1, rows).is_err() {
+            return false;
+        }
+        let Some(p) = self.node_point[k] else {
+            return true;
+        };
+        // Midpoint Euler's intervals do not evaluate the nodes.
+        if self.options.scheme == Scheme::MidpointEuler
+            && self.eval_stage(v, false, p, p + 1).is_err()
+        {
+            return false;
+        }
+        let nout = self.nx + 2;
+        self.point_vals[p * nout..(p + 1) * nout]
+            .iter()
+            .all(|x| x.is_finite())
     }
 
     /// The defect rows of interval `k` (1..N) into `c` (n_x values), from

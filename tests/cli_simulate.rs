@@ -331,6 +331,8 @@ fn results_replace_links_and_never_write_through_them() {
     }
     let states = std::fs::read_to_string(out.join("jump_states.sto")).unwrap();
     assert!(states.contains("endheader"), "{states}");
+    let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(outside.parent().unwrap());
 }
 
 /// A simulate study that names no model uses the default model relative
@@ -369,4 +371,5 @@ fn a_study_without_a_model_uses_the_working_directorys_default() {
         err.contains(&dir.join("jumper.json").display().to_string()),
         "{err}"
     );
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -125,3 +125,50 @@ fn a_jump_of_the_rhs_is_crossed_at_the_minimum_step() {
     // The crossing time's error is multiplied by Δf = 1e4 in x.
     assert!(err <= 1e-7, "{err}");
 }
+
+/// ẋ = 1 until x = 1/2, then NaN: the integration stops with the state not
+/// finite, past x = 1/2, and does not take the NaN as a step.
+struct GoesNan;
+impl OdeSystem for GoesNan {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn rhs(&mut self, _t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        dx[0] = if x[0] < 0.5 { 1.0 } else { f64::NAN };
+        Ok(())
+    }
+}
+
+#[test]
+fn a_nan_derivative_stops_the_integration_and_bad_settings_are_refused() {
+    let mut ig = Dopri5::new(&mut GoesNan, 0.0, &[0.0], Dopri5Options::default()).unwrap();
+    let e = loop {
+        match ig.step(&mut GoesNan, 1.0) {
+            Ok(_) => assert!(ig.x()[0].is_finite() && ig.f()[0].is_finite()),
+            Err(e) => break e,
+        }
+    };
+    assert!(
+        matches!(e, IntegrationError::NotFinite { t } if t >= 0.5),
+        "{e}"
+    );
+    for (min_step, max_step, accuracy) in [
+        (1e-3, 1e-4, 1e-5),
+        (0.0, 1.0, 1e-5),
+        (1e-8, f64::INFINITY, 1e-5),
+        (1e-8, 1.0, 0.0),
+        (1e-8, 1.0, f64::NAN),
+    ] {
+        let opts = Dopri5Options {
+            min_step,
+            max_step,
+            accuracy,
+            ..Default::default()
+        };
+        let r = Dopri5::new(&mut Jump, 0.0, &[0.0], opts);
+        assert!(
+            matches!(r, Err(IntegrationError::Options(_))),
+            "{min_step} {max_step} {accuracy}"
+        );
+    }
+}

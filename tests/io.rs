@@ -385,8 +385,8 @@ fn directories_and_devices_are_refused_as_input_files() {
 }
 
 /// An output file is written whole or not at all: a write that fails
-/// midway leaves the previous file as it was and no partial file beside
-/// it; one that succeeds replaces it.
+/// midway, or panics, leaves the previous file as it was and no partial
+/// file beside it; one that succeeds replaces it, with its permissions.
 #[test]
 fn output_files_are_written_whole_or_not_at_all() {
     let dir = scratch("write_output");
@@ -403,11 +403,42 @@ fn output_files_are_written_whole_or_not_at_all() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(names, vec![std::ffi::OsString::from("jump_summary.json")]);
+    // A panic while writing leaves no partial file either.
+    let panicked = std::panic::catch_unwind(|| {
+        leap::io::write_output_with(&path, |_| panic!("a bug in the writer"))
+    });
+    assert!(panicked.is_err());
+    let names: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, vec![std::ffi::OsString::from("jump_summary.json")]);
+    // The replacement keeps the replaced file's permissions.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).unwrap();
+    }
     leap::io::write_output(&path, "new").unwrap();
     assert_eq!(std::fs::read_to_string(&path).unwrap(), "new");
-    // A directory in the way is an error, and stays a directory.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = std::fs::metadata(&path).unwrap().permissions().mode();
+        assert_eq!(mode & 0o777, 0o600);
+    }
+    // A name near the file system's 255-byte limit still fits.
+    let long = dir.join(format!("{}.sto", "x".repeat(250)));
+    leap::io::write_output(&long, "long").unwrap();
+    assert_eq!(std::fs::read_to_string(&long).unwrap(), "long");
+    // A directory in the way is an error naming it, and stays a directory.
     std::fs::create_dir_all(dir.join("sub.sto")).unwrap();
     let e = leap::io::write_output(&dir.join("sub.sto"), "x").unwrap_err();
-    assert!(e.to_string().contains("directory"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("sub.sto: is a directory, not a file"),
+        "{e}"
+    );
     assert!(dir.join("sub.sto").is_dir());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -1015,14 +1015,17 @@ fn one_interval_evaluates_as_the_whole_problem() {
         (Scheme::BackwardEuler, FiberDynamics::Explicit),
     ] {
         let n = 8;
+        let options = TranscriptionOptions {
+            num_mesh_intervals: n,
+            scheme,
+            fiber_dynamics,
+            ..Default::default()
+        };
+        // Implicit rows have their own pattern (the fibre velocities).
         let mut tr = if fiber_dynamics == FiberDynamics::Implicit {
-            implicit_transcription()
+            Transcription::new(setup().0.clone(), options).unwrap()
         } else {
-            transcription(TranscriptionOptions {
-                num_mesh_intervals: n,
-                scheme,
-                ..Default::default()
-            })
+            transcription(options)
         };
         let (mut v, _) = tr.bang_bang_guess().unwrap();
         for k in 1..=n {
@@ -1074,6 +1077,17 @@ fn one_interval_evaluates_as_the_whole_problem() {
         assert!(tr.interval_residual(&v, n + 1, &mut rows).is_err());
         assert!(tr.interval_state_jacobian(&v, n + 1, &mut block).is_err());
         assert!(tr.interval_residual(&v[1..], 1, &mut rows).is_err());
+        // A value the interval reads that is not finite is named.
+        let j = tr.state_index(3, 0).unwrap();
+        let mut bad = v.clone();
+        bad[j] = f64::NAN;
+        for k in [3, 4] {
+            let e = tr.interval_residual(&bad, k, &mut rows).unwrap_err();
+            assert!(e.to_string().contains(&tr.variable_name(j)), "{e}");
+            let e = tr.interval_state_jacobian(&bad, k, &mut block).unwrap_err();
+            assert!(e.to_string().contains(&tr.variable_name(j)), "{e}");
+        }
+        assert!(tr.interval_residual(&bad, 5, &mut rows).is_ok());
     }
 }
 
