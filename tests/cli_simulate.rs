@@ -7,6 +7,17 @@ fn leap() -> Command {
     Command::cargo_bin("leap").unwrap()
 }
 
+/// `leap simulate --study STUDY --out OUT` and what it printed.
+fn simulate_study(study: &std::path::Path, out: &std::path::Path) -> std::process::Output {
+    leap()
+        .args(["simulate", "--study"])
+        .arg(study)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 fn tmp(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("leap-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -260,13 +271,7 @@ fn nonsense_simulate_study_settings_name_the_field() {
         v["model"] = model.display().to_string().into();
         let study = out.join("study.json");
         std::fs::write(&study, v.to_string()).unwrap();
-        let o = leap()
-            .args(["simulate", "--study"])
-            .arg(&study)
-            .arg("--out")
-            .arg(out.join("results"))
-            .output()
-            .unwrap();
+        let o = simulate_study(&study, &out.join("results"));
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{json}: {err}");
         assert!(
@@ -342,29 +347,11 @@ fn results_replace_links_and_never_write_through_them() {
 fn a_study_without_a_model_uses_the_working_directorys_default() {
     let dir = tmp("study-defaults");
     let study = dir.join("empty.json");
-    std::fs::write(&study, "{}").unwrap();
-    let o = leap()
-        .args([
-            "simulate",
-            "--integrator",
-            "DormandPrince",
-            "--json",
-            "--study",
-        ])
-        .arg(&study)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
+    std::fs::write(&study, r#"{"integrator": "DormandPrince"}"#).unwrap();
+    let o = simulate_study(&study, &dir.join("out"));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::write(&study, r#"{"model": "jumper.json"}"#).unwrap();
-    let o = leap()
-        .args(["simulate", "--study"])
-        .arg(&study)
-        .arg("--out")
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
+    let o = simulate_study(&study, &dir.join("out"));
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
