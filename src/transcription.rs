@@ -1575,7 +1575,8 @@ impl Transcription {
     /// own scheme: node by node, the states of node k are solved from the
     /// defect rows of interval k with node k−1, the excitations and t_f
     /// held (damped Newton on the nx × nx block of the Jacobian, states
-    /// kept in their bounds). A guess resampled from a continuous
+    /// kept in their bounds; each step evaluates only the points that read
+    /// node k, so the whole integration costs O(N) point evaluations). A guess resampled from a continuous
     /// trajectory violates the defects by its discretisation error, which
     /// on a 10 ms mesh through stiff foot contact is large (the bang-bang
     /// jump: 0.39 in the ankle's velocity defects); the SQP then spends
