@@ -701,11 +701,12 @@ fn simulate(
     // What the study omits is relative to the working directory.
     let model_path = model
         .or_else(|| st.model.as_deref().map(rel))
-        .unwrap_or_else(|| PathBuf::from(DEFAULT_MODEL));
+        .or_else(leap::study::default_model)
+        .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_MODEL));
     let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
     let out_dir = out
         .or_else(|| st.out.as_deref().map(rel))
-        .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT));
+        .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_OUTPUT_DIRECTORY));
     if let Some(i) = integrator {
         st.integrator = i;
     }

@@ -747,8 +747,9 @@ pub fn standing_com_height(eq: &StateEquation) -> f64 {
 }
 
 /// A forward-simulation study (JSON). Paths written in it are relative to
-/// the study file; those it omits take their defaults ([`DEFAULT_MODEL`],
-/// [`DEFAULT_OUT`]) relative to the working directory, as `leap solve`'s.
+/// the study file; those it omits take `leap solve`'s defaults
+/// ([`crate::study::default_model`],
+/// [`crate::study::DEFAULT_OUTPUT_DIRECTORY`] in the working directory).
 #[derive(Debug, Clone, serde::Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SimulateStudy {
@@ -795,11 +796,6 @@ pub struct BangBangSpec {
     #[serde(default = "default_off")]
     pub off_time: f64,
 }
-
-/// The model and results directory of a simulate study that names none
-/// (relative to the working directory).
-pub const DEFAULT_MODEL: &str = "models/jumper.json";
-pub const DEFAULT_OUT: &str = "results";
 
 fn default_integrator() -> String {
     "RungeKuttaMerson".into()

@@ -564,8 +564,8 @@ impl SolveConfig {
 }
 
 /// The default model: `models/jumper.json` in the working directory, else
-/// in the crate's source tree.
-fn default_model() -> Option<PathBuf> {
+/// in the crate's source tree (`leap solve`'s and `leap simulate`'s).
+pub fn default_model() -> Option<PathBuf> {
     let here = PathBuf::from(DEFAULT_MODEL);
     if here.is_file() {
         return Some(here);
