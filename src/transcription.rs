@@ -1576,8 +1576,9 @@ impl Transcription {
     /// defect rows of interval k with node k−1, the excitations and t_f
     /// held (damped Newton on the nx × nx block of the Jacobian, states
     /// kept in their bounds; each step evaluates only the points that read
-    /// node k, so the whole integration costs O(N) point evaluations). A guess resampled from a continuous
-    /// trajectory violates the defects by its discretisation error, which
+    /// node k, so the whole integration costs O(N) point evaluations). A
+    /// guess resampled from a continuous trajectory violates the defects by
+    /// its discretisation error, which
     /// on a 10 ms mesh through stiff foot contact is large (the bang-bang
     /// jump: 0.39 in the ankle's velocity defects); the SQP then spends
     /// its first iterations in elastic mode restoring what the mesh's own
