@@ -1,5 +1,6 @@
 //! The `leap` command line: cross-check JSON output and clear errors.
 
+use crate::common::refused;
 use assert_cmd::Command;
 
 #[test]
@@ -258,15 +259,14 @@ fn results_directory_taken_by_a_file_is_named() {
             "output_directory (--out): cannot create the results directory: a file of that name exists",
         ),
     ] {
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .args(args)
-            .arg("--out")
-            .arg(&file)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        let err = refused(
+            Command::cargo_bin("leap")
+                .unwrap()
+                .args(args)
+                .arg("--out")
+                .arg(&file),
+            &format!("{args:?}"),
+        );
         assert!(
             err.contains("taken") && err.contains(want),
             "{args:?}: {err}"
@@ -347,14 +347,13 @@ fn eval_reads_a_spreadsheet_csv() {
             ),
         )
         .unwrap();
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .args(["eval", "--input"])
-            .arg(&bad)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{name}: {err}");
+        let err = refused(
+            Command::cargo_bin("leap")
+                .unwrap()
+                .args(["eval", "--input"])
+                .arg(&bad),
+            name,
+        );
         assert!(
             err.contains("header") && err.contains(want),
             "{name}: {err}"

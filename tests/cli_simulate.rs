@@ -1,21 +1,21 @@
 //! `leap simulate`, `leap eval` and `leap squat` from the command line:
 //! outputs, JSON fields, and clear errors for bad input.
 
+use crate::common::refused;
 use assert_cmd::Command;
 
 fn leap() -> Command {
     Command::cargo_bin("leap").unwrap()
 }
 
-/// `leap simulate --study STUDY --out OUT` and what it printed.
-fn simulate_study(study: &std::path::Path, out: &std::path::Path) -> std::process::Output {
-    leap()
-        .args(["simulate", "--study"])
+/// `leap simulate --study STUDY --out OUT`.
+fn simulate_study(study: &std::path::Path, out: &std::path::Path) -> Command {
+    let mut cmd = leap();
+    cmd.args(["simulate", "--study"])
         .arg(study)
         .arg("--out")
-        .arg(out)
-        .output()
-        .unwrap()
+        .arg(out);
+    cmd
 }
 
 fn tmp(name: &str) -> std::path::PathBuf {
@@ -271,9 +271,7 @@ fn nonsense_simulate_study_settings_name_the_field() {
         v["model"] = model.display().to_string().into();
         let study = out.join("study.json");
         std::fs::write(&study, v.to_string()).unwrap();
-        let o = simulate_study(&study, &out.join("results"));
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{json}: {err}");
+        let err = refused(&mut simulate_study(&study, &out.join("results")), json);
         assert!(
             err.contains(&format!("{}: {field}: ", study.display())) && err.contains(reason),
             "{json}: {err}"
@@ -292,13 +290,7 @@ fn a_model_with_duplicate_sphere_names_is_refused() {
     v["forces"]["contact"]["spheres"][9]["name"] = "heel_lat_l".into();
     let model = out.join("m.json");
     std::fs::write(&model, v.to_string()).unwrap();
-    let o = leap()
-        .args(["squat", "--model"])
-        .arg(&model)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused(leap().args(["squat", "--model"]).arg(&model), "squat");
     assert!(
         err.contains(&format!(
             "{}: forces.contact.spheres[9].name: sphere 'heel_lat_l' is defined twice",
@@ -348,12 +340,10 @@ fn a_study_without_a_model_uses_the_working_directorys_default() {
     let dir = tmp("study-defaults");
     let study = dir.join("empty.json");
     std::fs::write(&study, r#"{"integrator": "DormandPrince"}"#).unwrap();
-    let o = simulate_study(&study, &dir.join("out"));
+    let o = simulate_study(&study, &dir.join("out")).output().unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     std::fs::write(&study, r#"{"model": "jumper.json"}"#).unwrap();
-    let o = simulate_study(&study, &dir.join("out"));
-    assert_eq!(o.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = refused(&mut simulate_study(&study, &dir.join("out")), "named model");
     assert!(
         err.contains(&dir.join("jumper.json").display().to_string()),
         "{err}"

@@ -108,3 +108,13 @@ pub fn clarabel_status(path: &std::path::Path) -> clarabel::solver::SolverStatus
     s.solve();
     s.solution.status
 }
+
+/// Run `cmd`, a `leap` command that must refuse its input: exit code 2 and
+/// no panic (`what` labels a failure). Returns its standard error.
+pub fn refused(cmd: &mut assert_cmd::Command, what: &str) -> String {
+    let o = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(2), "{what}: {err}");
+    assert!(!err.contains("panicked"), "{what}: {err}");
+    err
+}
