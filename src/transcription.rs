@@ -2052,10 +2052,7 @@ impl Transcription {
         let Some(p) = self.node_point[k] else {
             return true;
         };
-        // Midpoint Euler's intervals do not evaluate the nodes.
-        if self.options.scheme == Scheme::MidpointEuler
-            && self.eval_stage(v, false, p, p + 1).is_err()
-        {
+        if self.eval_stage(v, false, p, p + 1).is_err() {
             return false;
         }
         let nout = self.nx + 2;

