@@ -25,6 +25,7 @@ pub mod ocp;
 pub mod ode;
 pub mod path;
 pub mod scalar;
+pub mod shooting;
 pub mod simbody;
 pub mod simulate;
 pub mod solve;

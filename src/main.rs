@@ -101,6 +101,11 @@ enum Command {
         /// Results directory (default: the study's output_directory, results/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// collocation (default) or shooting (the paper's direct shooting:
+        /// excitations at the nodes, Dormand–Prince 5(4), central
+        /// differences; about 30 s per iteration).
+        #[arg(long)]
+        method: Option<String>,
         /// Uniform mesh intervals (≥ 2; default 28).
         #[arg(long, allow_negative_numbers = true)]
         num_mesh_intervals: Option<i64>,
@@ -364,6 +369,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Solve {
             study,
             out,
+            method,
             num_mesh_intervals,
             max_iterations,
             guess,
@@ -378,6 +384,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let overrides = leap::study::Overrides {
                 output_directory: out,
+                method,
                 num_mesh_intervals,
                 max_iterations,
                 guess,

@@ -24,12 +24,15 @@ use crate::io::{Controls, StoError, StoTable};
 use crate::model::{Model, ModelError};
 use crate::nlp::Nlp;
 use crate::ocp::{JumpOcp, OcpError, OcpOptions, FIBER_CLAMP_BAND};
+use crate::shooting::{NodeValues, Shooting, ShootingOptions};
 use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
 };
 use crate::sqp::{HessianMode, SqpResult, SqpStatus};
-use crate::study::{fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, SolveConfig};
+use crate::study::{
+    fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method, SolveConfig,
+};
 use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -109,6 +112,8 @@ pub struct ForwardCheckReport {
 /// What `leap solve` reports (the `--json` object and `<name>_summary.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SolveReport {
+    /// "collocation" or "shooting".
+    pub method: Method,
     /// How the SQP ended (snake_case [`SqpStatus`]).
     pub status: SqpStatus,
     /// The same as IPOPT's return status, as Moco writes it.
@@ -223,6 +228,9 @@ pub fn run(
     })?;
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
+    if config.method == Method::Shooting {
+        return run_shooting(config, &model, verbose, progress);
+    }
     let big_n = config.transcription.num_mesh_intervals;
     let defaults = OcpOptions::default();
     // The paper constrains 7 intervals against countermovement (eq. 4); a
@@ -327,9 +335,121 @@ pub fn run(
         })?;
     files.push(p);
 
+    finish(config, &ocp, &mesh, report, files, progress)
+}
+
+/// [`run`] for method "shooting" ([`crate::shooting`]).
+fn run_shooting(
+    config: &SolveConfig,
+    model: &Model,
+    verbose: bool,
+    progress: &mut dyn FnMut(&str),
+) -> Result<SolveReport, SolveError> {
+    let dir = &config.output_directory;
+    let big_n = config.transcription.num_mesh_intervals;
+    let defaults = OcpOptions::default();
+    let options = OcpOptions {
+        no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
+        ..defaults
+    };
+    progress("static squat and jump problem");
+    let ocp = Arc::new(JumpOcp::new(model, options)?);
+    let opts = ShootingOptions {
+        num_intervals: big_n,
+        ..config.shooting
+    };
+    progress(&format!(
+        "direct shooting: {big_n} control intervals, Dormand–Prince 5(4) at accuracy {:e}, central differences of step {:e} on {} threads",
+        opts.accuracy, opts.finite_difference_step, opts.threads
+    ));
+    let mut sh = Shooting::new(ocp.clone(), opts)?;
+    let (guess, guess_name, guess_jump) = match &config.guess {
+        GuessChoice::BangBang | GuessChoice::BangBangResampled => {
+            progress("initial guess: the bang-bang excitations at the nodes");
+            let (v, s) = sh.bang_bang_guess()?;
+            (v, "bang-bang".to_string(), Some(s.jump_height_m))
+        }
+        GuessChoice::File(p) => {
+            progress(&format!(
+                "initial guess: the excitations of {}",
+                p.display()
+            ));
+            (
+                shooting_guess_from_file(&sh, p)?,
+                p.display().to_string(),
+                None,
+            )
+        }
+    };
+    create_results_dir(dir).map_err(|error| SolveError::Io {
+        file: dir.clone(),
+        error,
+    })?;
+    let mut settings = config.settings.clone();
+    settings.verbose = verbose;
+    progress(&format!(
+        "SQP: {} variables, {} constraints ({} Jacobian entries), at most {} iterations, BFGS",
+        sh.num_variables(),
+        sh.num_constraints(),
+        sh.jacobian_structure().len(),
+        settings.max_iterations
+    ));
+    let result = crate::sqp::solve_from(&mut sh, &guess, &settings);
+    let violation = match crate::nlp::constraint_violations(&mut sh, &result.x) {
+        Ok(v) => v.into_iter().fold(0.0, f64::max),
+        Err(_) => f64::NAN,
+    };
+    let (nodes, traj) = sh.trajectory(&result.x).map_err(|e| {
+        SolveError::Transcription(TranscriptionError::Guess(format!(
+            "the last iterate does not integrate: {e}"
+        )))
+    })?;
+    let tf = sh.final_time(&result.x);
+    let h = tf / big_n as f64;
+    let nu = ocp.nu();
+    let controls = sh.node_controls(&result.x);
+    let mesh = MeshTrajectory {
+        time: (0..=big_n).map(|k| k as f64 * h).collect(),
+        states: nodes.states.clone(),
+        controls: controls.chunks(nu).map(<[f64]>::to_vec).collect(),
+    };
+    let mut report = shooting_report(&ocp, &sh, &result, &nodes, &traj, violation);
+    report.guess = guess_name;
+    report.guess_jump_height_m = guess_jump;
+    report.study = config.study_file.as_ref().map(|p| p.display().to_string());
+    report.model = config.model.display().to_string();
+    let name = &config.name;
+    let mut files = Vec::new();
+    let p = dir.join(format!("{name}_solution.sto"));
+    solution_table(&ocp, &mesh, &result, &report).write_sto(&p)?;
+    files.push(p);
+    let p = dir.join(format!("{name}_grf.mot"));
+    grf_table(&format!("{name}_grf"), &traj.time, &traj.grf).write_mot(&p)?;
+    files.push(p);
+    let p = dir.join(format!("{name}_history.csv"));
+    result
+        .write_history_csv(&p)
+        .map_err(|error| SolveError::Io {
+            file: p.clone(),
+            error,
+        })?;
+    files.push(p);
+    finish(config, &ocp, &mesh, report, files, progress)
+}
+
+/// The forward check and the summary file, for either method.
+fn finish(
+    config: &SolveConfig,
+    ocp: &Arc<JumpOcp>,
+    mesh: &MeshTrajectory,
+    mut report: SolveReport,
+    mut files: Vec<PathBuf>,
+    progress: &mut dyn FnMut(&str),
+) -> Result<SolveReport, SolveError> {
+    let (dir, name) = (&config.output_directory, &config.name);
     if let Some(fc) = config.forward_check {
         progress("forward check: the optimal excitations integrated from the squat");
-        let (check, fw_files) = forward_check(&ocp, &mesh, fc, dir, name)?;
+        let (check, fw_files) = forward_check(ocp, mesh, fc, dir, name)?;
         files.extend(fw_files);
         report.forward_jump_height_m = check.summary.as_ref().map(|s| s.jump_height_m);
         report.forward_jump_height_rust_m = check.rust_summary.as_ref().map(|s| s.jump_height_m);
@@ -347,6 +467,118 @@ pub fn run(
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
     crate::io::write_output(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
     Ok(report)
+}
+
+/// A shooting guess from a controls or solution file: its excitations
+/// sampled at the nodes, t_f its last time (within the final time's
+/// bounds).
+fn shooting_guess_from_file(sh: &Shooting, path: &Path) -> Result<Vec<f64>, SolveError> {
+    let eq = &sh.ocp.eq;
+    let muscles: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&m| eq.model.muscles[m].spec.name.as_str())
+        .collect();
+    let controls = Controls::from_file(path, &muscles)?;
+    let tf = *controls.time.last().unwrap_or(&0.0);
+    let [t_min, t_max] = sh.ocp.options.final_time_bounds;
+    if !(t_min..=t_max).contains(&tf) {
+        return Err(SolveError::Guess {
+            file: path.into(),
+            reason: format!(
+                "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the guess's last time is its t_f)"
+            ),
+        });
+    }
+    sh.point_from_source(&controls, tf)
+        .map_err(|e| SolveError::Guess {
+            file: path.into(),
+            reason: e.to_string(),
+        })
+}
+
+/// The report of a shooting solve, from its last iterate integrated with
+/// every step recorded: the peak ground force and lift-off over the steps,
+/// not only the nodes.
+fn shooting_report(
+    ocp: &JumpOcp,
+    sh: &Shooting,
+    r: &SqpResult,
+    nodes: &NodeValues,
+    traj: &crate::simulate::Trajectory,
+    violation: f64,
+) -> SolveReport {
+    let tf = sh.final_time(&r.x);
+    let force: Vec<f64> = traj
+        .grf
+        .iter()
+        .map(|g| (g[1] + g[7]) / ocp.body_weight)
+        .collect();
+    let max = |v: &[f64]| v.iter().copied().fold(f64::NAN, f64::max);
+    let level = ocp.options.liftoff.fraction();
+    let mut ws = ocp.eq.multibody.workspace::<f64>();
+    let mut com = |x: &[f64]| ocp.jump_objective(&mut ws, x);
+    let (t_liftoff, y, ydot) = match force.iter().rposition(|&f| f > level) {
+        Some(i) if i + 1 < force.len() => {
+            let (t0, t1) = (traj.time[i], traj.time[i + 1]);
+            let w = (force[i] - level) / (force[i] - force[i + 1]);
+            let (a, b) = (com(&traj.states[i]), com(&traj.states[i + 1]));
+            (
+                t0 + (t1 - t0) * w,
+                a.0 + w * (b.0 - a.0),
+                a.1 + w * (b.1 - a.1),
+            )
+        }
+        _ => {
+            let last = nodes.states.len() - 1;
+            (tf, nodes.com_height[last], nodes.com_velocity[last])
+        }
+    };
+    let j = nodes.objective;
+    SolveReport {
+        method: Method::Shooting,
+        status: r.status,
+        moco_status: moco_status(r.status),
+        success: r.status.success(),
+        message: r.message.clone(),
+        iterations: r.iterations,
+        wall_time_s: r.time.total_s,
+        wall_time_per_iteration_s: r.time.total_s / r.iterations.max(1) as f64,
+        objective: -j,
+        jump_height_m: j - ocp.standing_com_height,
+        apex_com_height_m: j,
+        standing_com_height_m: ocp.standing_com_height,
+        ground_contact_time_s: t_liftoff,
+        final_time_s: tf,
+        liftoff_com_velocity_mps: ydot,
+        liftoff_com_height_m: y,
+        peak_vertical_grf_bw: max(&force),
+        peak_vertical_grf_nodes_bw: max(&nodes.vertical_force_bw),
+        max_constraint_violation: violation,
+        forward_jump_height_m: None,
+        forward_check_difference_m: None,
+        forward_check_agrees: None,
+        forward_jump_height_rust_m: None,
+        forward_check: None,
+        guess: String::new(),
+        guess_jump_height_m: None,
+        guess_mesh_integration: None,
+        num_mesh_intervals: sh.num_intervals(),
+        scheme: "direct shooting",
+        fiber_dynamics: "explicit",
+        hessian: r.hessian,
+        variables: sh.num_variables(),
+        constraints: sh.num_constraints(),
+        time_split: r.time,
+        qp_fallbacks: r.qp_fallbacks,
+        qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
+        qp_fallback_seconds: r.qp_fallback_seconds,
+        qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
+        hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
+        study: None,
+        model: String::new(),
+        output_files: Vec::new(),
+    }
 }
 
 /// The report's solution quantities at the SQP's last iterate.
@@ -420,6 +652,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         Err(_) => f64::NAN,
     };
     SolveReport {
+        method: Method::Collocation,
         status: r.status,
         moco_status: moco_status(r.status),
         success: r.status.success(),

@@ -55,8 +55,22 @@ pub fn default_eigenvalue_floor(scheme: Scheme) -> f64 {
     }
 }
 
-/// Methods a study may name; only collocation is implemented.
+/// Methods a study may name.
 pub const METHODS: [&str; 2] = ["collocation", "shooting"];
+
+/// Why a collocation setting is refused with method "shooting".
+const COLLOCATION_ONLY: &str = "applies to method 'collocation'; method 'shooting' integrates the state equation (explicit fibre dynamics) with Dormand–Prince 5(4)";
+
+/// How the jump problem is transcribed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Direct collocation ([`crate::transcription`], the default).
+    Collocation,
+    /// Direct shooting ([`crate::shooting`]): excitations at the nodes,
+    /// forward integration, central-difference gradients.
+    Shooting,
+}
 
 /// Collocation schemes by name (Moco's spelling where it has one).
 pub const SCHEMES: [(&str, Scheme); 4] = [
@@ -102,9 +116,14 @@ pub struct SolveStudy {
     /// Model file (default `models/jumper.json`).
     #[serde(default)]
     pub model: Option<String>,
-    /// "collocation" (default); "shooting" is reserved.
+    /// "collocation" (default) or "shooting" (the paper's direct
+    /// shooting: excitations at the mesh nodes, Dormand–Prince 5(4),
+    /// central differences; see `shooting`).
     #[serde(default)]
     pub method: Option<String>,
+    /// Settings of method "shooting".
+    #[serde(default)]
+    pub shooting: ShootingSpec,
     #[serde(default)]
     pub mesh: MeshSpec,
     /// "bang-bang" (default: the bang-bang jump's excitations integrated on
@@ -158,6 +177,20 @@ pub struct MeshSpec {
     /// inverted force–velocity curve, the paper's form).
     #[serde(default)]
     pub fiber_dynamics: Option<String>,
+}
+
+/// Settings of direct shooting.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ShootingSpec {
+    /// Dormand–Prince accuracy (relative and absolute), in [1e-12, 1e-4]
+    /// (default 1e-8).
+    #[serde(default)]
+    pub integrator_accuracy: Option<f64>,
+    /// Central-difference step in the excitations (t_f: this times t_f),
+    /// in (0, 0.1) (default 1e-3).
+    #[serde(default)]
+    pub finite_difference_step: Option<f64>,
 }
 
 /// Stopping rules of the optimizer (Moco's names; −1 means the default,
@@ -243,7 +276,12 @@ pub struct SolveConfig {
     pub study_file: Option<PathBuf>,
     pub name: String,
     pub model: PathBuf,
+    pub method: Method,
+    /// The mesh of either method (`num_mesh_intervals`); the scheme and
+    /// fibre dynamics are collocation's.
     pub transcription: TranscriptionOptions,
+    /// Method "shooting"'s settings (its intervals are the mesh's).
+    pub shooting: crate::shooting::ShootingOptions,
     pub guess: GuessChoice,
     pub settings: SqpSettings,
     pub output_directory: PathBuf,
@@ -259,6 +297,8 @@ pub struct SolveConfig {
 #[derive(Debug, Clone, Default)]
 pub struct Overrides {
     pub output_directory: Option<PathBuf>,
+    /// "collocation" or "shooting".
+    pub method: Option<String>,
     pub num_mesh_intervals: Option<i64>,
     pub max_iterations: Option<i64>,
     /// "bang-bang" or a file.
@@ -326,8 +366,37 @@ impl SolveStudy {
         let name = self.name.clone().unwrap_or_else(|| "jump".into());
         check_name(&name).map_err(|r| err("name", r))?;
 
-        let method = self.method.as_deref().unwrap_or("collocation");
-        check_method(method).map_err(|r| err("method", r))?;
+        let method = parse_method(self.method.as_deref().unwrap_or("collocation"))
+            .map_err(|r| err("method", r))?;
+        let mut shooting = crate::shooting::ShootingOptions::default();
+        if let Some(a) = self.shooting.integrator_accuracy {
+            if !(a.is_finite() && (1e-12..=1e-4).contains(&a)) {
+                return Err(err(
+                    "shooting.integrator_accuracy",
+                    format!("must lie in [1e-12, 1e-4], got {a}: the difference quotients divide the integration error by the step"),
+                ));
+            }
+            shooting.accuracy = a;
+        }
+        if let Some(d) = self.shooting.finite_difference_step {
+            if !(d.is_finite() && d > 0.0 && d < 0.1) {
+                return Err(err(
+                    "shooting.finite_difference_step",
+                    format!("must lie in (0, 0.1), got {d}"),
+                ));
+            }
+            shooting.finite_difference_step = d;
+        }
+        if method == Method::Shooting {
+            for (given, field) in [
+                (self.mesh.scheme.is_some(), "mesh.scheme"),
+                (self.mesh.fiber_dynamics.is_some(), "mesh.fiber_dynamics"),
+            ] {
+                if given {
+                    return Err(err(field, COLLOCATION_ONLY.into()));
+                }
+            }
+        }
 
         let model = match &self.model {
             Some(m) => {
@@ -419,8 +488,12 @@ impl SolveStudy {
                 settings.stall_iterations = v;
             }
         }
+        if method == Method::Shooting {
+            settings.hessian = HessianMode::PartitionedBfgs;
+        }
         if let Some(h) = &self.hessian {
             apply_hessian(&mut settings, h).map_err(|r| err("hessian", r))?;
+            check_method_hessian(method, &settings).map_err(|r| err("hessian", r))?;
         }
         if let Some(v) = self.hessian_eigenvalue_floor {
             if !(v.is_finite() && v > 0.0 && v < 1.0) {
@@ -486,7 +559,9 @@ impl SolveStudy {
             study_file: file.map(Path::to_path_buf),
             name,
             model,
+            method,
             transcription,
+            shooting,
             guess,
             settings,
             output_directory,
@@ -520,6 +595,22 @@ impl SolveConfig {
         if let Some(d) = &o.output_directory {
             self.output_directory = d.clone();
         }
+        if let Some(m) = &o.method {
+            self.method = parse_method(m).map_err(|r| err("--method", r))?;
+            if self.method == Method::Shooting && o.hessian.is_none() {
+                self.settings.hessian = HessianMode::PartitionedBfgs;
+            }
+        }
+        if self.method == Method::Shooting {
+            for (given, option) in [
+                (o.scheme.is_some(), "--scheme"),
+                (o.fiber_dynamics.is_some(), "--fiber-dynamics"),
+            ] {
+                if given {
+                    return Err(err(option, COLLOCATION_ONLY.into()));
+                }
+            }
+        }
         if let Some(n) = o.num_mesh_intervals {
             self.transcription.num_mesh_intervals =
                 check_mesh_intervals(n).map_err(|r| err("--num-mesh-intervals", r))?;
@@ -549,6 +640,16 @@ impl SolveConfig {
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
+        check_method_hessian(self.method, &self.settings).map_err(|r| {
+            err(
+                if o.hessian.is_some() {
+                    "--hessian"
+                } else {
+                    "--method"
+                },
+                r,
+            )
+        })?;
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
         }
@@ -587,15 +688,24 @@ fn check_name(name: &str) -> Result<(), String> {
     Ok(())
 }
 
-fn check_method(method: &str) -> Result<(), String> {
+fn parse_method(method: &str) -> Result<Method, String> {
     match method {
-        "collocation" => Ok(()),
-        "shooting" => Err("method 'shooting' is not implemented yet; use 'collocation'".into()),
+        "collocation" => Ok(Method::Collocation),
+        "shooting" => Ok(Method::Shooting),
         other => Err(format!(
             "unknown method '{other}' (valid: {})",
             METHODS.join(", ")
         )),
     }
+}
+
+/// Shooting has first derivatives only (central differences): its
+/// Hessian is BFGS.
+fn check_method_hessian(method: Method, settings: &SqpSettings) -> Result<(), String> {
+    if method == Method::Shooting && settings.hessian != HessianMode::PartitionedBfgs {
+        return Err("method 'shooting' has no exact Hessian (its central differences give first derivatives only); use 'bfgs'".into());
+    }
+    Ok(())
 }
 
 /// The most mesh intervals a study may ask for, far above any use: the

@@ -33,7 +33,17 @@ fn bad_study_files_name_file_field_and_reason() {
             "method",
             "unknown method 'pseudospectral'",
         ),
-        ("shooting.json", "method", "not implemented yet"),
+        (
+            "shooting_scheme.json",
+            "mesh.scheme",
+            "applies to method 'collocation'",
+        ),
+        ("shooting_hessian.json", "hessian", "no exact Hessian"),
+        (
+            "shooting_accuracy.json",
+            "shooting.integrator_accuracy",
+            "got 0.5",
+        ),
         (
             "negative_intervals.json",
             "mesh.num_mesh_intervals",

@@ -1,0 +1,81 @@
+//! Difference quotients of the shooting transcription at the bang-bang
+//! guess under several integrator accuracies and steps: `cargo run
+//! --release --example shooting_probe -- N` prints each gradient's distance
+//! from the most accurate one, and the cost of a pass.
+use leap::nlp::Nlp;
+use std::sync::Arc;
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let n: usize = args.get(1).map_or(8, |s| s.parse().unwrap_or(8));
+    let file = args.get(2).map_or("models/jumper.json", |s| s.as_str());
+    let model = match leap::model::Model::from_file(std::path::Path::new(file)) {
+        Ok(m) => m,
+        Err(e) => return eprintln!("{e}"),
+    };
+    let opts = leap::ocp::OcpOptions {
+        no_countermovement_nodes: 7.min(n),
+        ..Default::default()
+    };
+    let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, opts).expect("jump problem"));
+    let settings = [
+        (1e-12, 1e-5),
+        (1e-8, 1e-3),
+        (1e-8, 1e-4),
+        (1e-9, 1e-4),
+        (1e-10, 1e-4),
+        (1e-9, 3e-4),
+        (1e-10, 3e-5),
+    ];
+    let mut reference: Option<(Vec<f64>, Vec<f64>)> = None;
+    for (acc, delta) in settings {
+        let mut sh = leap::shooting::Shooting::new(
+            ocp.clone(),
+            leap::shooting::ShootingOptions {
+                num_intervals: n,
+                accuracy: acc,
+                finite_difference_step: delta,
+                ..Default::default()
+            },
+        )
+        .expect("shooting");
+        let (mut v, _) = sh.bang_bang_guess().expect("guess");
+        // RAMP=1: excitations rising from 0.2 to 0.8 over the nodes, an
+        // interior point away from the activation switch and clamp.
+        if std::env::var_os("RAMP").is_some() {
+            let nu = ocp.nu();
+            for k in 0..n {
+                for i in 0..nu {
+                    v[k * nu + i] = 0.2 + 0.6 * k as f64 / (n - 1).max(1) as f64;
+                }
+            }
+        }
+        let t = std::time::Instant::now();
+        let mut g = vec![0.0; v.len()];
+        sh.gradient(&v, &mut g).expect("gradient");
+        let mut jac = vec![0.0; sh.jacobian_structure().len()];
+        sh.jacobian_values(&v, &mut jac).expect("jacobian");
+        let secs = t.elapsed().as_secs_f64();
+        let (gr, jr) = reference.get_or_insert_with(|| (g.clone(), jac.clone()));
+        let rel = |a: &[f64], b: &[f64]| {
+            let d = a
+                .iter()
+                .zip(b.iter())
+                .map(|(x, y)| (x - y).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            d / b.iter().map(|y| y * y).sum::<f64>().sqrt()
+        };
+        let jmax = jac
+            .iter()
+            .zip(jr.iter())
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        println!(
+            "accuracy {acc:e} step {delta:e}: pass {secs:.2} s, f evals {}, gradient rel. error {:.2e}, Jacobian rel. error {:.2e}, largest entry error {:.2e}",
+            sh.counters.f_evals,
+            rel(&g, gr),
+            rel(&jac, jr),
+            jmax
+        );
+    }
+}

@@ -1,0 +1,739 @@
+//! Direct shooting of the jump problem ([`crate::ocp::JumpOcp`]), the
+//! paper's first method (Porsa, Lin & Pandy 2016, "direct shooting"):
+//! the excitations at the nodes are the variables, and every evaluation
+//! integrates the state equation forward from the static squat with a
+//! variable-step Runge–Kutta integrator; gradients are central differences.
+//!
+//! **Mesh.** N uniform intervals on [0, t_f] (the paper's 29 nodes: N = 28),
+//! nodes t_k = k·h, h = t_f/N. The excitations are linear between the
+//! nodes; node 0's are the squat's, fixed.
+//!
+//! **Variables** (n = N·n_u + 1 = 673 for the paper's problem):
+//! `[u_1, u_2, …, u_N, t_f]`.
+//!
+//! **Integration.** The Rust-native Dormand–Prince 5(4)
+//! ([`crate::integrator::Dopri5`]) on the optimizer's state equation (the
+//! same smoothed activation switch and paths as collocation), restarted at
+//! every node (the excitations have a kink there). A restart makes the
+//! trajectory up to node k−1 independent of u_k, bit for bit, so a
+//! difference quotient in u_k integrates only from node k−1 on: the
+//! central-difference Jacobian costs about N·n_u + 2 whole integrations,
+//! not 2·(N·n_u + 1), and its columns run on
+//! [`ShootingOptions::threads`] threads.
+//!
+//! **Constraints** (rows in this order):
+//! - no countermovement (eq. 4): Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0, j = 0..n_cm−1;
+//! - lift-off: F_y(t_f)/(m g) ≤ ε ([`crate::ocp::LiftOff`]);
+//! - no descent ([`crate::ocp::OcpOptions::no_com_descent`]): Ẏ_C(t_k) ≥ 0,
+//!   k = 1..N;
+//! - state bounds (eq. 6) at the nodes k = 1..N: coordinates, speeds and
+//!   fibre lengths. Activations need no rows: with u in [u_min, 1] the
+//!   activation dynamics (a first-order lag toward u with a positive time
+//!   constant) keep a between the extremes of u and its start, inside
+//!   [0.01, 1].
+//!
+//! **Objective**: −J = −(Y_C(t_f) + Ẏ_C(t_f)²/(2g)) (eq. 3).
+//!
+//! No Hessian: the SQP uses damped BFGS on the one dense element.
+
+use crate::integrator::{Dopri5, Dopri5Options, OdeSystem};
+use crate::nlp::{EvalError, Nlp};
+use crate::ocp::{JumpOcp, OcpError};
+use crate::ode::StateWorkspace;
+use crate::simulate::{grf_of, ExcitationSource, Trajectory};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+
+/// Settings of the shooting transcription.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ShootingOptions {
+    /// Control intervals N (N + 1 nodes; the paper's 29 nodes: 28).
+    pub num_intervals: usize,
+    /// Dormand–Prince accuracy (relative and absolute, as Simbody's).
+    pub accuracy: f64,
+    /// Central-difference step: δ in each excitation, δ·t_f in t_f. The
+    /// quotient's error is about the integration error over δ plus δ²
+    /// times the third derivative. On the reduced jump at an interior point
+    /// (`RAMP=1 cargo run --release --example shooting_probe -- 4
+    /// models/jumper_reduced.json`), against accuracy 1e-12 and step 1e-5,
+    /// the Jacobian's relative error was 7.4e-5 at (1e-8, 1e-3), 3.3e-4
+    /// at (1e-8, 1e-4), 6.9e-5 at (1e-10, 1e-4) for twice the time. Where
+    /// a muscle rests at the activation floor (u = a = 0.01, OpenSim's clamp
+    /// of a in the force) the quotient averages the one-sided derivatives.
+    pub finite_difference_step: f64,
+    /// Threads for the difference quotients.
+    pub threads: usize,
+}
+
+impl Default for ShootingOptions {
+    fn default() -> Self {
+        ShootingOptions {
+            num_intervals: 28,
+            accuracy: 1e-8,
+            finite_difference_step: 1e-3,
+            threads: 2,
+        }
+    }
+}
+
+/// What a row constrains.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Row {
+    /// Ÿ_C(t_j) − Ÿ_C(t_{j+1}).
+    NoCountermovement(usize),
+    /// F_y(t_N)/(m g).
+    LiftOff,
+    /// Ẏ_C(t_k).
+    NoDescent(usize),
+    /// State i at node k.
+    Bound(usize, usize),
+}
+
+impl Row {
+    /// The last node the row reads.
+    fn last_node(self, big_n: usize) -> usize {
+        match self {
+            Row::NoCountermovement(j) => j + 1,
+            Row::LiftOff => big_n,
+            Row::NoDescent(k) | Row::Bound(k, _) => k,
+        }
+    }
+}
+
+/// Per node: the state, Ÿ_C, F_y/(m g), Ẏ_C and Y_C.
+#[derive(Debug, Clone, Default)]
+pub struct NodeValues {
+    /// The first node held (earlier nodes are not part of this run).
+    pub first: usize,
+    pub states: Vec<Vec<f64>>,
+    pub com_acceleration: Vec<f64>,
+    pub vertical_force_bw: Vec<f64>,
+    pub com_velocity: Vec<f64>,
+    pub com_height: Vec<f64>,
+    /// J = Y_C + Ẏ_C²/(2g) at the last node.
+    pub objective: f64,
+    pub f_evals: usize,
+}
+
+/// Node-quantity layout of a column of difference quotients: the state,
+/// then Ÿ_C, F_y/(m g), Ẏ_C.
+const EXTRA: usize = 3;
+
+/// The central differences of one variable: of the node quantities from
+/// node `first` on (layout: the state, Ÿ_C, F_y/(m g), Ẏ_C per node) and
+/// of J.
+struct ColumnQuotients {
+    column: usize,
+    first: usize,
+    nodes: Vec<f64>,
+    objective: f64,
+    f_evals: usize,
+}
+
+/// Counters of the work done by evaluations.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct ShootingCounters {
+    /// Integrations from the squat (nominal evaluations).
+    pub simulations: usize,
+    /// Difference-quotient integrations (each from its column's first node).
+    pub difference_simulations: usize,
+    /// Right-hand-side evaluations over all integrations.
+    pub f_evals: usize,
+    /// Jacobian evaluations (central-difference passes).
+    pub jacobians: usize,
+    /// Wall time of the passes (s).
+    pub jacobian_seconds: f64,
+}
+
+/// The jump problem transcribed by direct shooting.
+pub struct Shooting {
+    pub ocp: Arc<JumpOcp>,
+    options: ShootingOptions,
+    rows: Vec<Row>,
+    structure: Vec<(usize, usize)>,
+    guess: Vec<f64>,
+    nominal: Option<(Vec<f64>, NodeValues)>,
+    derivatives: Option<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    pub counters: ShootingCounters,
+}
+
+/// ẋ = f(x, u(t)) with u linear on the current interval.
+struct IntervalRhs<'a, 'w> {
+    ocp: &'a JumpOcp,
+    ws: &'w mut StateWorkspace<f64>,
+    u: Vec<f64>,
+    ua: &'a [f64],
+    ub: &'a [f64],
+    ta: f64,
+    h: f64,
+}
+
+impl OdeSystem for IntervalRhs<'_, '_> {
+    fn dim(&self) -> usize {
+        self.ocp.nx()
+    }
+    fn rhs(&mut self, t: f64, x: &[f64], dx: &mut [f64]) -> Result<(), String> {
+        let w = ((t - self.ta) / self.h).clamp(0.0, 1.0);
+        for ((u, a), b) in self.u.iter_mut().zip(self.ua).zip(self.ub) {
+            *u = a + w * (b - a);
+        }
+        self.ocp
+            .state_rates(self.ws, x, &self.u, dx)
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    }
+}
+
+impl Shooting {
+    pub fn new(ocp: Arc<JumpOcp>, options: ShootingOptions) -> Result<Self, OcpError> {
+        let big_n = options.num_intervals;
+        let bad = |s: String| Err(OcpError::Invalid(s));
+        if big_n < 1 {
+            return bad("shooting: num_mesh_intervals must be at least 1".into());
+        }
+        if !(options.accuracy.is_finite() && options.accuracy > 0.0 && options.accuracy < 1.0) {
+            return bad(format!(
+                "shooting: integrator_accuracy must lie in (0, 1), got {}",
+                options.accuracy
+            ));
+        }
+        let d = options.finite_difference_step;
+        if !(d.is_finite() && d > 0.0 && d < 0.1) {
+            return bad(format!(
+                "shooting: finite_difference_step must lie in (0, 0.1), got {d}"
+            ));
+        }
+        if options.threads == 0 {
+            return bad("shooting: threads must be at least 1".into());
+        }
+        let n_cm = ocp.options.no_countermovement_nodes;
+        if n_cm > big_n {
+            return bad(format!(
+                "{n_cm} no-countermovement rows need at least {n_cm} intervals, got num_mesh_intervals = {big_n}"
+            ));
+        }
+        let (nq, nm) = (ocp.nq(), ocp.nm());
+        let bounded: Vec<usize> = (0..2 * nq + nm).collect();
+        let mut rows: Vec<Row> = (0..n_cm).map(Row::NoCountermovement).collect();
+        rows.push(Row::LiftOff);
+        if ocp.options.no_com_descent {
+            rows.extend((1..=big_n).map(Row::NoDescent));
+        }
+        for k in 1..=big_n {
+            rows.extend(bounded.iter().map(|&i| Row::Bound(k, i)));
+        }
+        let nu = ocp.nu();
+        let tf_col = big_n * nu;
+        let mut structure = Vec::new();
+        for (r, row) in rows.iter().enumerate() {
+            let last = row.last_node(big_n);
+            structure.extend((0..last * nu).map(|c| (r, c)));
+            structure.push((r, tf_col));
+        }
+        let mut me = Shooting {
+            ocp,
+            options,
+            rows,
+            structure,
+            guess: Vec::new(),
+            nominal: None,
+            derivatives: None,
+            counters: ShootingCounters::default(),
+        };
+        // Until a guess is set: the squat's excitations held, t_f mid-range.
+        let [t0, t1] = me.ocp.options.final_time_bounds;
+        let mut g = Vec::with_capacity(tf_col + 1);
+        for _ in 0..big_n {
+            g.extend_from_slice(me.ocp.u0());
+        }
+        g.push(0.5 * (t0 + t1));
+        me.guess = g;
+        Ok(me)
+    }
+
+    pub fn options(&self) -> &ShootingOptions {
+        &self.options
+    }
+    pub fn num_intervals(&self) -> usize {
+        self.options.num_intervals
+    }
+    pub fn final_time(&self, v: &[f64]) -> f64 {
+        v[self.options.num_intervals * self.ocp.nu()]
+    }
+
+    /// The point from node excitations u_1..u_N (each clamped into its
+    /// bounds) and t_f.
+    pub fn point_from(&self, controls: &[Vec<f64>], tf: f64) -> Result<Vec<f64>, EvalError> {
+        let big_n = self.options.num_intervals;
+        if controls.len() != big_n {
+            return Err(EvalError::new(
+                "guess",
+                format!("{} node excitations for {big_n} intervals", controls.len()),
+            ));
+        }
+        let [t0, t1] = self.ocp.options.final_time_bounds;
+        let mut v = Vec::with_capacity(big_n * self.ocp.nu() + 1);
+        for u in controls {
+            if u.len() != self.ocp.nu() {
+                return Err(EvalError::new(
+                    "guess",
+                    format!("{} excitations, the model has {}", u.len(), self.ocp.nu()),
+                ));
+            }
+            v.extend(
+                u.iter()
+                    .enumerate()
+                    .map(|(i, &x)| x.clamp(self.ocp.control_lower[i], self.ocp.control_upper[i])),
+            );
+        }
+        v.push(tf.clamp(t0, t1));
+        Ok(v)
+    }
+
+    /// Excitations sampled at the nodes of [0, t_f] from a source.
+    pub fn point_from_source(
+        &self,
+        src: &dyn ExcitationSource,
+        tf: f64,
+    ) -> Result<Vec<f64>, EvalError> {
+        let big_n = self.options.num_intervals;
+        let h = tf / big_n as f64;
+        let controls: Vec<Vec<f64>> = (1..=big_n)
+            .map(|k| {
+                let mut u = vec![0.0; self.ocp.nu()];
+                src.at(k as f64 * h, &mut u);
+                u
+            })
+            .collect();
+        self.point_from(&controls, tf)
+    }
+
+    /// The initial guess the SQP starts from ([`Nlp::initial_point`]).
+    pub fn set_guess(&mut self, v: Vec<f64>) {
+        self.guess = v;
+    }
+
+    /// The bang-bang jump's excitations at the nodes, t_f its lift-off time
+    /// (the paper's second guess, as collocation's), and its summary.
+    pub fn bang_bang_guess(&self) -> Result<(Vec<f64>, crate::simulate::JumpSummary), OcpError> {
+        let (summary, _) = self
+            .ocp
+            .simulate_bang_bang(1e-6)
+            .map_err(|f| OcpError::Simulation(f.to_string()))?;
+        let tf = summary.liftoff_time_s.ok_or_else(|| {
+            OcpError::Simulation(format!(
+                "the bang-bang jump does not lift off within {} s",
+                summary.final_time_s
+            ))
+        })?;
+        let v = self
+            .point_from_source(&self.ocp.bang_bang(), tf)
+            .map_err(|e| OcpError::Invalid(e.to_string()))?;
+        Ok((v, summary))
+    }
+
+    /// Node excitations of a point, node 0 (the squat's) first.
+    pub fn node_controls(&self, v: &[f64]) -> Vec<f64> {
+        let nu = self.ocp.nu();
+        let mut c = Vec::with_capacity((self.options.num_intervals + 1) * nu);
+        c.extend_from_slice(self.ocp.u0());
+        c.extend_from_slice(&v[..self.options.num_intervals * nu]);
+        c
+    }
+
+    fn check_point(&self, v: &[f64]) -> Result<(), EvalError> {
+        if v.len() != self.num_variables() {
+            return Err(EvalError::new(
+                "point",
+                format!("{} values for {} variables", v.len(), self.num_variables()),
+            ));
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(EvalError::new(
+                "point",
+                format!("{} is not finite ({})", self.variable_name(i), v[i]),
+            ));
+        }
+        let tf = self.final_time(v);
+        if tf <= 0.0 {
+            return Err(EvalError::new(
+                "point",
+                format!("t_f = {tf} s is not positive"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Integrate from node `first` (state `x_first`) to node N with the
+    /// node excitations `controls` (node 0 first) over [0, tf]; the node
+    /// quantities from node `first` on. `record` receives every accepted
+    /// step (time, state, excitations, ground forces).
+    fn integrate(
+        &self,
+        ws: &mut StateWorkspace<f64>,
+        controls: &[f64],
+        tf: f64,
+        first: usize,
+        x_first: &[f64],
+        mut record: Option<&mut Trajectory>,
+    ) -> Result<NodeValues, EvalError> {
+        let ocp = &*self.ocp;
+        let (nx, nu) = (ocp.nx(), ocp.nu());
+        let big_n = self.options.num_intervals;
+        let h = tf / big_n as f64;
+        let opts = Dopri5Options {
+            accuracy: self.options.accuracy,
+            min_step: 1e-10 * tf.max(1e-3),
+            max_step: h,
+            max_steps: 200_000,
+        };
+        let mut out = NodeValues {
+            first,
+            ..Default::default()
+        };
+        let mut xdot = vec![0.0; nx];
+        let mut node = |out: &mut NodeValues,
+                        ws: &mut StateWorkspace<f64>,
+                        k: usize,
+                        x: &[f64]|
+         -> Result<(), EvalError> {
+            let u = &controls[k * nu..(k + 1) * nu];
+            let (ydd, fy) = ocp.state_rates(ws, x, u, &mut xdot).map_err(|e| {
+                EvalError::new(
+                    "simulation",
+                    format!("node {k} (t = {} s): {e}", k as f64 * h),
+                )
+            })?;
+            let (y, yd, j) = ocp.jump_objective(&mut ws.mb, x);
+            out.states.push(x.to_vec());
+            out.com_acceleration.push(ydd);
+            out.vertical_force_bw.push(fy);
+            out.com_velocity.push(yd);
+            out.com_height.push(y);
+            out.objective = j;
+            Ok(())
+        };
+        node(&mut out, ws, first, x_first)?;
+        let mut x = x_first.to_vec();
+        for k in first + 1..=big_n {
+            let (ta, tb) = (
+                (k - 1) as f64 * h,
+                if k == big_n { tf } else { k as f64 * h },
+            );
+            let mut sys = IntervalRhs {
+                ocp,
+                ws: &mut *ws,
+                u: vec![0.0; nu],
+                ua: &controls[(k - 1) * nu..k * nu],
+                ub: &controls[k * nu..(k + 1) * nu],
+                ta,
+                h,
+            };
+            let fail = |e: crate::integrator::IntegrationError| {
+                EvalError::new("simulation", format!("interval {k}: {e}"))
+            };
+            let result = (|| {
+                let mut ig = Dopri5::new(&mut sys, ta, &x, opts).map_err(fail)?;
+                while ig.t() < tb {
+                    ig.step(&mut sys, tb).map_err(fail)?;
+                    if let Some(tr) = record.as_deref_mut() {
+                        let (t, xs) = (ig.t(), ig.x().to_vec());
+                        let mut d = vec![0.0; nx];
+                        if sys.rhs(t, &xs, &mut d).is_ok() {
+                            let g = grf_of(&ocp.eq, sys.ws, &xs);
+                            tr.time.push(t);
+                            tr.states.push(xs);
+                            tr.controls.push(sys.u.clone());
+                            tr.grf.push(g);
+                        }
+                    }
+                }
+                out.f_evals += ig.stats.f_evals;
+                Ok(ig.x().to_vec())
+            })();
+            drop(sys);
+            x = result?;
+            node(&mut out, ws, k, &x)?;
+        }
+        Ok(out)
+    }
+
+    /// The nominal integration at `v` (cached).
+    pub fn evaluate(&mut self, v: &[f64]) -> Result<&NodeValues, EvalError> {
+        let cached = matches!(&self.nominal, Some((p, _)) if p.as_slice() == v);
+        if !cached {
+            self.check_point(v)?;
+            let mut ws = self.ocp.eq.workspace();
+            let controls = self.node_controls(v);
+            let r = self.integrate(
+                &mut ws,
+                &controls,
+                self.final_time(v),
+                0,
+                &self.ocp.squat.x.clone(),
+                None,
+            )?;
+            self.counters.simulations += 1;
+            self.counters.f_evals += r.f_evals;
+            self.nominal = Some((v.to_vec(), r));
+        }
+        Ok(&self.nominal.as_ref().expect("set above").1)
+    }
+
+    /// The integration at `v` with every accepted step recorded.
+    pub fn trajectory(&self, v: &[f64]) -> Result<(NodeValues, Trajectory), EvalError> {
+        self.check_point(v)?;
+        let mut ws = self.ocp.eq.workspace();
+        let mut tr = Trajectory::default();
+        let controls = self.node_controls(v);
+        let x0 = self.ocp.squat.x.clone();
+        // The start, as `leap simulate` records it.
+        let mut d = vec![0.0; self.ocp.nx()];
+        if self
+            .ocp
+            .state_rates(&mut ws, &x0, self.ocp.u0(), &mut d)
+            .is_ok()
+        {
+            tr.time.push(0.0);
+            tr.states.push(x0.clone());
+            tr.controls.push(self.ocp.u0().to_vec());
+            tr.grf.push(grf_of(&self.ocp.eq, &ws, &x0));
+        }
+        let r = self.integrate(
+            &mut ws,
+            &controls,
+            self.final_time(v),
+            0,
+            &x0,
+            Some(&mut tr),
+        )?;
+        Ok((r, tr))
+    }
+
+    /// Central differences of every node quantity and J in every variable.
+    fn difference_quotients(&mut self, v: &[f64]) -> Result<(), EvalError> {
+        if matches!(&self.derivatives, Some((p, _, _)) if p.as_slice() == v) {
+            return Ok(());
+        }
+        let started = std::time::Instant::now();
+        let nominal = self.evaluate(v)?.clone();
+        let (nx, nu) = (self.ocp.nx(), self.ocp.nu());
+        let big_n = self.options.num_intervals;
+        let n = self.num_variables();
+        let tf = self.final_time(v);
+        let delta = self.options.finite_difference_step;
+        let controls = self.node_controls(v);
+        let per_node = nx + EXTRA;
+        // Column c: (first node, quotients of the node quantities from it,
+        // quotient of J).
+        let next = AtomicUsize::new(0);
+        let threads = self.options.threads.min(n).max(1);
+        let me = &*self;
+        let work = |ws: &mut StateWorkspace<f64>| -> Result<Vec<ColumnQuotients>, EvalError> {
+            let mut done = Vec::new();
+            loop {
+                let c = next.fetch_add(1, Ordering::Relaxed);
+                if c >= n {
+                    return Ok(done);
+                }
+                let (first, d) = if c < big_n * nu {
+                    (c / nu, delta)
+                } else {
+                    (0, delta * tf)
+                };
+                let mut runs = [None, None];
+                let mut f_evals = 0;
+                for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
+                    let mut ctl = controls.clone();
+                    let mut t = tf;
+                    if c < big_n * nu {
+                        ctl[nu + c] += sign * d;
+                    } else {
+                        t += sign * d;
+                    }
+                    let r = me.integrate(ws, &ctl, t, first, &nominal.states[first], None)?;
+                    f_evals += r.f_evals;
+                    runs[s] = Some(r);
+                }
+                let [Some(p), Some(m)] = runs else {
+                    unreachable!("both runs are set above")
+                };
+                let mut q = Vec::with_capacity((big_n + 1 - first) * per_node);
+                let s = 0.5 / d;
+                for k in 0..p.states.len() {
+                    q.extend(
+                        p.states[k]
+                            .iter()
+                            .zip(&m.states[k])
+                            .map(|(a, b)| (a - b) * s),
+                    );
+                    q.push((p.com_acceleration[k] - m.com_acceleration[k]) * s);
+                    q.push((p.vertical_force_bw[k] - m.vertical_force_bw[k]) * s);
+                    q.push((p.com_velocity[k] - m.com_velocity[k]) * s);
+                }
+                done.push(ColumnQuotients {
+                    column: c,
+                    first,
+                    nodes: q,
+                    objective: (p.objective - m.objective) * s,
+                    f_evals,
+                });
+            }
+        };
+        let results: Vec<Result<_, EvalError>> = std::thread::scope(|scope| {
+            let handles: Vec<_> = (0..threads)
+                .map(|_| {
+                    scope.spawn(|| {
+                        let mut ws = me.ocp.eq.workspace();
+                        work(&mut ws)
+                    })
+                })
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| {
+                    h.join().unwrap_or_else(|_| {
+                        Err(EvalError::new(
+                            "jacobian",
+                            "a difference-quotient thread panicked",
+                        ))
+                    })
+                })
+                .collect()
+        });
+        let mut columns: Vec<(usize, Vec<f64>)> = vec![(0, Vec::new()); n];
+        let mut grad = vec![0.0; n];
+        let mut f_evals = 0;
+        let mut sims = 0;
+        for r in results {
+            for q in r? {
+                columns[q.column] = (q.first, q.nodes);
+                grad[q.column] = -q.objective;
+                f_evals += q.f_evals;
+                sims += 2;
+            }
+        }
+        let value = |c: usize, k: usize, what: usize| -> f64 {
+            let (first, q) = &columns[c];
+            if k < *first {
+                0.0
+            } else {
+                q[(k - first) * per_node + what]
+            }
+        };
+        let mut jac = Vec::with_capacity(self.structure.len());
+        for &(r, c) in &self.structure {
+            jac.push(match self.rows[r] {
+                Row::NoCountermovement(j) => value(c, j, nx) - value(c, j + 1, nx),
+                Row::LiftOff => value(c, big_n, nx + 1),
+                Row::NoDescent(k) => value(c, k, nx + 2),
+                Row::Bound(k, i) => value(c, k, i),
+            });
+        }
+        if let Some(i) = jac.iter().position(|x| !x.is_finite()) {
+            let (r, c) = self.structure[i];
+            return Err(EvalError::new(
+                "jacobian",
+                format!(
+                    "∂({})/∂({}) is not finite",
+                    self.constraint_name(r),
+                    self.variable_name(c)
+                ),
+            ));
+        }
+        self.counters.difference_simulations += sims;
+        self.counters.f_evals += f_evals;
+        self.counters.jacobians += 1;
+        self.counters.jacobian_seconds += started.elapsed().as_secs_f64();
+        self.derivatives = Some((v.to_vec(), grad, jac));
+        Ok(())
+    }
+
+    /// Row `row`'s value from the node quantities of a whole integration.
+    fn row_value(&self, nv: &NodeValues, row: Row) -> f64 {
+        match row {
+            Row::NoCountermovement(j) => nv.com_acceleration[j] - nv.com_acceleration[j + 1],
+            Row::LiftOff => nv.vertical_force_bw[self.options.num_intervals],
+            Row::NoDescent(k) => nv.com_velocity[k],
+            Row::Bound(k, i) => nv.states[k][i],
+        }
+    }
+}
+
+impl Nlp for Shooting {
+    fn num_variables(&self) -> usize {
+        self.options.num_intervals * self.ocp.nu() + 1
+    }
+    fn num_constraints(&self) -> usize {
+        self.rows.len()
+    }
+    fn variable_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        let nu = self.ocp.nu();
+        for k in 0..self.options.num_intervals {
+            lower[k * nu..(k + 1) * nu].copy_from_slice(&self.ocp.control_lower);
+            upper[k * nu..(k + 1) * nu].copy_from_slice(&self.ocp.control_upper);
+        }
+        let [t0, t1] = self.ocp.options.final_time_bounds;
+        let n = self.num_variables();
+        lower[n - 1] = t0;
+        upper[n - 1] = t1;
+    }
+    fn constraint_bounds(&self, lower: &mut [f64], upper: &mut [f64]) {
+        let (lo_l, lo_u) = self.ocp.liftoff_bounds();
+        for (r, row) in self.rows.iter().enumerate() {
+            (lower[r], upper[r]) = match *row {
+                Row::NoCountermovement(_) => (f64::NEG_INFINITY, 0.0),
+                Row::LiftOff => (lo_l, lo_u),
+                Row::NoDescent(_) => (0.0, f64::INFINITY),
+                Row::Bound(_, i) => (self.ocp.state_lower[i], self.ocp.state_upper[i]),
+            };
+        }
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x.copy_from_slice(&self.guess);
+    }
+    fn objective(&mut self, x: &[f64]) -> Result<f64, EvalError> {
+        Ok(-self.evaluate(x)?.objective)
+    }
+    fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
+        self.difference_quotients(x)?;
+        g.copy_from_slice(&self.derivatives.as_ref().expect("set above").1);
+        Ok(())
+    }
+    fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
+        let nv = self.evaluate(x)?.clone();
+        for (r, &row) in self.rows.iter().enumerate() {
+            c[r] = self.row_value(&nv, row);
+        }
+        Ok(())
+    }
+    fn jacobian_structure(&self) -> Vec<(usize, usize)> {
+        self.structure.clone()
+    }
+    fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
+        self.difference_quotients(x)?;
+        values.copy_from_slice(&self.derivatives.as_ref().expect("set above").2);
+        Ok(())
+    }
+    fn variable_name(&self, i: usize) -> String {
+        let nu = self.ocp.nu();
+        if i >= self.options.num_intervals * nu {
+            return "t_f".into();
+        }
+        let names = self.ocp.eq.control_names();
+        format!("node {} {}", i / nu + 1, names[i % nu])
+    }
+    fn constraint_name(&self, i: usize) -> String {
+        match self.rows.get(i) {
+            Some(Row::NoCountermovement(j)) => {
+                format!("no countermovement: Ÿ_C(node {j}) ≤ Ÿ_C(node {})", j + 1)
+            }
+            Some(Row::LiftOff) => "lift-off: F_y(t_f)/(m g)".into(),
+            Some(Row::NoDescent(k)) => format!("no descent: Ẏ_C(node {k}) ≥ 0"),
+            Some(Row::Bound(k, i)) => {
+                format!("bound of {} at node {k}", self.ocp.eq.state_names()[*i])
+            }
+            None => format!("c[{i}]"),
+        }
+    }
+}
