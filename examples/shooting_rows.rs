@@ -6,11 +6,25 @@ fn main() {
     let a: Vec<String> = std::env::args().collect();
     let (model, file, n) = (&a[1], &a[2], a[3].parse::<usize>().expect("N"));
     let model = leap::model::Model::from_file(std::path::Path::new(model)).expect("model");
-    let opts = leap::ocp::OcpOptions { no_countermovement_nodes: 7.min(n), ..Default::default() };
+    let opts = leap::ocp::OcpOptions {
+        no_countermovement_nodes: 7.min(n),
+        ..Default::default()
+    };
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, opts).expect("ocp"));
-    let mut sh = leap::shooting::Shooting::new(ocp.clone(), leap::shooting::ShootingOptions { num_intervals: n, ..Default::default() }).expect("shooting");
+    let mut sh = leap::shooting::Shooting::new(
+        ocp.clone(),
+        leap::shooting::ShootingOptions {
+            num_intervals: n,
+            ..Default::default()
+        },
+    )
+    .expect("shooting");
     let eq = &ocp.eq;
-    let muscles: Vec<&str> = eq.muscles.iter().map(|&m| eq.model.muscles[m].spec.name.as_str()).collect();
+    let muscles: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&m| eq.model.muscles[m].spec.name.as_str())
+        .collect();
     let c = leap::io::Controls::from_file(std::path::Path::new(file), &muscles).expect("controls");
     let tf = *c.time.last().expect("time");
     let v = sh.point_from_source(&c, tf).expect("point");
@@ -22,7 +36,13 @@ fn main() {
     for i in 0..m {
         let viol = (lo[i] - cv[i]).max(cv[i] - hi[i]);
         if viol > 1e-6 {
-            println!("{}: {} not in [{}, {}]", sh.constraint_name(i), cv[i], lo[i], hi[i]);
+            println!(
+                "{}: {} not in [{}, {}]",
+                sh.constraint_name(i),
+                cv[i],
+                lo[i],
+                hi[i]
+            );
         }
     }
     println!("J {}", -sh.objective(&v).expect("objective"));

@@ -840,3 +840,193 @@ mod tests {
         assert!(e.contains("--hessian") && e.contains("'newton'"), "{e}");
     }
 }
+
+/// The cost of one SQP iteration by method on the 29-node jump.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodRow {
+    pub method: &'static str,
+    pub variables: usize,
+    pub constraints: usize,
+    pub jacobian_nnz: usize,
+    /// Iterations timed (those that solved a QP).
+    pub iterations: usize,
+    /// Medians per iteration (s).
+    pub derivatives_s: f64,
+    pub hessian_s: f64,
+    pub qp_s: f64,
+    pub line_search_s: f64,
+    pub iteration_s: f64,
+    /// Porsa et al. (2016): CPU time per iteration of their solve (s).
+    pub paper_iteration_s: f64,
+}
+
+/// [`methods`]: both rows and the shooting integrations' cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct MethodsReport {
+    pub rows: Vec<MethodRow>,
+    /// One integration of the push-off from the squat (median, s), and its
+    /// right-hand-side evaluations.
+    pub shooting_integration_s: f64,
+    pub shooting_integration_f_evals: usize,
+    /// Integrations per central-difference Jacobian (each from its
+    /// column's node), and right-hand-side evaluations per Jacobian.
+    pub shooting_jacobian_integrations: usize,
+    pub shooting_jacobian_f_evals: usize,
+    pub shooting: crate::shooting::ShootingOptions,
+}
+
+/// Porsa et al. (2016), Table 2: collocation 702 iterations in 3.4 h of
+/// CPU, shooting 602 iterations in 846 h.
+pub const PAPER_COLLOCATION_S_PER_ITERATION: f64 = 3.4 * 3600.0 / 702.0;
+pub const PAPER_SHOOTING_S_PER_ITERATION: f64 = 846.0 * 3600.0 / 602.0;
+
+fn method_row(
+    method: &'static str,
+    size: (usize, usize, usize),
+    history: &[crate::sqp::IterationRecord],
+    paper_iteration_s: f64,
+) -> MethodRow {
+    let timed: Vec<&crate::sqp::IterationRecord> =
+        history.iter().filter(|h| h.qp_iterations > 0).collect();
+    let m = |f: &dyn Fn(&crate::sqp::IterationRecord) -> f64| {
+        median(timed.iter().map(|h| f(h)).collect())
+    };
+    MethodRow {
+        method,
+        variables: size.0,
+        constraints: size.1,
+        jacobian_nnz: size.2,
+        iterations: timed.len(),
+        derivatives_s: m(&|h| h.derivatives_s),
+        hessian_s: m(&|h| h.hessian_s),
+        qp_s: m(&|h| h.qp_s),
+        line_search_s: m(&|h| h.line_search_s),
+        iteration_s: m(&|h| h.derivatives_s + h.hessian_s + h.qp_s + h.line_search_s),
+        paper_iteration_s,
+    }
+}
+
+/// The first `iterations` SQP iterations of each method on the built-in
+/// study's jump from the bang-bang guess (collocation: the study's
+/// transcription, exact Hessians; shooting: Dormand–Prince at the default
+/// accuracy, central differences, BFGS), per iteration against the
+/// paper's CPU time per iteration.
+pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String> {
+    use crate::nlp::Nlp;
+    let config = crate::study::SolveConfig::builtin().map_err(|e| e.to_string())?;
+    let settings = crate::sqp::SqpSettings {
+        max_iterations: iterations,
+        ..config.settings.clone()
+    };
+    // Collocation, as `leap solve` sets it up.
+    let ocp = std::sync::Arc::new(
+        crate::ocp::JumpOcp::new(model, Default::default()).map_err(|e| e.to_string())?,
+    );
+    let mut tr = crate::transcription::Transcription::new(ocp.clone(), config.transcription)
+        .map_err(|e| e.to_string())?;
+    let (mut guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
+    tr.integrate_on_mesh(&mut guess)
+        .map_err(|e| e.to_string())?;
+    let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
+    let collocation = method_row(
+        "collocation",
+        (tr.num_variables(), tr.num_constraints(), tr.jacobian_nnz()),
+        &r.history,
+        PAPER_COLLOCATION_S_PER_ITERATION,
+    );
+    // Shooting.
+    let options = crate::shooting::ShootingOptions {
+        num_intervals: config.transcription.num_mesh_intervals,
+        ..config.shooting
+    };
+    let mut sh = crate::shooting::Shooting::new(ocp, options).map_err(|e| e.to_string())?;
+    let (v, _) = sh.bang_bang_guess().map_err(|e| e.to_string())?;
+    let mut times = Vec::new();
+    let mut f_evals = 0;
+    for k in 0..5 {
+        let mut p = v.clone();
+        let last = p.len() - 1;
+        p[last] += 1e-9 * k as f64;
+        let before = sh.counters.f_evals;
+        let t = std::time::Instant::now();
+        sh.evaluate(&p).map_err(|e| e.to_string())?;
+        times.push(t.elapsed().as_secs_f64());
+        f_evals = sh.counters.f_evals - before;
+    }
+    let before = sh.counters;
+    let mut g = vec![0.0; sh.num_variables()];
+    sh.gradient(&v, &mut g).map_err(|e| e.to_string())?;
+    let jacobian_integrations = sh.counters.difference_simulations - before.difference_simulations;
+    let jacobian_f_evals = sh.counters.f_evals - before.f_evals;
+    let settings = crate::sqp::SqpSettings {
+        hessian: crate::sqp::HessianMode::PartitionedBfgs,
+        ..settings
+    };
+    let size = (
+        sh.num_variables(),
+        sh.num_constraints(),
+        sh.jacobian_structure().len(),
+    );
+    let r = crate::sqp::solve_from(&mut sh, &v, &settings);
+    let shooting = method_row("shooting", size, &r.history, PAPER_SHOOTING_S_PER_ITERATION);
+    Ok(MethodsReport {
+        rows: vec![collocation, shooting],
+        shooting_integration_s: median(times),
+        shooting_integration_f_evals: f_evals,
+        shooting_jacobian_integrations: jacobian_integrations,
+        shooting_jacobian_f_evals: jacobian_f_evals,
+        shooting: options,
+    })
+}
+
+impl MethodsReport {
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        t.set_header(vec![
+            "method",
+            "variables",
+            "constraints",
+            "nnz(J)",
+            "iterations timed",
+            "derivatives (s)",
+            "Hessian (s)",
+            "QP (s)",
+            "line search (s)",
+            "iteration (s)",
+            "paper's iteration (s CPU)",
+            "paper / leap",
+        ]);
+        for r in &self.rows {
+            t.add_row(vec![
+                r.method.to_string(),
+                r.variables.to_string(),
+                r.constraints.to_string(),
+                r.jacobian_nnz.to_string(),
+                r.iterations.to_string(),
+                format!("{:.3}", r.derivatives_s),
+                format!("{:.3}", r.hessian_s),
+                format!("{:.3}", r.qp_s),
+                format!("{:.3}", r.line_search_s),
+                format!("{:.3}", r.iteration_s),
+                format!("{:.1}", r.paper_iteration_s),
+                format!("{:.0}", r.paper_iteration_s / r.iteration_s),
+            ]);
+        }
+        let ratio = match (self.rows.first(), self.rows.get(1)) {
+            (Some(c), Some(s)) => s.iteration_s / c.iteration_s,
+            _ => f64::NAN,
+        };
+        format!(
+            "the 29-node jump, per SQP iteration (medians over the first iterations from the bang-bang guess; wall time on this machine against the paper's CPU time, Porsa et al. 2016 Table 2)\n{t}\n  shooting: one push-off integration {:.3} s ({} f evaluations, Dormand–Prince at {:e}); one Jacobian {} integrations from each column's node ({} f evaluations), central differences of step {:e} on {} threads\n  a shooting iteration costs {:.0} collocation iterations (the paper: {:.0})\n",
+            self.shooting_integration_s,
+            self.shooting_integration_f_evals,
+            self.shooting.accuracy,
+            self.shooting_jacobian_integrations,
+            self.shooting_jacobian_f_evals,
+            self.shooting.finite_difference_step,
+            self.shooting.threads,
+            ratio,
+            PAPER_SHOOTING_S_PER_ITERATION / PAPER_COLLOCATION_S_PER_ITERATION
+        )
+    }
+}

@@ -258,6 +258,18 @@ enum BenchCommand {
         #[arg(long)]
         json: bool,
     },
+    /// Collocation against shooting: the first SQP iterations of each on
+    /// the 29-node jump, time per iteration split into derivatives, Hessian,
+    /// QP and line search, against the paper's CPU time per iteration.
+    Methods {
+        #[arg(long, default_value = "models/jumper.json")]
+        model: PathBuf,
+        /// SQP iterations per method (a shooting iteration takes about 30 s).
+        #[arg(long, default_value_t = 3, value_parser = at_least_one)]
+        iterations: usize,
+        #[arg(long)]
+        json: bool,
+    },
     /// A whole `leap solve` of a study (default: the built-in jump study),
     /// without the forward check: status, iterations, wall time and its
     /// split into derivatives, Hessian, QP, line search and other.
@@ -619,6 +631,23 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 .map_err(|e: String| anyhow::anyhow!("--hessian: {e}"))?;
             let report = leap::bench::sqp_jump(&m, iterations, mode, !no_equilibrate)
                 .map_err(|e| anyhow::anyhow!(e))?;
+            if json {
+                outln!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                outln!("{}", report.table());
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Bench {
+            which:
+                BenchCommand::Methods {
+                    model,
+                    iterations,
+                    json,
+                },
+        } => {
+            let m = leap::model::Model::from_file(&model)?;
+            let report = leap::bench::methods(&m, iterations).map_err(|e| anyhow::anyhow!(e))?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&report)?);
             } else {

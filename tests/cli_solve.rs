@@ -426,6 +426,16 @@ fn example_study_parses() {
         .unwrap();
     assert_eq!(c.transcription.num_mesh_intervals, 28);
     assert_eq!(c.model, Path::new("models/jumper.json"));
+    assert_eq!(c.method, leap::study::Method::Collocation);
+    let p = Path::new("models/jump_shooting.json");
+    let c = leap::study::SolveStudy::from_file(p)
+        .unwrap()
+        .resolve(Some(p))
+        .unwrap();
+    assert_eq!(c.method, leap::study::Method::Shooting);
+    assert_eq!(c.transcription.num_mesh_intervals, 28);
+    assert_eq!(c.settings.hessian, leap::sqp::HessianMode::PartitionedBfgs);
+    assert_eq!(c.shooting, leap::shooting::ShootingOptions::default());
 }
 
 /// `leap bench solve STUDY`: the small study solved twice; each run's time
@@ -584,4 +594,74 @@ fn num_mesh_intervals_beyond_the_maximum_is_refused_without_a_panic() {
         );
         assert!(!err.contains("panicked"), "{args:?}: {err}");
     }
+}
+
+/// `leap solve --method shooting` on the reduced model (8 intervals, 2
+/// iterations): the problem's size, every file in `--out`, node 0 at the
+/// squat, and the forward check. A shooting point is an integration of the
+/// model, so the Simbody forward check (OpenSim's activation switch and
+/// paths, not the optimizer's smoothed ones) must agree within 1 cm after
+/// any number of iterations, and the peak force over every integrator step
+/// is at least the peak over the nodes.
+#[test]
+fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
+    let out = fresh_dir("shooting_out");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "solve",
+            "models/jump_reduced.json",
+            "--method",
+            "shooting",
+            "--num-mesh-intervals",
+            "8",
+            "--max-iterations",
+            "2",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["method"], "shooting", "{v}");
+    // 8 nodes × 10 excitations + t_f; 7 no-countermovement rows, lift-off,
+    // 8 no-descent rows, 8 × (7 + 7 + 10) state bounds.
+    assert_eq!(v["variables"].as_u64(), Some(81));
+    assert_eq!(v["constraints"].as_u64(), Some(7 + 1 + 8 + 8 * 24));
+    assert_eq!(v["hessian"], "partitioned_bfgs", "{v}");
+    let d = v["forward_check_difference_m"].as_f64().unwrap();
+    assert!(d.abs() < 0.01, "forward check {d} m from the prediction");
+    let peak = v["peak_vertical_grf_bw"].as_f64().unwrap();
+    let peak_nodes = v["peak_vertical_grf_nodes_bw"].as_f64().unwrap();
+    assert!(peak >= peak_nodes, "{peak} < {peak_nodes}");
+    let expected = [
+        "jump_reduced_forward_controls.sto",
+        "jump_reduced_forward_grf.mot",
+        "jump_reduced_forward_states.sto",
+        "jump_reduced_grf.mot",
+        "jump_reduced_history.csv",
+        "jump_reduced_solution.sto",
+        "jump_reduced_summary.json",
+    ];
+    assert_eq!(files_in(&out), expected);
+    let sol = StoTable::read(&out.join("jump_reduced_solution.sto")).unwrap();
+    assert_eq!(sol.time.len(), 9);
+    let tf = v["final_time_s"].as_f64().unwrap();
+    assert!((sol.time[8] - tf).abs() < 1e-12);
+    let states = StoTable::read(&out.join("jump_reduced_forward_states.sto")).unwrap();
+    let squat = &states.rows[0];
+    let k = sol.labels.len().min(squat.len());
+    for (i, (a, b)) in sol.rows[0][..k].iter().zip(&squat[..k]).enumerate() {
+        assert!(
+            (a - b).abs() < 1e-9,
+            "node 0 {}: {a} against the squat's {b}",
+            sol.labels[i]
+        );
+    }
+    let grf = StoTable::read(&out.join("jump_reduced_grf.mot")).unwrap();
+    assert!(grf.time.len() > 9, "{} rows", grf.time.len());
+    let _ = std::fs::remove_dir_all(&out);
 }
