@@ -462,6 +462,7 @@ impl Shooting {
     pub fn evaluate(&mut self, v: &[f64]) -> Result<&NodeValues, EvalError> {
         let cached = matches!(&self.nominal, Some((p, _)) if p.as_slice() == v);
         if !cached {
+            self.nominal = None;
             self.check_point(v)?;
             let mut ws = self.ocp.eq.workspace();
             let controls = self.node_controls(v);
@@ -477,7 +478,10 @@ impl Shooting {
             self.counters.f_evals += r.f_evals;
             self.nominal = Some((v.to_vec(), r));
         }
-        Ok(&self.nominal.as_ref().expect("set above").1)
+        match &self.nominal {
+            Some((_, r)) => Ok(r),
+            None => Err(EvalError::new("simulation", "no integration at this point")),
+        }
     }
 
     /// The integration at `v` with every accepted step recorded.
@@ -510,11 +514,25 @@ impl Shooting {
         Ok((r, tr))
     }
 
-    /// Central differences of every node quantity and J in every variable.
-    fn difference_quotients(&mut self, v: &[f64]) -> Result<(), EvalError> {
-        if matches!(&self.derivatives, Some((p, _, _)) if p.as_slice() == v) {
-            return Ok(());
+    /// Central differences at `v` (cached): the gradient of −J and the
+    /// Jacobian's values.
+    fn difference_quotients(&mut self, v: &[f64]) -> Result<(&[f64], &[f64]), EvalError> {
+        let cached = matches!(&self.derivatives, Some((p, _, _)) if p.as_slice() == v);
+        if !cached {
+            self.derivatives = None;
+            self.compute_quotients(v)?;
         }
+        match &self.derivatives {
+            Some((_, g, j)) => Ok((g, j)),
+            None => Err(EvalError::new(
+                "jacobian",
+                "no difference quotients at this point",
+            )),
+        }
+    }
+
+    /// Central differences of every node quantity and J in every variable.
+    fn compute_quotients(&mut self, v: &[f64]) -> Result<(), EvalError> {
         let started = std::time::Instant::now();
         let nominal = self.evaluate(v)?.clone();
         let (nx, nu) = (self.ocp.nx(), self.ocp.nu());
@@ -541,9 +559,7 @@ impl Shooting {
                 } else {
                     (0, delta * tf)
                 };
-                let mut runs = [None, None];
-                let mut f_evals = 0;
-                for (s, sign) in [1.0, -1.0].into_iter().enumerate() {
+                let mut run = |sign: f64| {
                     let mut ctl = controls.clone();
                     let mut t = tf;
                     if c < big_n * nu {
@@ -551,13 +567,11 @@ impl Shooting {
                     } else {
                         t += sign * d;
                     }
-                    let r = me.integrate(ws, &ctl, t, first, &nominal.states[first], None)?;
-                    f_evals += r.f_evals;
-                    runs[s] = Some(r);
-                }
-                let [Some(p), Some(m)] = runs else {
-                    unreachable!("both runs are set above")
+                    me.integrate(ws, &ctl, t, first, &nominal.states[first], None)
                 };
+                let p = run(1.0)?;
+                let m = run(-1.0)?;
+                let f_evals = p.f_evals + m.f_evals;
                 let mut q = Vec::with_capacity((big_n + 1 - first) * per_node);
                 let s = 0.5 / d;
                 for k in 0..p.states.len() {
@@ -696,8 +710,7 @@ impl Nlp for Shooting {
         Ok(-self.evaluate(x)?.objective)
     }
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
-        self.difference_quotients(x)?;
-        g.copy_from_slice(&self.derivatives.as_ref().expect("set above").1);
+        g.copy_from_slice(&self.difference_quotients(x)?.0);
         Ok(())
     }
     fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
@@ -711,8 +724,7 @@ impl Nlp for Shooting {
         self.structure.clone()
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        self.difference_quotients(x)?;
-        values.copy_from_slice(&self.derivatives.as_ref().expect("set above").2);
+        values.copy_from_slice(&self.difference_quotients(x)?.1);
         Ok(())
     }
     fn variable_name(&self, i: usize) -> String {

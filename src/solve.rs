@@ -321,26 +321,16 @@ pub fn run(
 
     // Outputs.
     let mesh = tr.unpack(&result.x);
-    let name = &config.name;
-    let mut files = Vec::new();
-    let sol = solution_table(&ocp, &mesh, &result, &report);
-    let p = dir.join(format!("{name}_solution.sto"));
-    sol.write_sto(&p)?;
-    files.push(p);
     let grf: Vec<[f64; 12]> = node_grf(&ocp, &mesh);
-    let p = dir.join(format!("{name}_grf.mot"));
-    grf_table(&format!("{name}_grf"), &mesh.time, &grf).write_mot(&p)?;
-    files.push(p);
-    let p = dir.join(format!("{name}_history.csv"));
-    result
-        .write_history_csv(&p)
-        .map_err(|error| SolveError::Io {
-            file: p.clone(),
-            error,
-        })?;
-    files.push(p);
-
-    finish(config, &ocp, &mesh, report, files, progress)
+    finish(
+        config,
+        &ocp,
+        &mesh,
+        &result,
+        report,
+        (&mesh.time, &grf),
+        progress,
+    )
 }
 
 /// [`run`] for method "shooting" ([`crate::shooting`]).
@@ -423,13 +413,29 @@ fn run_shooting(
     report.guess_jump_height_m = guess_jump;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
-    let name = &config.name;
+    let grf = (traj.time.as_slice(), traj.grf.as_slice());
+    finish(config, &ocp, &mesh, &result, report, grf, progress)
+}
+
+/// The output files of either method: the solution at the nodes, the
+/// ground forces `grf` (times and forces), the iteration history, the
+/// forward check and the summary.
+fn finish(
+    config: &SolveConfig,
+    ocp: &Arc<JumpOcp>,
+    mesh: &MeshTrajectory,
+    result: &SqpResult,
+    mut report: SolveReport,
+    grf: (&[f64], &[[f64; 12]]),
+    progress: &mut dyn FnMut(&str),
+) -> Result<SolveReport, SolveError> {
+    let (dir, name) = (&config.output_directory, &config.name);
     let mut files = Vec::new();
     let p = dir.join(format!("{name}_solution.sto"));
-    solution_table(&ocp, &mesh, &result, &report).write_sto(&p)?;
+    solution_table(ocp, mesh, result, &report).write_sto(&p)?;
     files.push(p);
     let p = dir.join(format!("{name}_grf.mot"));
-    grf_table(&format!("{name}_grf"), &traj.time, &traj.grf).write_mot(&p)?;
+    grf_table(&format!("{name}_grf"), grf.0, grf.1).write_mot(&p)?;
     files.push(p);
     let p = dir.join(format!("{name}_history.csv"));
     result
@@ -439,19 +445,6 @@ fn run_shooting(
             error,
         })?;
     files.push(p);
-    finish(config, &ocp, &mesh, report, files, progress)
-}
-
-/// The forward check and the summary file, for either method.
-fn finish(
-    config: &SolveConfig,
-    ocp: &Arc<JumpOcp>,
-    mesh: &MeshTrajectory,
-    mut report: SolveReport,
-    mut files: Vec<PathBuf>,
-    progress: &mut dyn FnMut(&str),
-) -> Result<SolveReport, SolveError> {
-    let (dir, name) = (&config.output_directory, &config.name);
     if let Some(fc) = config.forward_check {
         progress("forward check: the optimal excitations integrated from the squat");
         let (check, fw_files) = forward_check(ocp, mesh, fc, dir, name)?;
@@ -539,51 +532,20 @@ fn shooting_report(
             (tf, nodes.com_height[last], nodes.com_velocity[last])
         }
     };
-    let j = nodes.objective;
-    SolveReport {
-        method: Method::Shooting,
-        status: r.status,
-        moco_status: moco_status(r.status),
-        success: r.status.success(),
-        message: r.message.clone(),
-        iterations: r.iterations,
-        wall_time_s: r.time.total_s,
-        wall_time_per_iteration_s: r.time.total_s / r.iterations.max(1) as f64,
-        objective: -j,
-        jump_height_m: j - ocp.standing_com_height,
-        apex_com_height_m: j,
-        standing_com_height_m: ocp.standing_com_height,
-        ground_contact_time_s: t_liftoff,
-        final_time_s: tf,
-        liftoff_com_velocity_mps: ydot,
-        liftoff_com_height_m: y,
-        peak_vertical_grf_bw: max(&force),
-        peak_vertical_grf_nodes_bw: max(&nodes.vertical_force_bw),
-        max_constraint_violation: violation,
-        forward_jump_height_m: None,
-        forward_check_difference_m: None,
-        forward_check_agrees: None,
-        forward_jump_height_rust_m: None,
-        forward_check: None,
-        guess: String::new(),
-        guess_jump_height_m: None,
-        guess_mesh_integration: None,
-        num_mesh_intervals: sh.num_intervals(),
-        scheme: "direct shooting",
-        fiber_dynamics: "explicit",
-        hessian: r.hessian,
-        variables: sh.num_variables(),
-        constraints: sh.num_constraints(),
-        time_split: r.time,
-        qp_fallbacks: r.qp_fallbacks,
-        qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
-        qp_fallback_seconds: r.qp_fallback_seconds,
-        qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
-        hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
-        study: None,
-        model: String::new(),
-        output_files: Vec::new(),
-    }
+    report_at(
+        r,
+        ocp,
+        SolutionQuantities {
+            method: Method::Shooting,
+            apex: nodes.objective,
+            final_time: tf,
+            liftoff: (t_liftoff, y, ydot),
+            peak_grf: (max(&force), max(&nodes.vertical_force_bw)),
+            violation,
+            mesh: (sh.num_intervals(), "direct shooting", "explicit"),
+            size: (sh.num_variables(), sh.num_constraints()),
+        },
+    )
 }
 
 /// The report's solution quantities at the SQP's last iterate.
@@ -656,8 +618,49 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         Ok(v) => v.into_iter().fold(0.0, f64::max),
         Err(_) => f64::NAN,
     };
+    report_at(
+        r,
+        &ocp,
+        SolutionQuantities {
+            method: Method::Collocation,
+            apex: j,
+            final_time: tf,
+            liftoff: (t_liftoff, y, ydot),
+            peak_grf: (peak, peak_nodes),
+            violation,
+            mesh: (
+                tr.num_intervals(),
+                scheme_name(tr.options().scheme),
+                fiber_dynamics_name(tr.options().fiber_dynamics),
+            ),
+            size: (tr.num_variables(), tr.num_constraints()),
+        },
+    )
+}
+
+/// What either method's solution gives its report.
+struct SolutionQuantities {
+    method: Method,
+    /// J at t_f (m).
+    apex: f64,
+    final_time: f64,
+    /// Lift-off time, Y_C and Ẏ_C there.
+    liftoff: (f64, f64, f64),
+    /// Peak vertical ground force / body weight, and over the nodes.
+    peak_grf: (f64, f64),
+    violation: f64,
+    /// Intervals, scheme, fibre dynamics.
+    mesh: (usize, &'static str, &'static str),
+    /// Variables, constraints.
+    size: (usize, usize),
+}
+
+/// The report of a solve ending at `r` (no forward check, guess or files
+/// yet).
+fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport {
+    let j = q.apex;
     SolveReport {
-        method: Method::Collocation,
+        method: q.method,
         status: r.status,
         moco_status: moco_status(r.status),
         success: r.status.success(),
@@ -669,13 +672,13 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         jump_height_m: j - ocp.standing_com_height,
         apex_com_height_m: j,
         standing_com_height_m: ocp.standing_com_height,
-        ground_contact_time_s: t_liftoff,
-        final_time_s: tf,
-        liftoff_com_velocity_mps: ydot,
-        liftoff_com_height_m: y,
-        peak_vertical_grf_bw: peak,
-        peak_vertical_grf_nodes_bw: peak_nodes,
-        max_constraint_violation: violation,
+        ground_contact_time_s: q.liftoff.0,
+        final_time_s: q.final_time,
+        liftoff_com_velocity_mps: q.liftoff.2,
+        liftoff_com_height_m: q.liftoff.1,
+        peak_vertical_grf_bw: q.peak_grf.0,
+        peak_vertical_grf_nodes_bw: q.peak_grf.1,
+        max_constraint_violation: q.violation,
         forward_jump_height_m: None,
         forward_check_difference_m: None,
         forward_check_agrees: None,
@@ -684,12 +687,12 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
         guess: String::new(),
         guess_jump_height_m: None,
         guess_mesh_integration: None,
-        num_mesh_intervals: tr.num_intervals(),
-        scheme: scheme_name(tr.options().scheme),
-        fiber_dynamics: fiber_dynamics_name(tr.options().fiber_dynamics),
+        num_mesh_intervals: q.mesh.0,
+        scheme: q.mesh.1,
+        fiber_dynamics: q.mesh.2,
         hessian: r.hessian,
-        variables: tr.num_variables(),
-        constraints: tr.num_constraints(),
+        variables: q.size.0,
+        constraints: q.size.1,
         time_split: r.time,
         qp_fallbacks: r.qp_fallbacks,
         qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
