@@ -17,9 +17,9 @@
 //! every node (the excitations have a kink there). A restart makes the
 //! trajectory up to node k−1 independent of u_k, bit for bit, so a
 //! difference quotient in u_k integrates only from node k−1 on: the
-//! central-difference Jacobian costs about N·n_u + 2 whole integrations,
-//! not 2·(N·n_u + 1), and its columns run on
-//! [`ShootingOptions::threads`] threads.
+//! central-difference Jacobian costs about n_u·(N + 1) + 2 whole
+//! integrations (698 on the paper's mesh), not 2·(N·n_u + 1), and its
+//! columns run on [`ShootingOptions::threads`] threads.
 //!
 //! **Constraints** (rows in this order):
 //! - no countermovement (eq. 4): Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0, j = 0..n_cm−1;
@@ -27,7 +27,9 @@
 //! - no descent ([`crate::ocp::OcpOptions::no_com_descent`]): Ẏ_C(t_k) ≥ 0,
 //!   k = 1..N;
 //! - state bounds (eq. 6) at the nodes k = 1..N: coordinates, speeds and
-//!   fibre lengths. Activations need no rows: with u in [u_min, 1] the
+//!   fibre lengths, and the activations of muscles whose excitations may
+//!   fall below the activation bound (DeGrooteFregly2016Muscle: u_min = 0).
+//!   Thelen muscles' activations need no rows: with u in [0.01, 1] their
 //!   activation dynamics (a first-order lag toward u with a positive time
 //!   constant) keep a between the extremes of u and its start, inside
 //!   [0.01, 1].
@@ -41,7 +43,7 @@ use crate::nlp::{EvalError, Nlp};
 use crate::ocp::{JumpOcp, OcpError};
 use crate::ode::StateWorkspace;
 use crate::simulate::{grf_of, ExcitationSource, Trajectory};
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 
 /// Settings of the shooting transcription.
@@ -213,7 +215,12 @@ impl Shooting {
             ));
         }
         let (nq, nm) = (ocp.nq(), ocp.nm());
-        let bounded: Vec<usize> = (0..2 * nq + nm).collect();
+        let mut bounded: Vec<usize> = (0..2 * nq + nm).collect();
+        bounded.extend(
+            (0..nm)
+                .filter(|&k| ocp.control_lower[k] < ocp.state_lower[2 * nq + nm + k])
+                .map(|k| 2 * nq + nm + k),
+        );
         let mut rows: Vec<Row> = (0..n_cm).map(Row::NoCountermovement).collect();
         rows.push(Row::LiftOff);
         if ocp.options.no_com_descent {
@@ -257,8 +264,11 @@ impl Shooting {
     pub fn num_intervals(&self) -> usize {
         self.options.num_intervals
     }
+    /// t_f of a point (NaN if `v` is too short).
     pub fn final_time(&self, v: &[f64]) -> f64 {
-        v[self.options.num_intervals * self.ocp.nu()]
+        v.get(self.options.num_intervals * self.ocp.nu())
+            .copied()
+            .unwrap_or(f64::NAN)
     }
 
     /// The point from node excitations u_1..u_N (each clamped into its
@@ -332,12 +342,14 @@ impl Shooting {
         Ok((v, summary))
     }
 
-    /// Node excitations of a point, node 0 (the squat's) first.
+    /// Node excitations of a point, node 0 (the squat's) first (only the
+    /// nodes `v` holds if it is too short).
     pub fn node_controls(&self, v: &[f64]) -> Vec<f64> {
         let nu = self.ocp.nu();
-        let mut c = Vec::with_capacity((self.options.num_intervals + 1) * nu);
+        let n = (self.options.num_intervals * nu).min(v.len());
+        let mut c = Vec::with_capacity(n + nu);
         c.extend_from_slice(self.ocp.u0());
-        c.extend_from_slice(&v[..self.options.num_intervals * nu]);
+        c.extend_from_slice(&v[..n]);
         c
     }
 
@@ -545,13 +557,15 @@ impl Shooting {
         // Column c: (first node, quotients of the node quantities from it,
         // quotient of J).
         let next = AtomicUsize::new(0);
+        // Set by a column that fails: the other threads stop too.
+        let failed = AtomicBool::new(false);
         let threads = self.options.threads.min(n).max(1);
         let me = &*self;
         let work = |ws: &mut StateWorkspace<f64>| -> Result<Vec<ColumnQuotients>, EvalError> {
             let mut done = Vec::new();
             loop {
                 let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= n {
+                if c >= n || failed.load(Ordering::Relaxed) {
                     return Ok(done);
                 }
                 let (first, d) = if c < big_n * nu {
@@ -569,8 +583,13 @@ impl Shooting {
                     }
                     me.integrate(ws, &ctl, t, first, &nominal.states[first], None)
                 };
-                let p = run(1.0)?;
-                let m = run(-1.0)?;
+                let (p, m) = match (run(1.0), run(-1.0)) {
+                    (Ok(p), Ok(m)) => (p, m),
+                    (Err(e), _) | (_, Err(e)) => {
+                        failed.store(true, Ordering::Relaxed);
+                        return Err(e);
+                    }
+                };
                 let f_evals = p.f_evals + m.f_evals;
                 let mut q = Vec::with_capacity((big_n + 1 - first) * per_node);
                 let s = 0.5 / d;

@@ -65,6 +65,9 @@ pub enum SolveError {
     Sto(#[from] StoError),
     #[error("{file}: {reason}")]
     Guess { file: PathBuf, reason: String },
+    /// The solve's last iterate could not be evaluated for the report.
+    #[error("the solution: {0}")]
+    Solution(String),
     #[error("{file}: {error}")]
     Io {
         file: PathBuf,
@@ -196,6 +199,9 @@ pub struct SolveReport {
     /// needed one, as in every mode but `exact-inertia-corrected`).
     pub hessian_shift: Option<crate::sqp::HessianShiftSummary>,
     pub study: Option<String>,
+    /// Settings of the study that the method does not use (a collocation
+    /// study solved with `--method shooting`).
+    pub ignored_study_settings: Vec<String>,
     pub model: String,
     pub output_files: Vec<String>,
 }
@@ -358,6 +364,12 @@ fn run_shooting(
         opts.accuracy, opts.finite_difference_step, opts.threads
     ));
     let mut sh = Shooting::new(ocp.clone(), opts)?;
+    if !config.ignored.is_empty() {
+        progress(&format!(
+            "method shooting ignores the study's {}",
+            config.ignored.join(", ")
+        ));
+    }
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang | GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang excitations at the nodes");
@@ -394,11 +406,9 @@ fn run_shooting(
         Ok(v) => v.into_iter().fold(0.0, f64::max),
         Err(_) => f64::NAN,
     };
-    let (nodes, traj) = sh.trajectory(&result.x).map_err(|e| {
-        SolveError::Transcription(TranscriptionError::Guess(format!(
-            "the last iterate does not integrate: {e}"
-        )))
-    })?;
+    let (nodes, traj) = sh
+        .trajectory(&result.x)
+        .map_err(|e| SolveError::Solution(format!("the last iterate does not integrate: {e}")))?;
     let tf = sh.final_time(&result.x);
     let h = tf / big_n as f64;
     let nu = ocp.nu();
@@ -413,6 +423,7 @@ fn run_shooting(
     report.guess_jump_height_m = guess_jump;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
+    report.ignored_study_settings = config.ignored.clone();
     let grf = (traj.time.as_slice(), traj.grf.as_slice());
     finish(config, &ocp, &mesh, &result, report, grf, progress)
 }
@@ -700,6 +711,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
         hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
+        ignored_study_settings: Vec::new(),
         model: String::new(),
         output_files: Vec::new(),
     }

@@ -290,6 +290,16 @@ pub struct SolveConfig {
     /// Whether the study named `hessian_eigenvalue_floor` (else a scheme
     /// given on the command line brings its own default floor).
     pub eigenvalue_floor_given: bool,
+    /// Whether the study named `hessian` (else `--method` brings the
+    /// method's default: exact for collocation, BFGS for shooting).
+    pub hessian_given: bool,
+    /// Settings the study names that the method does not use (a
+    /// collocation study solved with `--method shooting`); `leap solve`
+    /// lists them.
+    pub ignored: Vec<String>,
+    /// The collocation-only settings the study names (fields), for
+    /// `ignored` when `--method shooting` overrides it.
+    collocation_named: Vec<&'static str>,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -387,15 +397,33 @@ impl SolveStudy {
             }
             shooting.finite_difference_step = d;
         }
-        if method == Method::Shooting {
-            for (given, field) in [
-                (self.mesh.scheme.is_some(), "mesh.scheme"),
-                (self.mesh.fiber_dynamics.is_some(), "mesh.fiber_dynamics"),
-            ] {
-                if given {
+        let resampled = self.guess.as_deref() == Some("bang-bang-resampled");
+        let mut collocation_named = Vec::new();
+        for (given, field) in [
+            (self.mesh.scheme.is_some(), "mesh.scheme"),
+            (self.mesh.fiber_dynamics.is_some(), "mesh.fiber_dynamics"),
+            (resampled, "guess"),
+            (
+                self.hessian.as_deref().is_some_and(|h| h != "bfgs"),
+                "hessian",
+            ),
+            (
+                self.hessian_eigenvalue_floor.is_some(),
+                "hessian_eigenvalue_floor",
+            ),
+        ] {
+            if given {
+                if method == Method::Shooting {
                     return Err(err(field, COLLOCATION_ONLY.into()));
                 }
+                collocation_named.push(field);
             }
+        }
+        if method == Method::Collocation && self.shooting != ShootingSpec::default() {
+            return Err(err(
+                "shooting",
+                "applies to method 'shooting'; this study's method is 'collocation'".into(),
+            ));
         }
 
         let model = match &self.model {
@@ -567,6 +595,9 @@ impl SolveStudy {
             output_directory,
             forward_check,
             eigenvalue_floor_given: self.hessian_eigenvalue_floor.is_some(),
+            hessian_given: self.hessian.is_some(),
+            ignored: Vec::new(),
+            collocation_named,
         })
     }
 }
@@ -596,15 +627,37 @@ impl SolveConfig {
             self.output_directory = d.clone();
         }
         if let Some(m) = &o.method {
-            self.method = parse_method(m).map_err(|r| err("--method", r))?;
-            if self.method == Method::Shooting && o.hessian.is_none() {
-                self.settings.hessian = HessianMode::PartitionedBfgs;
+            let method = parse_method(m).map_err(|r| err("--method", r))?;
+            if method != self.method {
+                self.method = method;
+                if !self.hessian_given && o.hessian.is_none() {
+                    self.settings.hessian = match method {
+                        Method::Collocation => HessianMode::ExactConvexified,
+                        Method::Shooting => HessianMode::PartitionedBfgs,
+                    };
+                }
+                if method == Method::Shooting {
+                    // The study's collocation settings: listed, not used.
+                    self.ignored = self
+                        .collocation_named
+                        .iter()
+                        .map(|f| f.to_string())
+                        .collect();
+                    if self.ignored.iter().any(|f| f == "hessian") && o.hessian.is_none() {
+                        self.settings.hessian = HessianMode::PartitionedBfgs;
+                    }
+                    if self.guess == GuessChoice::BangBangResampled {
+                        self.guess = GuessChoice::BangBang;
+                    }
+                }
             }
         }
         if self.method == Method::Shooting {
+            let resampled = o.guess.as_deref() == Some("bang-bang-resampled");
             for (given, option) in [
                 (o.scheme.is_some(), "--scheme"),
                 (o.fiber_dynamics.is_some(), "--fiber-dynamics"),
+                (resampled, "--guess"),
             ] {
                 if given {
                     return Err(err(option, COLLOCATION_ONLY.into()));

@@ -596,13 +596,13 @@ fn num_mesh_intervals_beyond_the_maximum_is_refused_without_a_panic() {
     }
 }
 
-/// `leap solve --method shooting` on the reduced model (8 intervals, 2
-/// iterations): the problem's size, every file in `--out`, node 0 at the
-/// squat, and the forward check. A shooting point is an integration of the
-/// model, so the Simbody forward check (OpenSim's activation switch and
-/// paths, not the optimizer's smoothed ones) must agree within 1 cm after
-/// any number of iterations, and the peak force over every integrator step
-/// is at least the peak over the nodes.
+/// `leap solve --method shooting` on the reduced collocation study (8
+/// intervals, 2 iterations): the problem's size, the study's collocation
+/// settings listed as ignored, every file in `--out`, and the forward
+/// check. A shooting point is an integration of the model, so the Simbody
+/// forward check (OpenSim's activation switch and paths, not the
+/// optimizer's smoothed ones) must agree within 1 cm after any number of
+/// iterations.
 #[test]
 fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     let out = fresh_dir("shooting_out");
@@ -634,9 +634,11 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     assert_eq!(v["hessian"], "partitioned_bfgs", "{v}");
     let d = v["forward_check_difference_m"].as_f64().unwrap();
     assert!(d.abs() < 0.01, "forward check {d} m from the prediction");
-    let peak = v["peak_vertical_grf_bw"].as_f64().unwrap();
-    let peak_nodes = v["peak_vertical_grf_nodes_bw"].as_f64().unwrap();
-    assert!(peak >= peak_nodes, "{peak} < {peak_nodes}");
+    assert_eq!(
+        v["ignored_study_settings"],
+        serde_json::json!(["mesh.scheme", "hessian"]),
+        "{v}"
+    );
     let expected = [
         "jump_reduced_forward_controls.sto",
         "jump_reduced_forward_grf.mot",
@@ -651,16 +653,6 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     assert_eq!(sol.time.len(), 9);
     let tf = v["final_time_s"].as_f64().unwrap();
     assert!((sol.time[8] - tf).abs() < 1e-12);
-    let states = StoTable::read(&out.join("jump_reduced_forward_states.sto")).unwrap();
-    let squat = &states.rows[0];
-    let k = sol.labels.len().min(squat.len());
-    for (i, (a, b)) in sol.rows[0][..k].iter().zip(&squat[..k]).enumerate() {
-        assert!(
-            (a - b).abs() < 1e-9,
-            "node 0 {}: {a} against the squat's {b}",
-            sol.labels[i]
-        );
-    }
     let grf = StoTable::read(&out.join("jump_reduced_grf.mot")).unwrap();
     assert!(grf.time.len() > 9, "{} rows", grf.time.len());
     let _ = std::fs::remove_dir_all(&out);

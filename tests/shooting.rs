@@ -1,8 +1,10 @@
 //! Direct shooting ([`leap::shooting`]), the paper's first method, on the
 //! reduced model (10 muscles per side): its integration against one
-//! continuous integration, its Jacobian against difference quotients of
-//! whole integrations, its default difference quotients against accurate
-//! ones, and a reduced solve through `leap solve`'s path.
+//! continuous integration, its rows against collocation's at the same
+//! nodes, its Jacobian against difference quotients of whole integrations,
+//! its default difference quotients against accurate ones, and the study
+//! settings that go with it. `tests/cli_solve.rs` runs a reduced solve
+//! through `leap solve`.
 
 use leap::integrator::{Dopri5, Dopri5Options, OdeSystem};
 use leap::nlp::Nlp;
@@ -261,4 +263,114 @@ fn bad_shooting_settings_are_refused() {
     v[3] = f64::NAN;
     let e = sh.objective(&v).unwrap_err().to_string();
     assert!(e.contains("not finite"), "{e}");
+}
+
+/// Both methods solve the same problem: at the node states of a shooting
+/// integration and its node excitations, collocation's no-countermovement,
+/// lift-off and no-descent rows and its objective equal shooting's (the
+/// same quantities at the same nodes).
+#[test]
+fn shooting_rows_are_collocations_rows_at_the_same_nodes() {
+    use leap::transcription::{FiberDynamics, Scheme, Transcription, TranscriptionOptions};
+    let big_n = 8;
+    let ocp = reduced_ocp(big_n);
+    let (mut sh, v) = shooting(
+        &ocp,
+        ShootingOptions {
+            num_intervals: big_n,
+            ..Default::default()
+        },
+    );
+    let nodes = sh.evaluate(&v).unwrap().clone();
+    let tf = sh.final_time(&v);
+    let nu = ocp.nu();
+    let time: Vec<f64> = (0..=big_n).map(|k| k as f64 * tf / big_n as f64).collect();
+    let controls: Vec<Vec<f64>> = sh
+        .node_controls(&v)
+        .chunks(nu)
+        .map(<[f64]>::to_vec)
+        .collect();
+    let mut tr = Transcription::new(
+        ocp.clone(),
+        TranscriptionOptions {
+            num_mesh_intervals: big_n,
+            scheme: Scheme::MidpointEuler,
+            fiber_dynamics: FiberDynamics::Explicit,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let x = tr
+        .guess_from_trajectory(&time, &nodes.states, &controls, tf)
+        .unwrap();
+    let mut c_tr = vec![0.0; tr.num_constraints()];
+    tr.constraints(&x, &mut c_tr).unwrap();
+    let mut c_sh = vec![0.0; sh.num_constraints()];
+    sh.constraints(&v, &mut c_sh).unwrap();
+    let rows: Vec<usize> = tr
+        .no_countermovement_rows()
+        .chain([tr.liftoff_row()])
+        .chain(tr.no_descent_rows())
+        .collect();
+    assert_eq!(rows.len(), 7 + 1 + big_n);
+    for (i, &r) in rows.iter().enumerate() {
+        let (a, b) = (c_tr[r], c_sh[i]);
+        assert!(
+            (a - b).abs() <= 1e-9 * (1.0 + a.abs()),
+            "{}: collocation {a}, shooting {b}",
+            sh.constraint_name(i)
+        );
+    }
+    let (jt, js) = (tr.objective(&x).unwrap(), sh.objective(&v).unwrap());
+    assert!((jt - js).abs() <= 1e-12, "{jt} against {js}");
+}
+
+/// Study settings with method "shooting": a collocation setting in a
+/// shooting study is refused naming it; `--method shooting` on a
+/// collocation study lists the study's collocation settings as ignored and
+/// takes BFGS; `--method collocation` on a shooting study takes the exact
+/// Hessian back; the resampled guess is collocation's.
+#[test]
+fn shooting_study_settings_combine_as_documented() {
+    use leap::sqp::HessianMode;
+    use leap::study::{Method, Overrides, SolveStudy};
+    let parse = |text: &str| SolveStudy::from_json_str(text, "s.json").unwrap();
+    let refused = |text: &str| parse(text).resolve(None).unwrap_err().to_string();
+    let e = refused(r#"{"method": "shooting", "guess": "bang-bang-resampled"}"#);
+    assert!(e.contains("guess") && e.contains("collocation"), "{e}");
+    let e = refused(r#"{"method": "shooting", "hessian_eigenvalue_floor": 1e-3}"#);
+    assert!(e.contains("hessian_eigenvalue_floor"), "{e}");
+    let e = refused(r#"{"shooting": {"finite_difference_step": 1e-4}}"#);
+    assert!(e.contains("shooting") && e.contains("'collocation'"), "{e}");
+
+    let mut c = parse(r#"{"mesh": {"scheme": "trapezoidal"}, "hessian": "exact"}"#)
+        .resolve(None)
+        .unwrap();
+    c.apply(&Overrides {
+        method: Some("shooting".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    assert_eq!(c.method, Method::Shooting);
+    assert_eq!(c.settings.hessian, HessianMode::PartitionedBfgs);
+    assert_eq!(c.ignored, ["mesh.scheme", "hessian"]);
+
+    let mut c = parse(r#"{"method": "shooting"}"#).resolve(None).unwrap();
+    assert_eq!(c.settings.hessian, HessianMode::PartitionedBfgs);
+    c.apply(&Overrides {
+        method: Some("collocation".into()),
+        ..Default::default()
+    })
+    .unwrap();
+    assert_eq!(c.settings.hessian, HessianMode::ExactConvexified);
+
+    let mut c = parse(r#"{"method": "shooting"}"#).resolve(None).unwrap();
+    let e = c
+        .apply(&Overrides {
+            guess: Some("bang-bang-resampled".into()),
+            ..Default::default()
+        })
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("--guess"), "{e}");
 }
