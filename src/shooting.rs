@@ -729,7 +729,7 @@ impl Nlp for Shooting {
         Ok(-self.evaluate(x)?.objective)
     }
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
-        g.copy_from_slice(&self.difference_quotients(x)?.0);
+        g.copy_from_slice(self.difference_quotients(x)?.0);
         Ok(())
     }
     fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
@@ -743,7 +743,7 @@ impl Nlp for Shooting {
         self.structure.clone()
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        values.copy_from_slice(&self.difference_quotients(x)?.1);
+        values.copy_from_slice(self.difference_quotients(x)?.1);
         Ok(())
     }
     fn variable_name(&self, i: usize) -> String {
