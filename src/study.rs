@@ -61,6 +61,9 @@ pub const METHODS: [&str; 2] = ["collocation", "shooting"];
 /// Why a collocation setting is refused with method "shooting".
 const COLLOCATION_ONLY: &str = "applies to method 'collocation'; method 'shooting' integrates the state equation (explicit fibre dynamics) with Dormand–Prince 5(4)";
 
+/// Why an exact-Hessian setting is refused with method "shooting".
+const NO_EXACT_HESSIAN: &str = "method 'shooting' has no exact Hessian (its central differences give first derivatives only); use 'bfgs'";
+
 /// How the jump problem is transcribed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -414,7 +417,12 @@ impl SolveStudy {
         ] {
             if given {
                 if method == Method::Shooting {
-                    return Err(err(field, COLLOCATION_ONLY.into()));
+                    let reason = if field.starts_with("hessian") {
+                        NO_EXACT_HESSIAN
+                    } else {
+                        COLLOCATION_ONLY
+                    };
+                    return Err(err(field, reason.into()));
                 }
                 collocation_named.push(field);
             }
@@ -756,7 +764,7 @@ fn parse_method(method: &str) -> Result<Method, String> {
 /// Hessian is BFGS.
 fn check_method_hessian(method: Method, settings: &SqpSettings) -> Result<(), String> {
     if method == Method::Shooting && settings.hessian != HessianMode::PartitionedBfgs {
-        return Err("method 'shooting' has no exact Hessian (its central differences give first derivatives only); use 'bfgs'".into());
+        return Err(NO_EXACT_HESSIAN.into());
     }
     Ok(())
 }
