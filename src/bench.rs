@@ -958,10 +958,7 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
     sh.gradient(&v, &mut g).map_err(|e| e.to_string())?;
     let jacobian_integrations = sh.counters.difference_simulations - before.difference_simulations;
     let jacobian_f_evals = sh.counters.f_evals - before.f_evals;
-    let settings = crate::sqp::SqpSettings {
-        hessian: crate::sqp::HessianMode::PartitionedBfgs,
-        ..settings
-    };
+    let settings = crate::shooting::sqp_settings(&settings);
     let size = (
         sh.num_variables(),
         sh.num_constraints(),

@@ -392,7 +392,7 @@ fn run_shooting(
         file: dir.clone(),
         error,
     })?;
-    let mut settings = config.settings.clone();
+    let mut settings = crate::shooting::sqp_settings(&config.settings);
     settings.verbose = verbose;
     progress(&format!(
         "SQP: {} variables, {} constraints ({} Jacobian entries), at most {} iterations, BFGS",

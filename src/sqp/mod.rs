@@ -262,6 +262,11 @@ pub struct SqpSettings {
     /// The violation above which [`SqpSettings::stall_iterations`] counts
     /// (default 1e-3, the paper's constraint tolerance).
     pub stall_violation: f64,
+    /// BFGS's first scaling of the identity: false (default) Shanno and
+    /// Phua's yᵀy/sᵀy, the largest curvature the first step saw; true
+    /// Oren and Luenberger's sᵀy/sᵀs, the curvature along the step, never
+    /// larger.
+    pub bfgs_scaling_along_step: bool,
 }
 
 impl Default for SqpSettings {
@@ -298,6 +303,7 @@ impl Default for SqpSettings {
             trust_region_ratio: true,
             stall_iterations: 50,
             stall_violation: 1e-3,
+            bfgs_scaling_along_step: false,
         }
     }
 }
@@ -923,7 +929,14 @@ fn convexify_elements(
 
 /// Damped BFGS update of B (k×k row-major) with step s and gradient
 /// change y (Powell 1978). Returns false when skipped.
-fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool, floor: f64) -> bool {
+fn bfgs_update(
+    b: &mut [f64],
+    s: &[f64],
+    y: &[f64],
+    first: &mut bool,
+    floor: f64,
+    along_step: bool,
+) -> bool {
     let k = s.len();
     let ss: f64 = s.iter().map(|v| v * v).sum();
     if ss < 1e-300 {
@@ -937,7 +950,7 @@ fn bfgs_update(b: &mut [f64], s: &[f64], y: &[f64], first: &mut bool, floor: f64
         // and a larger limit caps the steps at ‖g‖/limit.
         let yy: f64 = y.iter().map(|v| v * v).sum();
         if sy > 1e-12 * ss.sqrt() * yy.sqrt() && sy > 0.0 {
-            let gamma = (yy / sy).clamp(floor, 1e6);
+            let gamma = if along_step { sy / ss } else { yy / sy }.clamp(floor, 1e6);
             for a in 0..k {
                 for c in 0..k {
                     b[a * k + c] = if a == c { gamma } else { 0.0 };
@@ -1528,6 +1541,7 @@ impl<'s> Solver<'s> {
                         &y,
                         &mut self.bfgs_first[e],
                         self.settings.eigenvalue_floor,
+                        self.settings.bfgs_scaling_along_step,
                     ) {
                         *skips += 1;
                     }
