@@ -2358,6 +2358,36 @@ mod tests {
         assert!(stalled(&near, 10, 1e-4).is_some());
     }
 
+    /// The first BFGS update scales the identity by Shanno–Phua's yᵀy/sᵀy
+    /// or, along the step, by Oren–Luenberger's sᵀy/sᵀs: a direction
+    /// orthogonal to s and y keeps that curvature, and the secant equation
+    /// B s = y holds (an undamped update: sᵀy ≥ 0.2 sᵀBs).
+    #[test]
+    fn first_bfgs_update_scales_the_identity_as_chosen() {
+        let s = [1.0, 0.0, 0.0];
+        let y = [2.0, 1.0, 0.0];
+        let (ss, sy, yy) = (1.0, 2.0, 5.0);
+        for (along, gamma) in [(false, yy / sy), (true, sy / ss)] {
+            let mut b = vec![0.0; 9];
+            for i in 0..3 {
+                b[i * 3 + i] = 1.0;
+            }
+            let mut first = true;
+            assert!(bfgs_update(&mut b, &s, &y, &mut first, 1e-8, along));
+            assert!(!first);
+            // e_3 is orthogonal to s and y.
+            assert!(
+                (b[8] - gamma).abs() < 1e-12,
+                "{along}: {} against {gamma}",
+                b[8]
+            );
+            for r in 0..3 {
+                let bs: f64 = (0..3).map(|c| b[r * 3 + c] * s[c]).sum();
+                assert!((bs - y[r]).abs() < 1e-12, "{along}: (Bs)_{r} = {bs}");
+            }
+        }
+    }
+
     #[test]
     fn median_of_odd_and_even_counts() {
         assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
