@@ -105,8 +105,7 @@ impl Row {
 /// Per node: the state, Ÿ_C, F_y/(m g), Ẏ_C and Y_C.
 #[derive(Debug, Clone, Default)]
 pub struct NodeValues {
-    /// The first node held (earlier nodes are not part of this run).
-    pub first: usize,
+    /// From the run's first node on.
     pub states: Vec<Vec<f64>>,
     pub com_acceleration: Vec<f64>,
     pub vertical_force_bw: Vec<f64>,
@@ -399,10 +398,7 @@ impl Shooting {
             max_step: h,
             max_steps: 200_000,
         };
-        let mut out = NodeValues {
-            first,
-            ..Default::default()
-        };
+        let mut out = NodeValues::default();
         let mut xdot = vec![0.0; nx];
         let mut node = |out: &mut NodeValues,
                         ws: &mut StateWorkspace<f64>,
@@ -546,7 +542,10 @@ impl Shooting {
     /// Central differences of every node quantity and J in every variable.
     fn compute_quotients(&mut self, v: &[f64]) -> Result<(), EvalError> {
         let started = std::time::Instant::now();
-        let nominal = self.evaluate(v)?.clone();
+        self.evaluate(v)?;
+        let Some((_, nominal)) = &self.nominal else {
+            return Err(EvalError::new("jacobian", "no integration at this point"));
+        };
         let (nx, nu) = (self.ocp.nx(), self.ocp.nu());
         let big_n = self.options.num_intervals;
         let n = self.num_variables();
@@ -733,9 +732,15 @@ impl Nlp for Shooting {
         Ok(())
     }
     fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
-        let nv = self.evaluate(x)?.clone();
+        self.evaluate(x)?;
+        let Some((_, nv)) = &self.nominal else {
+            return Err(EvalError::new(
+                "constraints",
+                "no integration at this point",
+            ));
+        };
         for (r, &row) in self.rows.iter().enumerate() {
-            c[r] = self.row_value(&nv, row);
+            c[r] = self.row_value(nv, row);
         }
         Ok(())
     }
