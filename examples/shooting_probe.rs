@@ -1,7 +1,8 @@
 //! Difference quotients of the shooting transcription at the bang-bang
-//! guess under several integrator accuracies and steps: `cargo run
-//! --release --example shooting_probe -- N` prints each gradient's distance
-//! from the most accurate one, and the cost of a pass.
+//! guess under several integrator accuracies and steps, then its forward
+//! sensitivities at several accuracies: `cargo run --release --example
+//! shooting_probe -- N` prints each gradient's distance from the most
+//! accurate quotients (accuracy 1e-12, step 1e-5), and the cost of a pass.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() {
@@ -17,23 +18,35 @@ fn main() {
         ..Default::default()
     };
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, opts).expect("jump problem"));
-    let settings = [
-        (1e-12, 1e-5),
-        (1e-8, 1e-3),
-        (1e-8, 1e-4),
-        (1e-9, 1e-4),
-        (1e-10, 1e-4),
-        (1e-9, 3e-4),
-        (1e-10, 3e-5),
+    use leap::shooting::ShootingDerivatives::{CentralDifference, ForwardSensitivity};
+    let mut settings = vec![
+        (1e-12, 1e-5, CentralDifference),
+        (1e-12, 1e-4, CentralDifference),
+        (1e-8, 1e-3, CentralDifference),
+        (1e-8, 1e-4, CentralDifference),
+        (1e-10, 1e-4, CentralDifference),
+        (1e-6, 0.0, ForwardSensitivity),
+        (1e-8, 0.0, ForwardSensitivity),
+        (1e-10, 0.0, ForwardSensitivity),
+        (1e-12, 0.0, ForwardSensitivity),
     ];
+    // REFERENCE=sensitivity: distances from the sensitivities at 1e-12.
+    if std::env::var("REFERENCE").as_deref() == Ok("sensitivity") {
+        settings.rotate_right(1);
+    }
+    // QUICK=1: only the default quotients and the sensitivities.
+    if std::env::var_os("QUICK").is_some() {
+        settings.retain(|&(a, d, _)| d == 0.0 || (a == 1e-8 && d == 1e-3));
+    }
     let mut reference: Option<(Vec<f64>, Vec<f64>)> = None;
-    for (acc, delta) in settings {
+    for (acc, delta, derivatives) in settings {
         let mut sh = leap::shooting::Shooting::new(
             ocp.clone(),
             leap::shooting::ShootingOptions {
                 num_intervals: n,
                 accuracy: acc,
-                finite_difference_step: delta,
+                finite_difference_step: if delta > 0.0 { delta } else { 1e-3 },
+                derivatives,
                 ..Default::default()
             },
         )
@@ -70,8 +83,23 @@ fn main() {
             .zip(jr.iter())
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
+        if std::env::var_os("WORST").is_some() {
+            let st = sh.jacobian_structure();
+            let mut idx: Vec<usize> = (0..jac.len()).collect();
+            idx.sort_by(|&a, &b| (jac[b] - jr[b]).abs().total_cmp(&(jac[a] - jr[a]).abs()));
+            for &e in idx.iter().take(8) {
+                let (r, c) = st[e];
+                println!(
+                    "  {} / {}: {:.6e} against {:.6e}",
+                    sh.constraint_name(r),
+                    sh.variable_name(c),
+                    jac[e],
+                    jr[e]
+                );
+            }
+        }
         println!(
-            "accuracy {acc:e} step {delta:e}: pass {secs:.2} s, f evals {}, gradient rel. error {:.2e}, Jacobian rel. error {:.2e}, largest entry error {:.2e}",
+            "{derivatives:?} accuracy {acc:e} step {delta:e}: pass {secs:.2} s, f evals {}, gradient rel. error {:.2e}, Jacobian rel. error {:.2e}, largest entry error {:.2e}",
             sh.counters.f_evals,
             rel(&g, gr),
             rel(&jac, jr),

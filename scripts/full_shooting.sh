@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
-# The paper's two methods on the full 29-node jump: direct shooting from the
-# default collocation solve's excitations against the collocation solve
-# (solved, violation within 1e-3, forward check and the two methods within
-# 1 cm): about 25 minutes on 2 cores. Prints both solves' summary lines.
+# The paper's two methods on the full 29-node jump, both from the bang-bang
+# guess: direct shooting (forward sensitivities) against the collocation
+# solve (solved, violation within 1e-3, forward check and the two methods
+# within 1 cm): about 15 minutes on 2 cores. Prints both solves' summary
+# lines.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh

@@ -868,11 +868,26 @@ pub struct MethodsReport {
     /// right-hand-side evaluations.
     pub shooting_integration_s: f64,
     pub shooting_integration_f_evals: usize,
-    /// Integrations per central-difference Jacobian (each from its
-    /// column's node), and right-hand-side evaluations per Jacobian.
-    pub shooting_jacobian_integrations: usize,
-    pub shooting_jacobian_f_evals: usize,
+    /// One shooting Jacobian (at the bang-bang guess) with each kind of
+    /// derivatives.
+    pub shooting_jacobians: Vec<ShootingJacobianCost>,
+    /// The study's shooting settings (the derivatives: both, as above).
     pub shooting: crate::shooting::ShootingOptions,
+}
+
+/// The work of one shooting Jacobian.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ShootingJacobianCost {
+    pub derivatives: &'static str,
+    /// Central differences: integrations, each from its column's node.
+    pub integrations: usize,
+    /// Forward sensitivities: integrator steps replayed, and point
+    /// Jacobians ∂f/∂(x, u) (one per stage and per node).
+    pub steps_replayed: usize,
+    pub point_jacobians: usize,
+    /// Right-hand-side evaluations (f64) and wall time.
+    pub f_evals: usize,
+    pub seconds: f64,
 }
 
 /// Porsa et al. (2016), Table 2: collocation 702 iterations in 3.4 h of
@@ -909,8 +924,9 @@ fn method_row(
 /// The first `iterations` SQP iterations of each method on the built-in
 /// study's jump from the bang-bang guess (collocation: the study's
 /// transcription, exact Hessians; shooting: Dormand–Prince at the default
-/// accuracy, central differences, BFGS), per iteration against the
-/// paper's CPU time per iteration.
+/// accuracy, BFGS, once with central differences and once with forward
+/// sensitivities), per iteration against the paper's CPU time per
+/// iteration.
 pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String> {
     use crate::nlp::Nlp;
     let config = crate::study::SolveConfig::builtin().map_err(|e| e.to_string())?;
@@ -934,45 +950,80 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
         &r.history,
         PAPER_COLLOCATION_S_PER_ITERATION,
     );
-    // Shooting.
-    let options = crate::shooting::ShootingOptions {
-        num_intervals: config.transcription.num_mesh_intervals,
-        ..config.shooting
-    };
-    let mut sh = crate::shooting::Shooting::new(ocp, options).map_err(|e| e.to_string())?;
-    let (v, _) = sh.bang_bang_guess().map_err(|e| e.to_string())?;
-    let mut times = Vec::new();
-    let mut f_evals = 0;
-    for k in 0..5 {
-        let mut p = v.clone();
-        let last = p.len() - 1;
-        p[last] += 1e-9 * k as f64;
-        let before = sh.counters.f_evals;
-        let t = std::time::Instant::now();
-        sh.evaluate(&p).map_err(|e| e.to_string())?;
-        times.push(t.elapsed().as_secs_f64());
-        f_evals = sh.counters.f_evals - before;
+    // Shooting, with each kind of derivatives.
+    let mut rows = vec![collocation];
+    let mut jacobians = Vec::new();
+    let mut integration = (f64::NAN, 0);
+    for derivatives in [
+        crate::shooting::ShootingDerivatives::CentralDifference,
+        crate::shooting::ShootingDerivatives::ForwardSensitivity,
+    ] {
+        let options = crate::shooting::ShootingOptions {
+            num_intervals: config.transcription.num_mesh_intervals,
+            derivatives,
+            ..config.shooting
+        };
+        let mut sh =
+            crate::shooting::Shooting::new(ocp.clone(), options).map_err(|e| e.to_string())?;
+        let (v, _) = sh.bang_bang_guess().map_err(|e| e.to_string())?;
+        if integration.1 == 0 {
+            let mut times = Vec::new();
+            for k in 0..5 {
+                let mut p = v.clone();
+                let last = p.len() - 1;
+                p[last] += 1e-9 * k as f64;
+                let before = sh.counters.f_evals;
+                let t = std::time::Instant::now();
+                sh.evaluate(&p).map_err(|e| e.to_string())?;
+                times.push(t.elapsed().as_secs_f64());
+                integration.1 = sh.counters.f_evals - before;
+            }
+            integration.0 = median(times);
+        }
+        sh.evaluate(&v).map_err(|e| e.to_string())?;
+        let before = sh.counters;
+        let mut g = vec![0.0; sh.num_variables()];
+        sh.gradient(&v, &mut g).map_err(|e| e.to_string())?;
+        let c = sh.counters;
+        jacobians.push(ShootingJacobianCost {
+            derivatives: derivatives.name(),
+            integrations: c.difference_simulations - before.difference_simulations,
+            steps_replayed: c.sensitivity_steps - before.sensitivity_steps,
+            point_jacobians: c.point_jacobians - before.point_jacobians,
+            f_evals: c.f_evals - before.f_evals,
+            seconds: c.jacobian_seconds - before.jacobian_seconds,
+        });
+        let settings = crate::shooting::sqp_settings(&settings);
+        let size = (
+            sh.num_variables(),
+            sh.num_constraints(),
+            sh.jacobian_structure().len(),
+        );
+        let r = crate::sqp::solve_from(&mut sh, &v, &settings);
+        let label = match derivatives {
+            crate::shooting::ShootingDerivatives::CentralDifference => {
+                "shooting, central differences"
+            }
+            crate::shooting::ShootingDerivatives::ForwardSensitivity => {
+                "shooting, forward sensitivities"
+            }
+        };
+        rows.push(method_row(
+            label,
+            size,
+            &r.history,
+            PAPER_SHOOTING_S_PER_ITERATION,
+        ));
     }
-    let before = sh.counters;
-    let mut g = vec![0.0; sh.num_variables()];
-    sh.gradient(&v, &mut g).map_err(|e| e.to_string())?;
-    let jacobian_integrations = sh.counters.difference_simulations - before.difference_simulations;
-    let jacobian_f_evals = sh.counters.f_evals - before.f_evals;
-    let settings = crate::shooting::sqp_settings(&settings);
-    let size = (
-        sh.num_variables(),
-        sh.num_constraints(),
-        sh.jacobian_structure().len(),
-    );
-    let r = crate::sqp::solve_from(&mut sh, &v, &settings);
-    let shooting = method_row("shooting", size, &r.history, PAPER_SHOOTING_S_PER_ITERATION);
     Ok(MethodsReport {
-        rows: vec![collocation, shooting],
-        shooting_integration_s: median(times),
-        shooting_integration_f_evals: f_evals,
-        shooting_jacobian_integrations: jacobian_integrations,
-        shooting_jacobian_f_evals: jacobian_f_evals,
-        shooting: options,
+        rows,
+        shooting_integration_s: integration.0,
+        shooting_integration_f_evals: integration.1,
+        shooting_jacobians: jacobians,
+        shooting: crate::shooting::ShootingOptions {
+            num_intervals: config.transcription.num_mesh_intervals,
+            ..config.shooting
+        },
     })
 }
 
@@ -1009,21 +1060,39 @@ impl MethodsReport {
                 format!("{:.0}", r.paper_iteration_s / r.iteration_s),
             ]);
         }
-        let ratio = match (self.rows.first(), self.rows.get(1)) {
-            (Some(c), Some(s)) => s.iteration_s / c.iteration_s,
-            _ => f64::NAN,
-        };
-        format!(
-            "the 29-node jump, per SQP iteration (medians over the first iterations from the bang-bang guess; wall time on this machine against the paper's CPU time, Porsa et al. 2016 Table 2)\n{t}\n  shooting: one push-off integration {:.3} s ({} f evaluations, Dormand–Prince at {:e}); one Jacobian {} integrations from each column's node ({} f evaluations), central differences of step {:e} on {} threads\n  a shooting iteration costs {:.0} collocation iterations (the paper: {:.0})\n",
+        let ratio = |r: &MethodRow| r.iteration_s / self.rows[0].iteration_s;
+        let mut text = format!(
+            "the 29-node jump, per SQP iteration (medians over the first iterations from the bang-bang guess; wall time on this machine against the paper's CPU time, Porsa et al. 2016 Table 2)\n{t}\n  shooting: one push-off integration {:.3} s ({} f evaluations, Dormand–Prince at {:e}) on {} threads\n",
             self.shooting_integration_s,
             self.shooting_integration_f_evals,
             self.shooting.accuracy,
-            self.shooting_jacobian_integrations,
-            self.shooting_jacobian_f_evals,
-            self.shooting.finite_difference_step,
             self.shooting.threads,
-            ratio,
-            PAPER_SHOOTING_S_PER_ITERATION / PAPER_COLLOCATION_S_PER_ITERATION
-        )
+        );
+        for j in &self.shooting_jacobians {
+            let work = if j.integrations > 0 {
+                format!(
+                    "{} integrations from each column's node, step {:e}",
+                    j.integrations, self.shooting.finite_difference_step
+                )
+            } else {
+                format!(
+                    "{} steps replayed, {} point Jacobians",
+                    j.steps_replayed, j.point_jacobians
+                )
+            };
+            text += &format!(
+                "  one {} Jacobian: {:.2} s, {work}, {} f evaluations\n",
+                j.derivatives, j.seconds, j.f_evals
+            );
+        }
+        for r in self.rows.iter().skip(1) {
+            text += &format!(
+                "  an iteration of {} costs {:.1} collocation iterations (the paper's shooting: {:.0})\n",
+                r.method,
+                ratio(r),
+                PAPER_SHOOTING_S_PER_ITERATION / PAPER_COLLOCATION_S_PER_ITERATION
+            );
+        }
+        text
     }
 }

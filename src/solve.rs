@@ -29,7 +29,7 @@ use crate::io::{Controls, StoError, StoTable};
 use crate::model::{Model, ModelError};
 use crate::nlp::Nlp;
 use crate::ocp::{JumpOcp, OcpError, OcpOptions, FIBER_CLAMP_BAND};
-use crate::shooting::{NodeValues, Shooting, ShootingOptions};
+use crate::shooting::{NodeValues, Shooting, ShootingDerivatives, ShootingOptions};
 use crate::simulate::{
     grf_of, grf_table, simulate_rust, simulate_simbody, write_trajectory, JumpSummary,
     SimulateOptions,
@@ -117,6 +117,17 @@ pub struct ForwardCheckReport {
     pub errors: Vec<String>,
 }
 
+/// A shooting solve's derivative settings and evaluation counts.
+#[derive(Debug, Clone, Serialize)]
+pub struct ShootingSummary {
+    /// "central-difference" or "forward-sensitivity".
+    pub derivatives: &'static str,
+    pub integrator_accuracy: f64,
+    /// The central-difference step (None with forward sensitivities).
+    pub finite_difference_step: Option<f64>,
+    pub counters: crate::shooting::ShootingCounters,
+}
+
 /// What `leap solve` reports (the `--json` object and `<name>_summary.json`).
 #[derive(Debug, Clone, Serialize)]
 pub struct SolveReport {
@@ -202,6 +213,8 @@ pub struct SolveReport {
     /// Settings of the study that the method does not use (a collocation
     /// study solved with `--method shooting`).
     pub ignored_study_settings: Vec<String>,
+    /// Method "shooting": its derivatives and the work they took.
+    pub shooting: Option<ShootingSummary>,
     pub model: String,
     pub output_files: Vec<String>,
 }
@@ -359,9 +372,18 @@ fn run_shooting(
         num_intervals: big_n,
         ..config.shooting
     };
+    let derivatives = match opts.derivatives {
+        ShootingDerivatives::CentralDifference => {
+            format!(
+                "central differences of step {:e}",
+                opts.finite_difference_step
+            )
+        }
+        ShootingDerivatives::ForwardSensitivity => "forward sensitivities".to_string(),
+    };
     progress(&format!(
-        "direct shooting: {big_n} control intervals, Dormand–Prince 5(4) at accuracy {:e}, central differences of step {:e} on {} threads",
-        opts.accuracy, opts.finite_difference_step, opts.threads
+        "direct shooting: {big_n} control intervals, Dormand–Prince 5(4) at accuracy {:e}, {derivatives} on {} threads",
+        opts.accuracy, opts.threads
     ));
     let mut sh = Shooting::new(ocp.clone(), opts)?;
     if !config.ignored.is_empty() {
@@ -424,6 +446,14 @@ fn run_shooting(
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.ignored_study_settings = config.ignored.clone();
+    let o = sh.options();
+    report.shooting = Some(ShootingSummary {
+        derivatives: o.derivatives.name(),
+        integrator_accuracy: o.accuracy,
+        finite_difference_step: (o.derivatives == ShootingDerivatives::CentralDifference)
+            .then_some(o.finite_difference_step),
+        counters: sh.counters,
+    });
     let grf = (traj.time.as_slice(), traj.grf.as_slice());
     finish(config, &ocp, &mesh, &result, report, grf, progress)
 }
@@ -712,6 +742,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
         ignored_study_settings: Vec::new(),
+        shooting: None,
         model: String::new(),
         output_files: Vec::new(),
     }

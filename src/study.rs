@@ -62,7 +62,7 @@ pub const METHODS: [&str; 2] = ["collocation", "shooting"];
 const COLLOCATION_ONLY: &str = "applies to method 'collocation'; method 'shooting' integrates the state equation (explicit fibre dynamics) with Dormand–Prince 5(4)";
 
 /// Why an exact-Hessian setting is refused with method "shooting".
-const NO_EXACT_HESSIAN: &str = "method 'shooting' has no exact Hessian (its central differences give first derivatives only); use 'bfgs'";
+const NO_EXACT_HESSIAN: &str = "method 'shooting' has no exact Hessian (its central differences and forward sensitivities give first derivatives only); use 'bfgs'";
 
 /// How the jump problem is transcribed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -191,9 +191,13 @@ pub struct ShootingSpec {
     #[serde(default)]
     pub integrator_accuracy: Option<f64>,
     /// Central-difference step in the excitations (t_f: this times t_f),
-    /// in (0, 0.1) (default 1e-3).
+    /// in (0, 0.1) (default 1e-3); central differences only.
     #[serde(default)]
     pub finite_difference_step: Option<f64>,
+    /// "central-difference" (the paper's, default) or
+    /// "forward-sensitivity" ([`crate::shooting::ShootingDerivatives`]).
+    #[serde(default)]
+    pub derivatives: Option<String>,
 }
 
 /// Stopping rules of the optimizer (Moco's names; −1 means the default,
@@ -381,6 +385,12 @@ impl SolveStudy {
 
         let method = parse_method(self.method.as_deref().unwrap_or("collocation"))
             .map_err(|r| err("method", r))?;
+        if method == Method::Collocation && self.shooting != ShootingSpec::default() {
+            return Err(err(
+                "shooting",
+                "applies to method 'shooting'; this study's method is 'collocation'".into(),
+            ));
+        }
         let mut shooting = crate::shooting::ShootingOptions::default();
         if let Some(a) = self.shooting.integrator_accuracy {
             if !(a.is_finite() && (1e-12..=1e-4).contains(&a)) {
@@ -391,7 +401,20 @@ impl SolveStudy {
             }
             shooting.accuracy = a;
         }
+        if let Some(d) = self.shooting.derivatives.as_deref() {
+            shooting.derivatives =
+                parse_shooting_derivatives(d).map_err(|r| err("shooting.derivatives", r))?;
+        }
         if let Some(d) = self.shooting.finite_difference_step {
+            if shooting.derivatives != crate::shooting::ShootingDerivatives::CentralDifference {
+                return Err(err(
+                    "shooting.finite_difference_step",
+                    format!(
+                        "applies to derivatives 'central-difference' only, not '{}'",
+                        shooting.derivatives.name()
+                    ),
+                ));
+            }
             if !(d.is_finite() && d > 0.0 && d < 0.1) {
                 return Err(err(
                     "shooting.finite_difference_step",
@@ -426,12 +449,6 @@ impl SolveStudy {
                 }
                 collocation_named.push(field);
             }
-        }
-        if method == Method::Collocation && self.shooting != ShootingSpec::default() {
-            return Err(err(
-                "shooting",
-                "applies to method 'shooting'; this study's method is 'collocation'".into(),
-            ));
         }
 
         let model = match &self.model {
@@ -760,8 +777,19 @@ fn parse_method(method: &str) -> Result<Method, String> {
     }
 }
 
-/// Shooting has first derivatives only (central differences): its
-/// Hessian is BFGS.
+/// A study's shooting derivatives by name.
+fn parse_shooting_derivatives(name: &str) -> Result<crate::shooting::ShootingDerivatives, String> {
+    use crate::shooting::ShootingDerivatives as D;
+    [D::CentralDifference, D::ForwardSensitivity]
+        .into_iter()
+        .find(|d| d.name() == name)
+        .ok_or_else(|| {
+            format!("unknown derivatives '{name}' (valid: central-difference, forward-sensitivity)")
+        })
+}
+
+/// Shooting has first derivatives only (central differences or forward
+/// sensitivities): its Hessian is BFGS.
 fn check_method_hessian(method: Method, settings: &SqpSettings) -> Result<(), String> {
     if method == Method::Shooting && settings.hessian != HessianMode::PartitionedBfgs {
         return Err(NO_EXACT_HESSIAN.into());

@@ -671,6 +671,57 @@ fn eval_jac<const W: usize>(
     Ok(())
 }
 
+/// g(x, u) = (f(x, u), Ÿ_C, F_y/(m g)) and its Jacobian entries in a
+/// [`StatePattern`] (explicit fibre dynamics) by the same coloured forward
+/// dual passes as collocation's Jacobian: the point derivatives of direct
+/// shooting's sensitivities ([`crate::shooting`]).
+pub struct PointJacobian {
+    cp: Compiled,
+    w: Worker<LANES>,
+}
+
+impl PointJacobian {
+    /// For `ocp`'s state equation in `pattern` (whose inputs must be x and
+    /// the excitations).
+    pub fn new(ocp: &JumpOcp, pattern: &StatePattern) -> Result<Self, TranscriptionError> {
+        if pattern.nx != ocp.nx() || pattern.nu != ocp.nu() || pattern.rows.len() != ocp.nx() + 2 {
+            return Err(TranscriptionError::Pattern(format!(
+                "a pattern of {} states, {} inputs and {} rows does not fit a model of {} states and {} excitations",
+                pattern.nx,
+                pattern.nu,
+                pattern.rows.len(),
+                ocp.nx(),
+                ocp.nu()
+            )));
+        }
+        Ok(PointJacobian {
+            cp: Compiled::new(&pattern.rows, pattern.nx + pattern.nu, true, LANES),
+            w: Worker::new(ocp, ocp.nu()),
+        })
+    }
+
+    /// The Jacobian's entries (output row, input column), in the order
+    /// [`PointJacobian::eval`] writes their values.
+    pub fn entries(&self) -> &[(usize, usize)] {
+        &self.cp.entries
+    }
+
+    /// g at (x, u) into `g` (n_x + 2 values) and the entries' values into
+    /// `jac`.
+    pub fn eval(
+        &mut self,
+        ocp: &JumpOcp,
+        x: &[f64],
+        u: &[f64],
+        g: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), String> {
+        self.w.x.copy_from_slice(x);
+        self.w.u.copy_from_slice(u);
+        eval_jac(ocp, &self.cp, &mut self.w, g, jac, None)
+    }
+}
+
 /// Where the state equation is evaluated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Point {
@@ -3636,7 +3687,7 @@ fn balance_hessian(
 /// The gradient over (q, q̇) (into `g`) of output `which` of
 /// [`JumpOcp::jump_objective`] (0 Y_C, 1 Ẏ_C, 2 J) at `xk`, by dual numbers,
 /// in the caller's workspace `ws` and seed buffer `xd` (length of `xk`).
-fn jump_objective_gradient(
+pub(crate) fn jump_objective_gradient(
     ocp: &JumpOcp,
     (ws, xd): (&mut crate::multibody::Workspace<Dual64>, &mut [Dual64]),
     xk: &[f64],

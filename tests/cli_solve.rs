@@ -45,6 +45,11 @@ fn bad_study_files_name_file_field_and_reason() {
             "got 0.5",
         ),
         (
+            "shooting_step.json",
+            "shooting.finite_difference_step",
+            "applies to derivatives 'central-difference' only",
+        ),
+        (
             "negative_intervals.json",
             "mesh.num_mesh_intervals",
             "got -3",
@@ -632,6 +637,11 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     assert_eq!(v["variables"].as_u64(), Some(81));
     assert_eq!(v["constraints"].as_u64(), Some(7 + 1 + 8 + 8 * 24));
     assert_eq!(v["hessian"], "partitioned_bfgs", "{v}");
+    assert_eq!(v["shooting"]["derivatives"], "forward-sensitivity", "{v}");
+    assert!(
+        v["shooting"]["counters"]["point_jacobians"].as_u64() > Some(0),
+        "{v}"
+    );
     let d = v["forward_check_difference_m"].as_f64().unwrap();
     assert!(d.abs() < 0.01, "forward check {d} m from the prediction");
     assert_eq!(

@@ -177,15 +177,15 @@ fn full_jump_by_hermite_simpson_is_solved_and_agrees() {
     ));
 }
 
-/// The paper's two methods on the full 29-node jump: direct shooting from
-/// the default collocation solve's excitations
-/// (`tests/data/controls/jump_optimal.sto`) against the collocation solve
-/// of the same study, run here. Shooting's optimum is an integration of
-/// the model, so it must be solved within the paper's 1e-3, agree with its
-/// Simbody forward check within 1 cm, and jump as high as collocation
-/// predicts within 1 cm (the forward check's tolerance).
+/// The paper's two methods on the full 29-node jump, both from the
+/// bang-bang guess: direct shooting (forward sensitivities, the default)
+/// against the collocation solve of the same study, run here. Shooting's
+/// optimum is an integration of the model, so it must be solved within
+/// the paper's 1e-3, agree with its Simbody forward check within 1 cm, and
+/// jump as high as collocation predicts within 1 cm (the forward check's
+/// tolerance).
 #[test]
-#[ignore = "the full shooting solve takes about 25 minutes on 2 cores; scripts/full_shooting.sh"]
+#[ignore = "the full shooting solve takes about 15 minutes on 2 cores; scripts/full_shooting.sh"]
 fn full_jump_by_shooting_agrees_with_collocation() {
     let collocation = solve("models/jump_collocation.json", "full_collocation");
     let shooting = solve_with(
@@ -193,7 +193,6 @@ fn full_jump_by_shooting_agrees_with_collocation() {
         "full_shooting",
         Overrides {
             method: Some("shooting".into()),
-            guess: Some("tests/data/controls/jump_optimal.sto".into()),
             ..Default::default()
         },
     );

@@ -124,6 +124,7 @@ fn shooting_jacobian_equals_difference_quotients_of_whole_integrations() {
     let ocp = reduced_ocp(big_n);
     let options = ShootingOptions {
         num_intervals: big_n,
+        derivatives: leap::shooting::ShootingDerivatives::CentralDifference,
         ..Default::default()
     };
     let (mut sh, v) = shooting(&ocp, options);
@@ -171,15 +172,15 @@ fn shooting_jacobian_equals_difference_quotients_of_whole_integrations() {
     assert_eq!(sh.counters.jacobians, 1);
 }
 
-/// The default settings' difference quotients (accuracy 1e-8, step 1e-3)
-/// against accurate ones (accuracy 1e-12, step 1e-5) at a point inside
+/// Central differences at their default settings (accuracy 1e-8, step
+/// 1e-3) against accurate ones (accuracy 1e-12, step 1e-5) at a point inside
 /// the bounds, excitations rising from 0.2 to 0.8 over the nodes: the
 /// gradient and the Jacobian within 1e-3 of the latter's size (measured
 /// 9e-6 and 7e-5). At a point where muscles rest at the activation floor
 /// (the bang-bang guess: u = a = 0.01, where OpenSim clamps a in the force)
 /// the quotients average the one-sided derivatives, whatever the step.
 #[test]
-fn default_shooting_difference_quotients_are_accurate() {
+fn central_difference_quotients_are_accurate() {
     let big_n = 4;
     let ocp = reduced_ocp(big_n);
     let quotients = |accuracy: f64, step: f64| {
@@ -187,6 +188,7 @@ fn default_shooting_difference_quotients_are_accurate() {
             num_intervals: big_n,
             accuracy,
             finite_difference_step: step,
+            derivatives: leap::shooting::ShootingDerivatives::CentralDifference,
             ..Default::default()
         };
         let (mut sh, mut v) = shooting(&ocp, options);
@@ -213,6 +215,86 @@ fn default_shooting_difference_quotients_are_accurate() {
     assert!(
         eg < 1e-3 && ej < 1e-3,
         "gradient {eg:.2e}, Jacobian {ej:.2e}"
+    );
+}
+
+/// Forward sensitivities (the integrator's steps replayed with the point
+/// Jacobian at every stage, chained over the nodes) against accurate
+/// central differences (accuracy 1e-12, step 1e-5) at the interior point
+/// of `central_difference_quotients_are_accurate`: at accuracy
+/// 1e-10 the gradient and the Jacobian within 1e-3 of the latter's size
+/// (measured 2e-5 and 8e-5), and every column within 1e-2 of its own
+/// size (measured 4e-4, an excitation at node 3), so that no variable's
+/// derivatives (an excitation's weight on either side of its node, t_f
+/// through the step lengths) can be wrong unseen. At the default accuracy
+/// 1e-8 the Jacobian's error is larger (7.8e-4 here; `RAMP=1 cargo run
+/// --release --example shooting_probe -- 4 models/jumper_reduced.json`):
+/// the replayed steps are the state's, chosen for its error alone.
+#[test]
+fn forward_sensitivities_match_accurate_difference_quotients() {
+    use leap::shooting::ShootingDerivatives;
+    let big_n = 4;
+    let ocp = reduced_ocp(big_n);
+    let derivatives = |accuracy: f64, derivatives: ShootingDerivatives, step: f64| {
+        let options = ShootingOptions {
+            num_intervals: big_n,
+            accuracy,
+            finite_difference_step: step,
+            derivatives,
+            ..Default::default()
+        };
+        let (mut sh, mut v) = shooting(&ocp, options);
+        let nu = ocp.nu();
+        for k in 0..big_n {
+            let u = 0.2 + 0.6 * k as f64 / (big_n - 1) as f64;
+            v[k * nu..(k + 1) * nu].fill(u);
+        }
+        let mut g = vec![0.0; sh.num_variables()];
+        sh.gradient(&v, &mut g).unwrap();
+        let mut j = vec![0.0; sh.jacobian_structure().len()];
+        sh.jacobian_values(&v, &mut j).unwrap();
+        (g, j, sh)
+    };
+    let (g, j, sh) = derivatives(1e-10, ShootingDerivatives::ForwardSensitivity, 1e-3);
+    assert_eq!(sh.counters.jacobians, 1);
+    assert_eq!(sh.counters.difference_simulations, 0);
+    assert!(sh.counters.point_jacobians > 6 * sh.counters.sensitivity_steps);
+    let (g_ref, j_ref, _) = derivatives(1e-12, ShootingDerivatives::CentralDifference, 1e-5);
+    let rel = |a: &[f64], b: &[f64]| {
+        let d: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
+        let s: f64 = b.iter().map(|y| y * y).sum();
+        (d / s).sqrt()
+    };
+    let (eg, ej) = (rel(&g, &g_ref), rel(&j, &j_ref));
+    let structure = sh.jacobian_structure();
+    let mut worst = (0.0, 0);
+    for c in 0..sh.num_variables() {
+        let (a, b): (Vec<f64>, Vec<f64>) = structure
+            .iter()
+            .zip(j.iter().zip(&j_ref))
+            .filter(|((_, cc), _)| *cc == c)
+            .map(|(_, (&a, &b))| (a, b))
+            .chain([(g[c], g_ref[c])])
+            .unzip();
+        let e = rel(&a, &b);
+        if e > worst.0 {
+            worst = (e, c);
+        }
+    }
+    eprintln!(
+        "gradient relative error {eg:.2e}, Jacobian {ej:.2e}, worst column {} {:.2e}",
+        sh.variable_name(worst.1),
+        worst.0
+    );
+    assert!(
+        eg < 1e-3 && ej < 1e-3,
+        "gradient {eg:.2e}, Jacobian {ej:.2e}"
+    );
+    assert!(
+        worst.0 < 1e-2,
+        "column {}: {:.2e}",
+        sh.variable_name(worst.1),
+        worst.0
     );
 }
 
@@ -342,6 +424,25 @@ fn shooting_study_settings_combine_as_documented() {
     assert!(e.contains("hessian_eigenvalue_floor"), "{e}");
     let e = refused(r#"{"shooting": {"finite_difference_step": 1e-4}}"#);
     assert!(e.contains("shooting") && e.contains("'collocation'"), "{e}");
+    let e = refused(r#"{"method": "shooting", "shooting": {"derivatives": "adjoint"}}"#);
+    assert!(
+        e.contains("shooting.derivatives") && e.contains("forward-sensitivity"),
+        "{e}"
+    );
+    let e = refused(
+        r#"{"method": "shooting", "shooting": {"derivatives": "forward-sensitivity", "finite_difference_step": 1e-4}}"#,
+    );
+    assert!(
+        e.contains("shooting.finite_difference_step") && e.contains("'central-difference' only"),
+        "{e}"
+    );
+    let c = parse(r#"{"method": "shooting", "shooting": {"derivatives": "forward-sensitivity"}}"#)
+        .resolve(None)
+        .unwrap();
+    assert_eq!(
+        c.shooting.derivatives,
+        leap::shooting::ShootingDerivatives::ForwardSensitivity
+    );
 
     let mut c = parse(r#"{"mesh": {"scheme": "trapezoidal"}, "hessian": "exact"}"#)
         .resolve(None)
