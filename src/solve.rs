@@ -155,6 +155,11 @@ pub struct SolveReport {
     pub ground_contact_time_s: f64,
     /// t_f (s), at or after lift-off (J is constant in flight).
     pub final_time_s: f64,
+    /// Whether the vertical ground force fell through the lift-off level
+    /// before t_f. When false the body is still on the ground at t_f (the
+    /// lift-off row violated: a solve stopped early), and the ground
+    /// contact time and the lift-off quantities are t_f's.
+    pub lifted_off: bool,
     /// Ẏ_C (m/s) and Y_C (m) at lift-off, interpolated between the nodes.
     pub liftoff_com_velocity_mps: f64,
     pub liftoff_com_height_m: f64,
@@ -557,21 +562,28 @@ fn shooting_report(
     let level = ocp.options.liftoff.fraction();
     let mut ws = ocp.eq.multibody.workspace::<f64>();
     let mut com = |x: &[f64]| ocp.jump_objective(&mut ws, x);
-    let (t_liftoff, y, ydot) = match force.iter().rposition(|&f| f > level) {
+    let last = nodes.states.len().saturating_sub(1);
+    let at_tf = (
+        tf,
+        nodes.com_height.get(last).copied().unwrap_or(f64::NAN),
+        nodes.com_velocity.get(last).copied().unwrap_or(f64::NAN),
+    );
+    let ((t_liftoff, y, ydot), lifted_off) = match force.iter().rposition(|&f| f > level) {
         Some(i) if i + 1 < force.len() => {
             let (t0, t1) = (traj.time[i], traj.time[i + 1]);
             let w = (force[i] - level) / (force[i] - force[i + 1]);
             let (a, b) = (com(&traj.states[i]), com(&traj.states[i + 1]));
             (
-                t0 + (t1 - t0) * w,
-                a.0 + w * (b.0 - a.0),
-                a.1 + w * (b.1 - a.1),
+                (
+                    t0 + (t1 - t0) * w,
+                    a.0 + w * (b.0 - a.0),
+                    a.1 + w * (b.1 - a.1),
+                ),
+                true,
             )
         }
-        _ => {
-            let last = nodes.states.len() - 1;
-            (tf, nodes.com_height[last], nodes.com_velocity[last])
-        }
+        Some(_) => (at_tf, false),
+        None => (at_tf, true),
     };
     report_at(
         r,
@@ -581,6 +593,7 @@ fn shooting_report(
             apex: nodes.objective,
             final_time: tf,
             liftoff: (t_liftoff, y, ydot),
+            lifted_off,
             peak_grf: (max(&force), max(&nodes.vertical_force_bw)),
             violation,
             mesh: (sh.num_intervals(), "direct shooting", "explicit"),
@@ -627,13 +640,14 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
     // falls through the lift-off row's level, interpolated linearly; the
     // lift-off COM height and velocity are taken there.
     let level = ocp.options.liftoff.fraction();
-    let t_liftoff = match forces.iter().rposition(|&f| f > level) {
+    let (t_liftoff, lifted_off) = match forces.iter().rposition(|&f| f > level) {
         Some(i) if i + 1 < forces.len() => {
             let (t0, t1) = (points.time[i], points.time[i + 1]);
             let (f0, f1) = (forces[i], forces[i + 1]);
-            t0 + (t1 - t0) * (f0 - level) / (f0 - f1)
+            (t0 + (t1 - t0) * (f0 - level) / (f0 - f1), true)
         }
-        _ => tf,
+        Some(_) => (tf, false),
+        None => (tf, true),
     };
     // Y_C, Ẏ_C and J at every node; J at the last is the objective.
     let mut ws = ocp.eq.multibody.workspace::<f64>();
@@ -667,6 +681,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
             apex: j,
             final_time: tf,
             liftoff: (t_liftoff, y, ydot),
+            lifted_off,
             peak_grf: (peak, peak_nodes),
             violation,
             mesh: (
@@ -685,8 +700,9 @@ struct SolutionQuantities {
     /// J at t_f (m).
     apex: f64,
     final_time: f64,
-    /// Lift-off time, Y_C and Ẏ_C there.
+    /// Lift-off time, Y_C and Ẏ_C there (t_f's without lift-off).
     liftoff: (f64, f64, f64),
+    lifted_off: bool,
     /// Peak vertical ground force / body weight, and over the nodes.
     peak_grf: (f64, f64),
     violation: f64,
@@ -715,6 +731,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         standing_com_height_m: ocp.standing_com_height,
         ground_contact_time_s: q.liftoff.0,
         final_time_s: q.final_time,
+        lifted_off: q.lifted_off,
         liftoff_com_velocity_mps: q.liftoff.2,
         liftoff_com_height_m: q.liftoff.1,
         peak_vertical_grf_bw: q.peak_grf.0,
@@ -1039,6 +1056,13 @@ impl SolveReport {
             s.push_str(&format!(
                 "  inertia correction: τ > 0 in {} of {} QPs, median {:.2e}, largest {:.2e} (τ I on the equilibrated QP, whose entries are at most about 1: a τ near 1 or above outweighs much of the exact curvature)\n",
                 h.shifted, h.qps, h.median, h.max
+            ));
+        }
+        if !self.lifted_off {
+            s.push_str(&format!(
+                "  warning: the body is still on the ground at t_f = {:.3} s (vertical force above {}% of body weight: the lift-off row is violated); the ground contact time and the lift-off velocity are t_f's, not a lift-off's\n",
+                self.final_time_s,
+                100.0 * crate::ocp::LiftOff::default().fraction()
             ));
         }
         if let Some(fc) = &self.forward_check {

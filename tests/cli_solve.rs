@@ -667,3 +667,44 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     assert!(grf.time.len() > 9, "{} rows", grf.time.len());
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// A solve stopped before the body leaves the ground (the reduced jump by
+/// shooting after one iteration: the bang-bang guess still pushes at t_f)
+/// says so: `lifted_off` false in the JSON, the ground contact time t_f's,
+/// and a warning under the summary table.
+#[test]
+fn a_solve_stopped_on_the_ground_says_so() {
+    let out = fresh_dir("on_ground");
+    let run = |json: bool| {
+        let mut c = Command::cargo_bin("leap").unwrap();
+        c.args([
+            "solve",
+            "models/jump_reduced.json",
+            "--method",
+            "shooting",
+            "--num-mesh-intervals",
+            "8",
+            "--max-iterations",
+            "1",
+            "--no-forward-check",
+            "--out",
+        ])
+        .arg(&out);
+        if json {
+            c.arg("--json");
+        }
+        c.output().unwrap()
+    };
+    let o = run(true);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["lifted_off"], false, "{v}");
+    assert!(
+        v["max_constraint_violation"].as_f64().unwrap() > 0.01,
+        "{v}"
+    );
+    assert_eq!(v["ground_contact_time_s"], v["final_time_s"], "{v}");
+    let o = run(false);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("still on the ground at t_f"), "{text}");
+    let _ = std::fs::remove_dir_all(&out);
+}

@@ -99,6 +99,7 @@ fn assert_solved_and_forward_checked(r: &SolveReport) {
     let diff = r.forward_check_difference_m.expect("forward check ran");
     assert!(diff.abs() <= 0.01, "forward check differs by {diff} m");
     // A jump, not a stumble: lift-off upwards after a push-off.
+    assert!(r.lifted_off);
     assert!(r.liftoff_com_velocity_mps > 0.5 && r.ground_contact_time_s > 0.1);
     // The predicted lift-off (where the ground force at the midpoints
     // falls through 1% of body weight, t_f possibly later) within one mesh
