@@ -1002,10 +1002,10 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
         let r = crate::sqp::solve_from(&mut sh, &v, &settings);
         let label = match derivatives {
             crate::shooting::ShootingDerivatives::CentralDifference => {
-                "shooting, central differences"
+                "shooting, central-difference"
             }
             crate::shooting::ShootingDerivatives::ForwardSensitivity => {
-                "shooting, forward sensitivities"
+                "shooting, forward-sensitivity"
             }
         };
         rows.push(method_row(
@@ -1062,7 +1062,7 @@ impl MethodsReport {
         }
         let ratio = |r: &MethodRow| r.iteration_s / self.rows[0].iteration_s;
         let mut text = format!(
-            "the 29-node jump, per SQP iteration (medians over the first iterations from the bang-bang guess; wall time on this machine against the paper's CPU time, Porsa et al. 2016 Table 2)\n{t}\n  shooting: one push-off integration {:.3} s ({} f evaluations, Dormand–Prince at {:e}) on {} threads\n",
+            "the 29-node jump, per SQP iteration (medians over the first iterations from the bang-bang guess; wall time on this machine against the paper's CPU time, Porsa et al. 2016 Table 2)\n{t}\n  shooting: one push-off integration {:.3} s ({} f evaluations, Dormand–Prince at {:e}); Jacobians on {} threads\n",
             self.shooting_integration_s,
             self.shooting_integration_f_evals,
             self.shooting.accuracy,

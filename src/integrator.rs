@@ -112,6 +112,8 @@ pub struct Dopri5 {
     pub stats: IntegrationStats,
     t: f64,
     h: f64,
+    /// The length of the last accepted step.
+    h_last: f64,
     x: Vec<f64>,
     k: [Vec<f64>; 7],
     xs: Vec<f64>,
@@ -149,6 +151,7 @@ impl Dopri5 {
             stats: IntegrationStats::default(),
             t: t0,
             h: 0.0,
+            h_last: 0.0,
             x: x0.to_vec(),
             k: std::array::from_fn(|_| vec![0.0; n]),
             xs: vec![0.0; n],
@@ -194,6 +197,11 @@ impl Dopri5 {
     }
     pub fn x(&self) -> &[f64] {
         &self.x
+    }
+    /// The length h of the last accepted step, as its stages used it (the
+    /// time advanced by it may differ in the last bit).
+    pub fn last_step(&self) -> f64 {
+        self.h_last
     }
     /// The derivative at the current state (FSAL).
     pub fn f(&self) -> &[f64] {
@@ -273,6 +281,7 @@ impl Dopri5 {
                 self.x_prev.copy_from_slice(&self.x);
                 self.f_prev.copy_from_slice(&self.k[0]);
                 self.t = if last { t_end } else { self.t + h };
+                self.h_last = h;
                 self.x.copy_from_slice(&self.xnew);
                 let k6 = self.k[6].clone();
                 self.k[0].copy_from_slice(&k6);

@@ -2,7 +2,9 @@
 //! paper's first method (Porsa, Lin & Pandy 2016, "direct shooting"):
 //! the excitations at the nodes are the variables, and every evaluation
 //! integrates the state equation forward from the static squat with a
-//! variable-step Runge–Kutta integrator; gradients are central differences.
+//! variable-step Runge–Kutta integrator. Derivatives are forward
+//! sensitivities of the integrator's steps (default) or the paper's central
+//! differences ([`ShootingDerivatives`]).
 //!
 //! **Mesh.** N uniform intervals on [0, t_f] (the paper's 29 nodes: N = 28),
 //! nodes t_k = k·h, h = t_f/N. The excitations are linear between the
@@ -14,12 +16,17 @@
 //! **Integration.** The Rust-native Dormand–Prince 5(4)
 //! ([`crate::integrator::Dopri5`]) on the optimizer's state equation (the
 //! same smoothed activation switch and paths as collocation), restarted at
-//! every node (the excitations have a kink there). A restart makes the
-//! trajectory up to node k−1 independent of u_k, bit for bit, so a
-//! difference quotient in u_k integrates only from node k−1 on: the
-//! central-difference Jacobian costs about n_u·(N + 1) + 2 whole
-//! integrations (698 on the paper's mesh), not 2·(N·n_u + 1), and its
-//! columns run on [`ShootingOptions::threads`] threads.
+//! every node (the excitations have a kink there).
+//!
+//! **Derivatives.** Forward sensitivities: per interval (on
+//! [`ShootingOptions::threads`] threads) the nominal accepted steps are
+//! replayed with the point Jacobian ∂f/∂(x, u) at every stage, giving
+//! ∂x_k/∂(x_{k−1}, u_{k−1}, u_k, t_f) in normalised time (the steps scale
+//! with t_f); these are chained from node to node. Central differences: a
+//! restart makes the trajectory up to node k−1 independent of u_k, bit for
+//! bit, so a difference quotient in u_k integrates only from node k−1 on:
+//! the Jacobian costs about n_u·(N + 1) + 2 whole integrations (698 on the
+//! paper's mesh), not 2·(N·n_u + 1), its columns on the threads.
 //!
 //! **Constraints** (rows in this order):
 //! - no countermovement (eq. 4): Ÿ_C(t_j) − Ÿ_C(t_{j+1}) ≤ 0, j = 0..n_cm−1;
@@ -74,6 +81,7 @@ pub struct ShootingOptions {
 
 /// The derivatives of a shooting solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum ShootingDerivatives {
     /// Central differences of whole integrations (the paper's): two
     /// integrations per variable, each from its column's first node.
@@ -169,8 +177,9 @@ struct IntervalSensitivity {
     /// ∂Ÿ_C/∂(x_k, u_k) and ∂(F_y/(m g))/∂(x_k, u_k).
     ydd: Vec<f64>,
     fy: Vec<f64>,
-    /// ∂Ẏ_C/∂(q, q̇)_k, and ∂J/∂(q, q̇)_N at node N (zero elsewhere).
+    /// ∂Ẏ_C/∂(q, q̇)_k.
     yd: Vec<f64>,
+    /// ∂J/∂(q, q̇)_N at node N (zero elsewhere).
     j: Vec<f64>,
     f_evals: usize,
     point_jacobians: usize,
@@ -290,8 +299,13 @@ impl Shooting {
             ShootingDerivatives::ForwardSensitivity => {
                 let d = crate::transcription::TranscriptionOptions::default();
                 Some(
-                    StatePattern::detect(&ocp, d.pattern_samples, d.pattern_seed)
-                        .map_err(|e| OcpError::Invalid(e.to_string()))?,
+                    StatePattern::detect(&ocp, d.pattern_samples, d.pattern_seed).map_err(
+                        |e| {
+                            OcpError::Invalid(format!(
+                                "shooting: forward sensitivities: {e} (derivatives 'central-difference' need no pattern)"
+                            ))
+                        },
+                    )?,
                 )
             }
         };
@@ -623,7 +637,7 @@ impl Shooting {
 
     /// The derivatives at `v` (cached; central differences or forward
     /// sensitivities): the gradient of −J and the Jacobian's values.
-    fn difference_quotients(&mut self, v: &[f64]) -> Result<(&[f64], &[f64]), EvalError> {
+    fn derivatives_at(&mut self, v: &[f64]) -> Result<(&[f64], &[f64]), EvalError> {
         let cached = matches!(&self.derivatives, Some((p, _, _)) if p.as_slice() == v);
         if !cached {
             self.derivatives = None;
@@ -634,10 +648,7 @@ impl Shooting {
         }
         match &self.derivatives {
             Some((_, g, j)) => Ok((g, j)),
-            None => Err(EvalError::new(
-                "jacobian",
-                "no difference quotients at this point",
-            )),
+            None => Err(EvalError::new("jacobian", "no derivatives at this point")),
         }
     }
 
@@ -796,7 +807,7 @@ impl Shooting {
         let mut steps: Vec<(f64, f64, Vec<f64>)> = Vec::new();
         let (_, f_evals) =
             self.integrate_interval(ws, controls, tf, k, x_start, &mut |_, t0, x0, ig| {
-                steps.push((t0, ig.t() - t0, x0.to_vec()))
+                steps.push((t0, ig.last_step(), x0.to_vec()))
             })?;
         let (ta, _, hk) = self.interval_span(k, tf);
         let (ua, ub) = (
@@ -1147,7 +1158,7 @@ impl Nlp for Shooting {
         Ok(-self.evaluate(x)?.objective)
     }
     fn gradient(&mut self, x: &[f64], g: &mut [f64]) -> Result<(), EvalError> {
-        g.copy_from_slice(self.difference_quotients(x)?.0);
+        g.copy_from_slice(self.derivatives_at(x)?.0);
         Ok(())
     }
     fn constraints(&mut self, x: &[f64], c: &mut [f64]) -> Result<(), EvalError> {
@@ -1167,7 +1178,7 @@ impl Nlp for Shooting {
         self.structure.clone()
     }
     fn jacobian_values(&mut self, x: &[f64], values: &mut [f64]) -> Result<(), EvalError> {
-        values.copy_from_slice(self.difference_quotients(x)?.1);
+        values.copy_from_slice(self.derivatives_at(x)?.1);
         Ok(())
     }
     fn variable_name(&self, i: usize) -> String {
@@ -1194,10 +1205,10 @@ impl Nlp for Shooting {
 }
 
 /// The SQP settings of a shooting solve from a study's: damped BFGS (the
-/// difference quotients give no second derivatives), its first curvature
+/// derivatives are first derivatives only), its first curvature
 /// taken along the first step (Oren–Luenberger), not the largest seen
-/// (Shanno–Phua). On the full jump from the bang-bang guess, Shanno–Phua's
-/// steps stayed near 1e-3 (the actual reduction twice the predicted) and
+/// (Shanno–Phua). On the full jump from the bang-bang guess with central
+/// differences, Shanno–Phua's steps stayed near 1e-3 (the actual reduction twice the predicted) and
 /// the paper's rule stopped the solve at 25.6 cm after 45 iterations;
 /// Oren–Luenberger's steps were 0.05–0.1 and passed that point by
 /// iteration 9 (README, "Direct shooting").

@@ -71,7 +71,8 @@ pub enum Method {
     /// Direct collocation ([`crate::transcription`], the default).
     Collocation,
     /// Direct shooting ([`crate::shooting`]): excitations at the nodes,
-    /// forward integration, central-difference gradients.
+    /// forward integration, forward-sensitivity or central-difference
+    /// derivatives.
     Shooting,
 }
 
@@ -121,7 +122,7 @@ pub struct SolveStudy {
     pub model: Option<String>,
     /// "collocation" (default) or "shooting" (the paper's direct
     /// shooting: excitations at the mesh nodes, Dormand–Prince 5(4),
-    /// central differences; see `shooting`).
+    /// forward sensitivities or central differences; see `shooting`).
     #[serde(default)]
     pub method: Option<String>,
     /// Settings of method "shooting".
@@ -194,8 +195,8 @@ pub struct ShootingSpec {
     /// in (0, 0.1) (default 1e-3); central differences only.
     #[serde(default)]
     pub finite_difference_step: Option<f64>,
-    /// "central-difference" (the paper's, default) or
-    /// "forward-sensitivity" ([`crate::shooting::ShootingDerivatives`]).
+    /// "forward-sensitivity" (default) or "central-difference" (the
+    /// paper's) ([`crate::shooting::ShootingDerivatives`]).
     #[serde(default)]
     pub derivatives: Option<String>,
 }
@@ -396,7 +397,7 @@ impl SolveStudy {
             if !(a.is_finite() && (1e-12..=1e-4).contains(&a)) {
                 return Err(err(
                     "shooting.integrator_accuracy",
-                    format!("must lie in [1e-12, 1e-4], got {a}: the difference quotients divide the integration error by the step"),
+                    format!("must lie in [1e-12, 1e-4], got {a}: the derivatives' error follows the integration's"),
                 ));
             }
             shooting.accuracy = a;
@@ -410,8 +411,13 @@ impl SolveStudy {
                 return Err(err(
                     "shooting.finite_difference_step",
                     format!(
-                        "applies to derivatives 'central-difference' only, not '{}'",
-                        shooting.derivatives.name()
+                        "applies to derivatives 'central-difference' only, not '{}'{}",
+                        shooting.derivatives.name(),
+                        if self.shooting.derivatives.is_none() {
+                            " (the default); add \"derivatives\": \"central-difference\" for the paper's central differences"
+                        } else {
+                            ""
+                        }
                     ),
                 ));
             }

@@ -716,6 +716,18 @@ impl PointJacobian {
         g: &mut [f64],
         jac: &mut [f64],
     ) -> Result<(), String> {
+        let (nx, nu) = (self.w.x.len(), self.w.u.len());
+        if x.len() != nx || u.len() != nu || g.len() < nx + 2 || jac.len() < self.cp.entries.len() {
+            return Err(format!(
+                "point Jacobian: {} states, {} excitations, {} outputs and {} entries given for {nx}, {nu}, {} and {}",
+                x.len(),
+                u.len(),
+                g.len(),
+                jac.len(),
+                nx + 2,
+                self.cp.entries.len()
+            ));
+        }
         self.w.x.copy_from_slice(x);
         self.w.u.copy_from_slice(u);
         eval_jac(ocp, &self.cp, &mut self.w, g, jac, None)

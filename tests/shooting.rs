@@ -1,8 +1,9 @@
 //! Direct shooting ([`leap::shooting`]), the paper's first method, on the
 //! reduced model (10 muscles per side): its integration against one
 //! continuous integration, its rows against collocation's at the same
-//! nodes, its Jacobian against difference quotients of whole integrations,
-//! its default difference quotients against accurate ones, and the study
+//! nodes, its central-difference Jacobian against difference quotients of
+//! whole integrations, its central differences and its forward
+//! sensitivities against accurate central differences, and the study
 //! settings that go with it. `tests/cli_solve.rs` runs a reduced solve
 //! through `leap solve`.
 
@@ -235,13 +236,13 @@ fn forward_sensitivities_match_accurate_difference_quotients() {
     use leap::shooting::ShootingDerivatives;
     let big_n = 4;
     let ocp = reduced_ocp(big_n);
-    let derivatives = |accuracy: f64, derivatives: ShootingDerivatives, step: f64| {
+    let derivatives = |accuracy: f64, derivatives: ShootingDerivatives, step: f64, threads| {
         let options = ShootingOptions {
             num_intervals: big_n,
             accuracy,
             finite_difference_step: step,
             derivatives,
-            ..Default::default()
+            threads,
         };
         let (mut sh, mut v) = shooting(&ocp, options);
         let nu = ocp.nu();
@@ -255,11 +256,18 @@ fn forward_sensitivities_match_accurate_difference_quotients() {
         sh.jacobian_values(&v, &mut j).unwrap();
         (g, j, sh)
     };
-    let (g, j, sh) = derivatives(1e-10, ShootingDerivatives::ForwardSensitivity, 1e-3);
+    let (g, j, sh) = derivatives(1e-10, ShootingDerivatives::ForwardSensitivity, 1e-3, 2);
+    // The intervals are independent: one thread gives the same bits.
+    let (g1, j1, _) = derivatives(1e-10, ShootingDerivatives::ForwardSensitivity, 1e-3, 1);
+    assert!(g1 == g && j1 == j);
     assert_eq!(sh.counters.jacobians, 1);
     assert_eq!(sh.counters.difference_simulations, 0);
-    assert!(sh.counters.point_jacobians > 6 * sh.counters.sensitivity_steps);
-    let (g_ref, j_ref, _) = derivatives(1e-12, ShootingDerivatives::CentralDifference, 1e-5);
+    // Six stages per replayed step, and one point per node 1..N.
+    assert_eq!(
+        sh.counters.point_jacobians,
+        6 * sh.counters.sensitivity_steps + big_n
+    );
+    let (g_ref, j_ref, _) = derivatives(1e-12, ShootingDerivatives::CentralDifference, 1e-5, 2);
     let rel = |a: &[f64], b: &[f64]| {
         let d: f64 = a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum();
         let s: f64 = b.iter().map(|y| y * y).sum();
