@@ -926,8 +926,22 @@ fn solve(
     force_log: bool,
 ) -> Result<ExitCode> {
     use std::io::IsTerminal;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    // Ctrl-C stops the SQP at its next iteration and writes the results of
+    // its last iterate (status user_requested_stop); a second one exits.
+    let interrupt = std::sync::Arc::new(AtomicBool::new(false));
+    let flag = interrupt.clone();
+    let handler = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::Relaxed) {
+            std::process::exit(130);
+        }
+        eprintln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
+    });
     let mut config = leap::study::SolveConfig::load(study.as_deref())?;
     config.apply(&overrides)?;
+    if handler.is_ok() {
+        config.settings.interrupt = Some(interrupt);
+    }
     let chatty = !json && !quiet;
     let verbose = force_log || (chatty && std::io::stderr().is_terminal());
     let mut progress = |line: &str| {

@@ -237,6 +237,7 @@ pub fn moco_status(s: SqpStatus) -> &'static str {
         SqpStatus::NumericalError => "Error_In_Step_Computation",
         SqpStatus::EvaluationError => "Invalid_Number_Detected",
         SqpStatus::InvalidProblem => "Invalid_Problem_Definition",
+        SqpStatus::UserRequestedStop => "User_Requested_Stop",
     }
 }
 

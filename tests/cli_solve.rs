@@ -708,3 +708,56 @@ fn a_solve_stopped_on_the_ground_says_so() {
     assert!(text.contains("still on the ground at t_f"), "{text}");
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Ctrl-C (SIGINT) during `leap solve` stops the SQP at its next iteration
+/// and writes the results of its last iterate: status
+/// `user_requested_stop` (IPOPT's `User_Requested_Stop` in the solution
+/// header), exit code 1, the solution, ground forces, history and summary.
+#[test]
+fn ctrl_c_stops_a_solve_and_writes_its_results() {
+    let out = fresh_dir("interrupted");
+    let bin = assert_cmd::cargo::cargo_bin("leap");
+    let mut child = std::process::Command::new(bin)
+        .args([
+            "solve",
+            "models/jump_shooting.json",
+            "--max-iterations",
+            "1000",
+            "--no-forward-check",
+            "--json",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    let killed = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["status"], "user_requested_stop", "{v}");
+    assert_eq!(v["moco_status"], "User_Requested_Stop", "{v}");
+    assert!(v["iterations"].as_u64().unwrap() < 1000);
+    for f in [
+        "jump_shooting_solution.sto",
+        "jump_shooting_grf.mot",
+        "jump_shooting_history.csv",
+        "jump_shooting_summary.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let sol = std::fs::read_to_string(out.join("jump_shooting_solution.sto")).unwrap();
+    assert!(
+        sol.contains("status=User_Requested_Stop"),
+        "{}",
+        &sol[..400.min(sol.len())]
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}

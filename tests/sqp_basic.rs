@@ -618,3 +618,30 @@ fn stalled_solves_end_as_restoration_failed() {
     assert!(ended[1] < ended[0], "{ended:?}");
     assert_eq!(ended[0], ended[2]);
 }
+
+/// The interrupt flag (Ctrl-C in `leap solve`): unset, the solve is the
+/// same to the bit; set, it stops at the next iteration with status
+/// user-requested stop and returns that iterate (here the start).
+#[test]
+fn an_interrupt_stops_the_solve_at_its_next_iteration() {
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    let base = run(hs071(), HessianMode::PartitionedBfgs);
+    let flag = Arc::new(AtomicBool::new(false));
+    let settings = |flag: &Arc<AtomicBool>| SqpSettings {
+        hessian: HessianMode::PartitionedBfgs,
+        interrupt: Some(flag.clone()),
+        ..Default::default()
+    };
+    let r = solve(&mut AdNlp::new(hs071()), &settings(&flag));
+    assert_eq!(r.status, SqpStatus::Solved);
+    assert!(r.x == base.x && r.iterations == base.iterations);
+    flag.store(true, std::sync::atomic::Ordering::Relaxed);
+    let r = solve(&mut AdNlp::new(hs071()), &settings(&flag));
+    assert_eq!(r.status, SqpStatus::UserRequestedStop, "{}", r.message);
+    assert_eq!(r.iterations, 0);
+    let mut x0 = vec![0.0; r.x.len()];
+    leap::nlp::Nlp::initial_point(&AdNlp::new(hs071()), &mut x0);
+    assert_eq!(r.x, x0);
+    assert!(!r.status.success());
+}

@@ -267,6 +267,10 @@ pub struct SqpSettings {
     /// Oren and Luenberger's sᵀy/sᵀs, the curvature along the step, never
     /// larger.
     pub bfgs_scaling_along_step: bool,
+    /// When set (by `leap solve` on Ctrl-C), the solve stops at the next
+    /// iteration with status [`SqpStatus::UserRequestedStop`] and returns
+    /// its iterate, as at the iteration limit.
+    pub interrupt: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 impl Default for SqpSettings {
@@ -304,6 +308,7 @@ impl Default for SqpSettings {
             stall_iterations: 50,
             stall_violation: 1e-3,
             bfgs_scaling_along_step: false,
+            interrupt: None,
         }
     }
 }
@@ -333,6 +338,8 @@ pub enum SqpStatus {
     EvaluationError,
     /// The problem is malformed (bounds, elements, dimensions).
     InvalidProblem,
+    /// Stopped on request ([`SqpSettings::interrupt`]).
+    UserRequestedStop,
 }
 
 impl SqpStatus {
@@ -1774,10 +1781,18 @@ impl<'s> Solver<'s> {
             }
             progress.push((inf_pr, p.f));
             let stall = stalled(&progress, st.stall_iterations, st.stall_violation);
-            if iter == st.max_iterations || stall.is_some() {
+            let interrupted = st
+                .interrupt
+                .as_ref()
+                .is_some_and(|f| f.load(std::sync::atomic::Ordering::Relaxed));
+            if iter == st.max_iterations || stall.is_some() || interrupted {
                 self.log(&rec, start, result);
                 let (status, mut msg) = match stall {
                     Some(why) if iter < st.max_iterations => (SqpStatus::RestorationFailed, why),
+                    _ if interrupted && iter < st.max_iterations => (
+                        SqpStatus::UserRequestedStop,
+                        format!("stopped on request after {iter} iterations"),
+                    ),
                     _ => (
                         SqpStatus::IterationLimit,
                         format!("{} iterations", st.max_iterations),
