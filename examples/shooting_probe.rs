@@ -1,8 +1,13 @@
-//! Difference quotients of the shooting transcription at the bang-bang
-//! guess under several integrator accuracies and steps, then its forward
-//! sensitivities at several accuracies: `cargo run --release --example
-//! shooting_probe -- N` prints each gradient's distance from the most
-//! accurate quotients (accuracy 1e-12, step 1e-5), and the cost of a pass.
+//! Derivatives of the shooting transcription at the bang-bang guess (or,
+//! with RAMP=1, at excitations rising from 0.2 to 0.8 over the nodes):
+//! central differences under several integrator accuracies and steps, then
+//! forward sensitivities at several accuracies. `cargo run --release
+//! --example shooting_probe -- N [MODEL]` prints each pass's time and its
+//! gradient's and Jacobian's distance from the reference: central
+//! differences at accuracy 1e-12 and step 1e-5, or with
+//! REFERENCE=sensitivity the sensitivities at 1e-12. QUICK=1 runs only the
+//! default quotients and the sensitivities; WORST=1 names the eight
+//! largest differences of each pass.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 fn main() {
