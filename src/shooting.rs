@@ -766,18 +766,31 @@ impl Shooting {
                 q[(k - first) * per_node + what]
             }
         };
-        let mut jac = Vec::with_capacity(self.structure.len());
-        for &(r, c) in &self.structure {
-            jac.push(match self.rows[r] {
-                Row::NoCountermovement(j) => value(c, j, nx) - value(c, j + 1, nx),
-                Row::LiftOff => value(c, big_n, nx + 1),
-                Row::NoDescent(k) => value(c, k, nx + 2),
-                Row::Bound(k, i) => value(c, k, i),
-            });
-        }
-        self.check_derivatives(&grad, &jac)?;
         self.counters.difference_simulations += sims;
         self.counters.f_evals += f_evals;
+        self.store_derivatives(v, grad, started, |row, c| match row {
+            Row::NoCountermovement(j) => value(c, j, nx) - value(c, j + 1, nx),
+            Row::LiftOff => value(c, big_n, nx + 1),
+            Row::NoDescent(k) => value(c, k, nx + 2),
+            Row::Bound(k, i) => value(c, k, i),
+        })
+    }
+
+    /// The Jacobian's values (`entry(row, column)` over the structure),
+    /// checked finite with the gradient, counted and cached at `v`.
+    fn store_derivatives(
+        &mut self,
+        v: &[f64],
+        grad: Vec<f64>,
+        started: std::time::Instant,
+        entry: impl Fn(Row, usize) -> f64,
+    ) -> Result<(), EvalError> {
+        let jac: Vec<f64> = self
+            .structure
+            .iter()
+            .map(|&(r, c)| entry(self.rows[r], c))
+            .collect();
+        self.check_derivatives(&grad, &jac)?;
         self.counters.jacobians += 1;
         self.counters.jacobian_seconds += started.elapsed().as_secs_f64();
         self.derivatives = Some((v.to_vec(), grad, jac));
@@ -1070,23 +1083,15 @@ impl Shooting {
             }
             g_nodes.push(gk);
         }
-        let mut jac = Vec::with_capacity(self.structure.len());
-        for &(r, c) in &self.structure {
-            jac.push(match self.rows[r] {
-                Row::NoCountermovement(j) => d_ydd[j][c] - d_ydd[j + 1][c],
-                Row::LiftOff => d_fy[big_n][c],
-                Row::NoDescent(k) => d_yd[k][c],
-                Row::Bound(k, i) => g_nodes[k][i * n + c],
-            });
-        }
-        self.check_derivatives(&grad, &jac)?;
         self.counters.f_evals += f_evals;
         self.counters.point_jacobians += pjs;
         self.counters.sensitivity_steps += steps;
-        self.counters.jacobians += 1;
-        self.counters.jacobian_seconds += started.elapsed().as_secs_f64();
-        self.derivatives = Some((v.to_vec(), grad, jac));
-        Ok(())
+        self.store_derivatives(v, grad, started, |row, c| match row {
+            Row::NoCountermovement(j) => d_ydd[j][c] - d_ydd[j + 1][c],
+            Row::LiftOff => d_fy[big_n][c],
+            Row::NoDescent(k) => d_yd[k][c],
+            Row::Bound(k, i) => g_nodes[k][i * n + c],
+        })
     }
 
     /// An error naming the first derivative that is not finite.

@@ -173,6 +173,27 @@ fn shooting_jacobian_equals_difference_quotients_of_whole_integrations() {
     assert_eq!(sh.counters.jacobians, 1);
 }
 
+/// The gradient and the Jacobian's values at an interior point:
+/// excitations rising from 0.2 to 0.8 over the nodes, t_f the bang-bang
+/// guess's.
+fn derivatives_at_a_ramp(
+    ocp: &Arc<JumpOcp>,
+    options: ShootingOptions,
+) -> (Vec<f64>, Vec<f64>, Shooting) {
+    let big_n = options.num_intervals;
+    let (mut sh, mut v) = shooting(ocp, options);
+    let nu = ocp.nu();
+    for k in 0..big_n {
+        let u = 0.2 + 0.6 * k as f64 / (big_n - 1) as f64;
+        v[k * nu..(k + 1) * nu].fill(u);
+    }
+    let mut g = vec![0.0; sh.num_variables()];
+    sh.gradient(&v, &mut g).unwrap();
+    let mut j = vec![0.0; sh.jacobian_structure().len()];
+    sh.jacobian_values(&v, &mut j).unwrap();
+    (g, j, sh)
+}
+
 /// Central differences at their default settings (accuracy 1e-8, step
 /// 1e-3) against accurate ones (accuracy 1e-12, step 1e-5) at a point inside
 /// the bounds, excitations rising from 0.2 to 0.8 over the nodes: the
@@ -192,16 +213,7 @@ fn central_difference_quotients_are_accurate() {
             derivatives: leap::shooting::ShootingDerivatives::CentralDifference,
             ..Default::default()
         };
-        let (mut sh, mut v) = shooting(&ocp, options);
-        let nu = ocp.nu();
-        for k in 0..big_n {
-            let u = 0.2 + 0.6 * k as f64 / (big_n - 1) as f64;
-            v[k * nu..(k + 1) * nu].fill(u);
-        }
-        let mut g = vec![0.0; sh.num_variables()];
-        sh.gradient(&v, &mut g).unwrap();
-        let mut j = vec![0.0; sh.jacobian_structure().len()];
-        sh.jacobian_values(&v, &mut j).unwrap();
+        let (g, j, _) = derivatives_at_a_ramp(&ocp, options);
         (g, j)
     };
     let (g, j) = quotients(1e-8, 1e-3);
@@ -244,17 +256,7 @@ fn forward_sensitivities_match_accurate_difference_quotients() {
             derivatives,
             threads,
         };
-        let (mut sh, mut v) = shooting(&ocp, options);
-        let nu = ocp.nu();
-        for k in 0..big_n {
-            let u = 0.2 + 0.6 * k as f64 / (big_n - 1) as f64;
-            v[k * nu..(k + 1) * nu].fill(u);
-        }
-        let mut g = vec![0.0; sh.num_variables()];
-        sh.gradient(&v, &mut g).unwrap();
-        let mut j = vec![0.0; sh.jacobian_structure().len()];
-        sh.jacobian_values(&v, &mut j).unwrap();
-        (g, j, sh)
+        derivatives_at_a_ramp(&ocp, options)
     };
     let (g, j, sh) = derivatives(1e-10, ShootingDerivatives::ForwardSensitivity, 1e-3, 2);
     // The intervals are independent: one thread gives the same bits.
