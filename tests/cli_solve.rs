@@ -717,7 +717,7 @@ fn a_solve_stopped_on_the_ground_says_so() {
 fn ctrl_c_stops_a_solve_and_writes_its_results() {
     let out = fresh_dir("interrupted");
     let bin = assert_cmd::cargo::cargo_bin("leap");
-    let mut child = std::process::Command::new(bin)
+    let child = std::process::Command::new(bin)
         .args([
             "solve",
             "models/jump_shooting.json",
