@@ -666,20 +666,11 @@ impl Shooting {
         let delta = self.options.finite_difference_step;
         let controls = self.node_controls(v);
         let per_node = nx + EXTRA;
-        // Column c: (first node, quotients of the node quantities from it,
-        // quotient of J).
-        let next = AtomicUsize::new(0);
-        // Set by a column that fails: the other threads stop too.
-        let failed = AtomicBool::new(false);
-        let threads = self.options.threads.min(n).max(1);
         let me = &*self;
-        let work = |ws: &mut StateWorkspace<f64>| -> Result<Vec<ColumnQuotients>, EvalError> {
-            let mut done = Vec::new();
-            loop {
-                let c = next.fetch_add(1, Ordering::Relaxed);
-                if c >= n || failed.load(Ordering::Relaxed) {
-                    return Ok(done);
-                }
+        // Column c: the quotients of the node quantities from its first
+        // node, and of J.
+        let column =
+            |ws: &mut StateWorkspace<f64>, c: usize| -> Result<ColumnQuotients, EvalError> {
                 let (first, d) = if c < big_n * nu {
                     (c / nu, delta)
                 } else {
@@ -695,14 +686,7 @@ impl Shooting {
                     }
                     me.integrate(ws, &ctl, t, first, &nominal.states[first], None)
                 };
-                let (p, m) = match (run(1.0), run(-1.0)) {
-                    (Ok(p), Ok(m)) => (p, m),
-                    (Err(e), _) | (_, Err(e)) => {
-                        failed.store(true, Ordering::Relaxed);
-                        return Err(e);
-                    }
-                };
-                let f_evals = p.f_evals + m.f_evals;
+                let (p, m) = (run(1.0)?, run(-1.0)?);
                 let mut q = Vec::with_capacity((big_n + 1 - first) * per_node);
                 let s = 0.5 / d;
                 for k in 0..p.states.len() {
@@ -716,47 +700,30 @@ impl Shooting {
                     q.push((p.vertical_force_bw[k] - m.vertical_force_bw[k]) * s);
                     q.push((p.com_velocity[k] - m.com_velocity[k]) * s);
                 }
-                done.push(ColumnQuotients {
+                Ok(ColumnQuotients {
                     column: c,
                     first,
                     nodes: q,
                     objective: (p.objective - m.objective) * s,
-                    f_evals,
-                });
-            }
-        };
-        let results: Vec<Result<_, EvalError>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..threads)
-                .map(|_| {
-                    scope.spawn(|| {
-                        let mut ws = me.ocp.eq.workspace();
-                        work(&mut ws)
-                    })
+                    f_evals: p.f_evals + m.f_evals,
                 })
-                .collect();
-            handles
-                .into_iter()
-                .map(|h| {
-                    h.join().unwrap_or_else(|_| {
-                        Err(EvalError::new(
-                            "jacobian",
-                            "a difference-quotient thread panicked",
-                        ))
-                    })
-                })
-                .collect()
-        });
+            };
+        let done = run_tasks(
+            self.options.threads,
+            0..n,
+            "difference-quotient",
+            || Ok(me.ocp.eq.workspace()),
+            column,
+        )?;
         let mut columns: Vec<(usize, Vec<f64>)> = vec![(0, Vec::new()); n];
         let mut grad = vec![0.0; n];
         let mut f_evals = 0;
         let mut sims = 0;
-        for r in results {
-            for q in r? {
-                columns[q.column] = (q.first, q.nodes);
-                grad[q.column] = -q.objective;
-                f_evals += q.f_evals;
-                sims += 2;
-            }
+        for q in done {
+            columns[q.column] = (q.first, q.nodes);
+            grad[q.column] = -q.objective;
+            f_evals += q.f_evals;
+            sims += 2;
         }
         let value = |c: usize, k: usize, what: usize| -> f64 {
             let (first, q) = &columns[c];
@@ -817,10 +784,13 @@ impl Shooting {
         let (nx, nu, nq) = (ocp.nx(), ocp.nu(), ocp.nq());
         let m = nx + 2 * nu + 1;
         let tcol = m - 1;
-        let mut steps: Vec<(f64, f64, Vec<f64>)> = Vec::new();
+        // The accepted steps (t, h) and their start states, back to back.
+        let mut steps: Vec<(f64, f64)> = Vec::new();
+        let mut starts: Vec<f64> = Vec::new();
         let (_, f_evals) =
             self.integrate_interval(ws, controls, tf, k, x_start, &mut |_, t0, x0, ig| {
-                steps.push((t0, ig.last_step(), x0.to_vec()))
+                steps.push((t0, ig.last_step()));
+                starts.extend_from_slice(x0);
             })?;
         let (ta, _, hk) = self.interval_span(k, tf);
         let (ua, ub) = (
@@ -840,7 +810,7 @@ impl Shooting {
         let mut g = vec![0.0; nx + 2];
         let mut jac = vec![0.0; entries.len()];
         let mut point_jacobians = 0;
-        for (t0, h, x0) in &steps {
+        for (&(t0, h), x0) in steps.iter().zip(starts.chunks_exact(nx)) {
             for st in 0..7 {
                 // Stage st's point x0 + h Σ a_sj K_j and its derivative;
                 // the step is h = (t_f/N)·Δτ, so ∂h/∂t_f = h/t_f.
@@ -956,63 +926,46 @@ impl Shooting {
         let n = self.num_variables();
         let tf = self.final_time(v);
         let controls = self.node_controls(v);
-        let next = AtomicUsize::new(1);
-        let failed = AtomicBool::new(false);
-        let threads = self.options.threads.min(big_n).max(1);
         let me = &*self;
-        let work = || -> Result<Vec<IntervalSensitivity>, EvalError> {
-            let mut pj = PointJacobian::new(ocp, pattern)
+        let init = || -> Result<_, EvalError> {
+            let pj = PointJacobian::new(ocp, pattern)
                 .map_err(|e| EvalError::new("jacobian", e.to_string()))?;
             let entries = pj.entries().to_vec();
-            let mut ws = ocp.eq.workspace();
-            let mut ows = ocp.eq.multibody.workspace::<Dual64>();
-            let mut oxd = vec![Dual64::from(0.0); 2 * nq];
-            let mut done = Vec::new();
-            loop {
-                let k = next.fetch_add(1, Ordering::Relaxed);
-                if k > big_n || failed.load(Ordering::Relaxed) {
-                    return Ok(done);
-                }
-                match me.interval_sensitivity(
-                    &mut pj,
-                    &entries,
-                    &mut ws,
-                    (&mut ows, &mut oxd),
+            Ok((
+                pj,
+                entries,
+                ocp.eq.workspace(),
+                ocp.eq.multibody.workspace::<Dual64>(),
+                vec![Dual64::from(0.0); 2 * nq],
+            ))
+        };
+        let done = run_tasks(
+            self.options.threads,
+            1..big_n + 1,
+            "sensitivity",
+            init,
+            |(pj, entries, ws, ows, oxd), k| {
+                me.interval_sensitivity(
+                    pj,
+                    entries,
+                    ws,
+                    (ows, oxd),
                     &controls,
                     tf,
                     k,
                     &nominal.states[k - 1],
                     &nominal.states[k],
-                ) {
-                    Ok(r) => done.push(r),
-                    Err(e) => {
-                        failed.store(true, Ordering::Relaxed);
-                        return Err(e);
-                    }
-                }
-            }
-        };
-        let results: Vec<Result<_, EvalError>> = std::thread::scope(|scope| {
-            let handles: Vec<_> = (0..threads).map(|_| scope.spawn(work)).collect();
-            handles
-                .into_iter()
-                .map(|h| {
-                    h.join().unwrap_or_else(|_| {
-                        Err(EvalError::new("jacobian", "a sensitivity thread panicked"))
-                    })
-                })
-                .collect()
-        });
+                )
+            },
+        )?;
         let mut per: Vec<Option<IntervalSensitivity>> = (0..=big_n).map(|_| None).collect();
         let (mut f_evals, mut pjs, mut steps) = (0, 0, 0);
-        for r in results {
-            for s in r? {
-                f_evals += s.f_evals;
-                pjs += s.point_jacobians;
-                steps += s.steps;
-                let k = s.k;
-                per[k] = Some(s);
-            }
+        for s in done {
+            f_evals += s.f_evals;
+            pjs += s.point_jacobians;
+            steps += s.steps;
+            let k = s.k;
+            per[k] = Some(s);
         }
         // Chain: G_k = ∂x_k/∂v (n_x × n row-major) = A_k G_{k−1} + the
         // columns of u_{k−1}, u_k and t_f; G_0 = 0 (the squat is fixed).
@@ -1207,6 +1160,58 @@ impl Nlp for Shooting {
             None => format!("c[{i}]"),
         }
     }
+}
+
+/// Tasks `tasks` on up to `threads` scoped threads, each thread with its
+/// own state from `init`: every task's result (in no particular order), or
+/// the first error; a failing task stops the other threads at their next
+/// task. `what` names the tasks in the error of a thread that panicked.
+fn run_tasks<S, T: Send>(
+    threads: usize,
+    tasks: std::ops::Range<usize>,
+    what: &str,
+    init: impl Fn() -> Result<S, EvalError> + Sync,
+    task: impl Fn(&mut S, usize) -> Result<T, EvalError> + Sync,
+) -> Result<Vec<T>, EvalError> {
+    let next = AtomicUsize::new(tasks.start);
+    let failed = AtomicBool::new(false);
+    let work = || -> Result<Vec<T>, EvalError> {
+        let mut state = init()?;
+        let mut done = Vec::new();
+        loop {
+            let i = next.fetch_add(1, Ordering::Relaxed);
+            if i >= tasks.end || failed.load(Ordering::Relaxed) {
+                return Ok(done);
+            }
+            match task(&mut state, i) {
+                Ok(r) => done.push(r),
+                Err(e) => {
+                    failed.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+        }
+    };
+    let threads = threads.min(tasks.len()).max(1);
+    let results: Vec<Result<Vec<T>, EvalError>> = std::thread::scope(|scope| {
+        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(&work)).collect();
+        handles
+            .into_iter()
+            .map(|h| {
+                h.join().unwrap_or_else(|_| {
+                    Err(EvalError::new(
+                        "jacobian",
+                        format!("a {what} thread panicked"),
+                    ))
+                })
+            })
+            .collect()
+    });
+    let mut all = Vec::new();
+    for r in results {
+        all.extend(r?);
+    }
+    Ok(all)
 }
 
 /// The SQP settings of a shooting solve from a study's: damped BFGS (the
