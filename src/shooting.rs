@@ -1194,7 +1194,7 @@ fn run_tasks<S, T: Send>(
     };
     let threads = threads.min(tasks.len()).max(1);
     let results: Vec<Result<Vec<T>, EvalError>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(&work)).collect();
+        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(work)).collect();
         handles
             .into_iter()
             .map(|h| {
