@@ -1387,6 +1387,71 @@ mod tests {
         (p, a, ne, r)
     }
 
+    /// A QP of direct shooting's shape: the excitations of `stages` nodes
+    /// and a final time, a dense P (BFGS), and per stage rows on every
+    /// variable of its own and earlier stages and the final time (the
+    /// states at a node depend on every excitation before it), most of
+    /// them twice with opposite signs (range rows, as the SQP writes
+    /// them), a few dropping entries at random; the first two rows are
+    /// equalities, then the general rows, then the bounds. Its KKT system
+    /// has a dense root supernode with one-column constraint rows below,
+    /// whose updates the factorisation gathers in batches.
+    fn shooting_qp(seed: u64) -> (CscMatrix<f64>, CscMatrix<f64>, usize, usize) {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let (stages, size, per_stage) = (8, 6, 9);
+        let n = stages * size + 1;
+        let mut pe = Vec::new();
+        for j in 0..n {
+            for i in 0..=j {
+                let v = if i == j {
+                    n as f64
+                } else {
+                    rng.random_range(-0.5..0.5)
+                };
+                pe.push((i, j, v));
+            }
+        }
+        let p = dense_csc(n, n, &pe);
+        let mut general: Vec<Vec<(usize, f64)>> = Vec::new();
+        for s in 0..stages {
+            for _ in 0..per_stage {
+                let mut row: Vec<(usize, f64)> = (0..(s + 1) * size)
+                    .chain([n - 1])
+                    .filter_map(|j| {
+                        let v = rng.random_range(-1.0..1.0);
+                        rng.random_bool(0.9).then_some((j, v))
+                    })
+                    .collect();
+                if row.is_empty() {
+                    row.push((n - 1, 1.0));
+                }
+                general.push(row);
+            }
+        }
+        let mut rows = Vec::new();
+        let mut r = 0;
+        for (k, row) in general.iter().enumerate() {
+            for &(j, v) in row {
+                rows.push((r, j, v));
+            }
+            r += 1;
+            // After the two equalities, most rows come again negated.
+            if k >= 2 && k % 4 != 0 {
+                for &(j, v) in row {
+                    rows.push((r, j, -v));
+                }
+                r += 1;
+            }
+        }
+        for j in 0..n {
+            rows.push((r, j, 1.0));
+            r += 1;
+        }
+        let a = dense_csc(r, n, &rows);
+        (p, a, 2, r)
+    }
+
     /// A linear term q in [−q_max, q_max] and the right-hand side b of
     /// [`stage_qp`]: equality rows in [−0.1, 0.1], the bounds x ≤ 1.
     fn stage_vectors(
@@ -1491,46 +1556,54 @@ mod tests {
     /// without signs).
     #[test]
     fn supernodal_factorisation_matches_faer() {
-        let (p, a, ne, r) = stage_qp(5);
+        use crate::sqp::ldlt::{BATCH_MIN_COLUMNS, DENSE_KERNEL_MIN_COLUMNS};
         // faer's dense kernels for every supernode, for the wide ones (the
-        // default) and for none.
-        let widths = [1, crate::sqp::ldlt::DENSE_KERNEL_MIN_COLUMNS, usize::MAX];
+        // default) and for none; narrow descendants' updates batched into
+        // every supernode, into the wide ones (the default) and into none.
+        let dense = [1, DENSE_KERNEL_MIN_COLUMNS, usize::MAX];
+        let batch = [1, BATCH_MIN_COLUMNS, usize::MAX];
         let cases = [(1, false), (2, false), (2, true)];
-        for ((threads, inertia), dense_min) in
-            cases.into_iter().flat_map(|c| widths.map(|w| (c, w)))
-        {
-            let mut ipm = supernodal_ipm(&p, &a, ne, threads);
-            ipm.inertia_correction = inertia;
-            ipm.layout.as_mut().unwrap().dense_min = dense_min;
-            let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
-            assert!(ipm.factor(&p, &a, &d));
-            let ours = ipm.l_values.clone();
-            let dim = ipm.diag.len();
-            let symb =
-                SymbolicSparseColMatRef::new_checked(dim, dim, &ipm.colptr, None, &ipm.rowind);
-            let reg = LdltRegularization {
-                dynamic_regularization_signs: (!inertia).then_some(&ipm.signs[..]),
-                dynamic_regularization_delta: REG_DELTA,
-                dynamic_regularization_epsilon: REG_EPSILON,
-            };
-            ipm.symbolic
-                .factorize_numeric_ldlt(
-                    &mut ipm.l_values,
-                    SparseColMatRef::new(symb, &ipm.values),
-                    Side::Upper,
-                    reg,
-                    Par::Seq,
-                    MemStack::new(&mut ipm.work),
-                    Default::default(),
-                )
-                .unwrap();
-            let scale = norm_inf(&ipm.l_values);
-            assert!(scale > 1.0);
-            for (k, (x, y)) in ours.iter().zip(&ipm.l_values).enumerate() {
-                assert!(
+        for (qp, (p, a, ne, r)) in [("stage", stage_qp(5)), ("shooting", shooting_qp(6))] {
+            for ((threads, inertia), (dense_min, batch_min)) in cases.into_iter().flat_map(|c| {
+                dense
+                    .iter()
+                    .flat_map(move |&d| batch.map(move |b| (c, (d, b))))
+            }) {
+                let mut ipm = supernodal_ipm(&p, &a, ne, threads);
+                ipm.inertia_correction = inertia;
+                let layout = ipm.layout.as_mut().unwrap();
+                layout.dense_min = dense_min;
+                layout.batch_min = batch_min;
+                let d: Vec<f64> = (0..r).map(|k| if k < ne { 0.0 } else { 0.5 }).collect();
+                assert!(ipm.factor(&p, &a, &d));
+                let ours = ipm.l_values.clone();
+                let dim = ipm.diag.len();
+                let symb =
+                    SymbolicSparseColMatRef::new_checked(dim, dim, &ipm.colptr, None, &ipm.rowind);
+                let reg = LdltRegularization {
+                    dynamic_regularization_signs: (!inertia).then_some(&ipm.signs[..]),
+                    dynamic_regularization_delta: REG_DELTA,
+                    dynamic_regularization_epsilon: REG_EPSILON,
+                };
+                ipm.symbolic
+                    .factorize_numeric_ldlt(
+                        &mut ipm.l_values,
+                        SparseColMatRef::new(symb, &ipm.values),
+                        Side::Upper,
+                        reg,
+                        Par::Seq,
+                        MemStack::new(&mut ipm.work),
+                        Default::default(),
+                    )
+                    .unwrap();
+                let scale = norm_inf(&ipm.l_values);
+                assert!(scale > 1.0);
+                for (k, (x, y)) in ours.iter().zip(&ipm.l_values).enumerate() {
+                    assert!(
                     (x - y).abs() <= 1e-10 * scale,
-                    "{threads} thread(s), inertia {inertia}, dense from {dense_min}: value {k}: {x} against faer's {y}"
+                    "{qp} QP, {threads} thread(s), inertia {inertia}, dense from {dense_min}, batched from {batch_min}: value {k}: {x} against faer's {y}"
                 );
+                }
             }
         }
     }
