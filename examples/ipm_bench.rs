@@ -8,11 +8,21 @@
 //! instead of the smaller factor of AMD and nested dissection; `CHAIN=1`
 //! solves the files in the order given with one solver, each QP
 //! warm-started from the last, as the SQP does: consecutive QPs of one
-//! solve, with REPEATS=1).
+//! solve, with REPEATS=1; `TWINS=0` keeps a range's two rows apart in the
+//! KKT system instead of merging them, as the SQP does).
 #[path = "common/qp_json.rs"]
 mod qp_json;
 use leap::sqp::ipm::{Ipm, KktOrdering};
 use qp_json::csc;
+
+/// The range rows' pairs, as the SQP names them (none with `TWINS=0`).
+fn twins(a: &clarabel::algebra::CscMatrix<f64>, num_eq: usize) -> Vec<(usize, usize)> {
+    if std::env::var("TWINS").as_deref() == Ok("0") {
+        Vec::new()
+    } else {
+        Ipm::detect_twins(a, num_eq)
+    }
+}
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let repeats: usize = std::env::var("REPEATS")
@@ -43,11 +53,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             let mut fresh;
             let s: &mut Ipm = if std::env::var_os("CHAIN").is_some() {
                 if chain.is_none() {
-                    chain = Some(Ipm::with_ordering(&p, &a, num_eq, ordering)?);
+                    chain = Some(Ipm::with_twins(
+                        &p,
+                        &a,
+                        num_eq,
+                        ordering,
+                        &twins(&a, num_eq),
+                    )?);
                 }
                 chain.as_mut().unwrap()
             } else {
-                fresh = Ipm::with_ordering(&p, &a, num_eq, ordering)?;
+                fresh = Ipm::with_twins(&p, &a, num_eq, ordering, &twins(&a, num_eq))?;
                 &mut fresh
             };
             s.inertia_correction = inertia;

@@ -183,8 +183,14 @@ pub struct Ipm {
     /// For each row kept in the KKT system, its row index; a kept row k is
     /// KKT index n + k.
     kept: Vec<usize>,
-    /// Position in `kept` of each row (usize::MAX for eliminated rows).
-    kept_pos: Vec<usize>,
+    /// For each kept row, the inequality row that is its negation (a
+    /// constraint's upper and lower bound rows, as the SQP writes them):
+    /// that row is not in the KKT system, the kept row stands for both
+    /// ([`Ipm::merged_weight`]). usize::MAX where there is none.
+    twin: Vec<usize>,
+    /// The A entries (kept row's, twin's) of every pair, in order: the
+    /// values must stay negated ([`Ipm::twins_hold`]).
+    twin_entries: Vec<(usize, usize)>,
     // KKT matrix, upper triangle, CSC.
     colptr: Vec<usize>,
     rowind: Vec<usize>,
@@ -193,6 +199,15 @@ pub struct Ipm {
     sources: Vec<(usize, Slot)>,
     /// KKT slot of each diagonal entry.
     diag: Vec<usize>,
+    /// Whether `values` and `l_base` hold the P and A of the current
+    /// solve (they change from QP to QP, the diagonal from iteration to
+    /// iteration).
+    assembled: bool,
+    /// The diagonal's share of P (the sources of each diagonal slot).
+    diag_base: Vec<f64>,
+    /// The supernodal factor's values before factorisation, but for the
+    /// diagonal: P and A in the factor's layout, zero elsewhere.
+    l_base: Vec<f64>,
     signs: Vec<i8>,
     symbolic: SymbolicCholesky<usize>,
     /// The supernodal factor's layout, for [`Ipm::ldlt_solve`] (None when
@@ -298,6 +313,60 @@ fn par() -> Par {
     Par::Seq
 }
 
+/// [`twin_rows`]' mark of a twin row (not in the KKT system).
+const TWIN: usize = usize::MAX - 1;
+
+/// Each row's entries (column, index in A's values), by column.
+fn row_entries(a: &CscMatrix<f64>) -> Vec<Vec<(usize, usize)>> {
+    let mut rows = vec![Vec::new(); a.m];
+    for j in 0..a.n {
+        for k in a.colptr[j]..a.colptr[j + 1] {
+            rows[a.rowval[k]].push((j, k));
+        }
+    }
+    rows
+}
+
+/// The twin pairs of [`Ipm::with_twins`], checked: for each row its twin
+/// (kept rows), [`TWIN`] (twin rows) or usize::MAX, and the A entries
+/// (row's, twin's) of every pair. Pairs whose rows are single-entry
+/// (eliminated as bounds anyway) are dropped.
+fn twin_rows(
+    a: &CscMatrix<f64>,
+    num_eq: usize,
+    bound: &[Option<(usize, usize)>],
+    twins: &[(usize, usize)],
+) -> Result<(Vec<usize>, Vec<(usize, usize)>), String> {
+    let mut partner = vec![usize::MAX; a.m];
+    let mut entries = Vec::new();
+    if twins.is_empty() {
+        return Ok((partner, entries));
+    }
+    let rows = row_entries(a);
+    for &(r, t) in twins {
+        if r >= a.m || t >= a.m || r == t || r < num_eq || t < num_eq {
+            return Err(format!(
+                "twin rows ({r}, {t}): not two distinct inequality rows of the {} rows",
+                a.m
+            ));
+        }
+        if partner[r] != usize::MAX || partner[t] != usize::MAX {
+            return Err(format!("twin rows ({r}, {t}): a row in two pairs"));
+        }
+        let (x, y) = (&rows[r], &rows[t]);
+        if x.len() != y.len() || x.iter().zip(y).any(|(cx, cy)| cx.0 != cy.0) {
+            return Err(format!("twin rows ({r}, {t}): different columns"));
+        }
+        if bound[r].is_some() || bound[t].is_some() {
+            continue;
+        }
+        partner[r] = t;
+        partner[t] = TWIN;
+        entries.extend(x.iter().zip(y).map(|(cx, cy)| (cx.1, cy.1)));
+    }
+    Ok((partner, entries))
+}
+
 // `!(a > b)` is meant: it is true for NaN as well.
 #[allow(clippy::neg_cmp_op_on_partial_ord)]
 impl Ipm {
@@ -315,7 +384,48 @@ impl Ipm {
         num_eq: usize,
         ordering: KktOrdering,
     ) -> Result<Ipm, String> {
-        Self::with_threshold(p, a, num_eq, SupernodalThreshold::AUTO, ordering)
+        Self::with_threshold(p, a, num_eq, SupernodalThreshold::AUTO, ordering, &[])
+    }
+
+    /// [`Ipm::with_ordering`] for a QP whose rows come in twins: in each
+    /// pair (r, t) of inequality rows, row t is row r negated (the upper
+    /// and lower bound rows of one constraint, as the SQP writes them).
+    /// Only r enters the KKT system, with the weight of both rows
+    /// ([`Ipm::merged_weight`]): a shooting QP's system loses half its
+    /// constraint rows. The two rows must have the same columns; a solve
+    /// whose values are not negated fails ([`IpmStatus::Failed`]).
+    pub fn with_twins(
+        p: &CscMatrix<f64>,
+        a: &CscMatrix<f64>,
+        num_eq: usize,
+        ordering: KktOrdering,
+        twins: &[(usize, usize)],
+    ) -> Result<Ipm, String> {
+        Self::with_threshold(p, a, num_eq, SupernodalThreshold::AUTO, ordering, twins)
+    }
+
+    /// The pairs of neighbouring inequality rows of A that have the same
+    /// columns and negated values, as [`Ipm::with_twins`] takes them (for
+    /// QPs read from files; the SQP names its pairs).
+    pub fn detect_twins(a: &CscMatrix<f64>, num_eq: usize) -> Vec<(usize, usize)> {
+        let rows = row_entries(a);
+        let mut twins = Vec::new();
+        let mut r = num_eq;
+        while r + 1 < a.m {
+            let (x, y) = (&rows[r], &rows[r + 1]);
+            let negated = x.len() > 1
+                && x.len() == y.len()
+                && x.iter()
+                    .zip(y)
+                    .all(|(&(cx, kx), &(cy, ky))| cx == cy && a.nzval[kx] == -a.nzval[ky]);
+            if negated {
+                twins.push((r, r + 1));
+                r += 2;
+            } else {
+                r += 1;
+            }
+        }
+        twins
     }
 
     /// [`Ipm::new`] with faer's choice between the simplicial and the
@@ -326,6 +436,7 @@ impl Ipm {
         num_eq: usize,
         threshold: SupernodalThreshold,
         ordering: KktOrdering,
+        twins: &[(usize, usize)],
     ) -> Result<Ipm, String> {
         let (n, m) = (p.n, a.m);
         let mut row_count = vec![0usize; m];
@@ -340,7 +451,11 @@ impl Ipm {
         let bound: Vec<Option<(usize, usize)>> = (0..m)
             .map(|r| (r >= num_eq && row_count[r] == 1).then_some(row_entry[r]))
             .collect();
-        let kept: Vec<usize> = (0..m).filter(|&r| bound[r].is_none()).collect();
+        let (partner, twin_entries) = twin_rows(a, num_eq, &bound, twins)?;
+        let kept: Vec<usize> = (0..m)
+            .filter(|&r| bound[r].is_none() && partner[r] != TWIN)
+            .collect();
+        let twin: Vec<usize> = kept.iter().map(|&r| partner[r]).collect();
         let mut kept_pos = vec![usize::MAX; m];
         for (k, &r) in kept.iter().enumerate() {
             kept_pos[r] = k;
@@ -453,12 +568,16 @@ impl Ipm {
             num_eq,
             bound,
             kept,
-            kept_pos,
+            twin,
+            twin_entries,
             colptr,
             rowind,
             values: vec![0.0; nnz],
             sources,
             diag,
+            assembled: false,
+            diag_base: vec![0.0; dim],
+            l_base: Vec::new(),
             signs,
             l_values: vec![0.0; symbolic.len_val()],
             symbolic,
@@ -506,28 +625,44 @@ impl Ipm {
     /// on inequality rows, 0 on equality rows) and factorise it.
     fn factor(&mut self, p: &CscMatrix<f64>, a: &CscMatrix<f64>, d: &[f64]) -> bool {
         let n = self.n;
-        self.values.iter_mut().for_each(|v| *v = 0.0);
-        for &(slot, src) in &self.sources {
-            self.values[slot] += match src {
-                Slot::P(k) => p.nzval[k],
-                Slot::A(k) => a.nzval[k],
-            };
+        if !self.assembled {
+            // P and A into the KKT matrix (and the factor's layout) once
+            // per solve: the interior-point iterations change only the
+            // diagonal.
+            self.values.fill(0.0);
+            for &(slot, src) in &self.sources {
+                self.values[slot] += match src {
+                    Slot::P(k) => p.nzval[k],
+                    Slot::A(k) => a.nzval[k],
+                };
+            }
+            for (b, &slot) in self.diag_base.iter_mut().zip(&self.diag) {
+                *b = self.values[slot];
+            }
+            if self.layout.is_some() {
+                self.l_base.clear();
+                self.l_base.resize(self.l_values.len(), 0.0);
+                for (&pos, &v) in self.l_slot.iter().zip(&self.values) {
+                    self.l_base[pos] = v;
+                }
+            }
+            self.assembled = true;
         }
         for j in 0..n {
-            self.values[self.diag[j]] += STATIC_REG + self.shift;
+            self.values[self.diag[j]] = self.diag_base[j] + STATIC_REG + self.shift;
         }
         for (r, b) in self.bound.iter().enumerate() {
             if let Some((k, j)) = *b {
                 self.values[self.diag[j]] += a.nzval[k] * a.nzval[k] / d[r];
             }
         }
-        for (k, &r) in self.kept.iter().enumerate() {
-            self.values[self.diag[n + k]] = -d[r] - STATIC_REG;
+        for k in 0..self.kept.len() {
+            self.values[self.diag[n + k]] = -self.merged_weight(k, d) - STATIC_REG;
         }
         if let Some(layout) = &mut self.layout {
-            self.l_values.fill(0.0);
-            for (&pos, &v) in self.l_slot.iter().zip(&self.values) {
-                self.l_values[pos] += v;
+            self.l_values.copy_from_slice(&self.l_base);
+            for &slot in &self.diag {
+                self.l_values[self.l_slot[slot]] = self.values[slot];
             }
             let signs = (!self.inertia_correction).then_some(&self.factor_signs[..]);
             return layout
@@ -553,6 +688,36 @@ impl Ipm {
                 Default::default(),
             )
             .is_ok()
+    }
+
+    /// The weight of kept row k in the reduced KKT system: its d, or for a
+    /// row with a twin t (a_t = −a_r) both rows' slacks eliminated into
+    /// one, 1/(1/d_r + 1/d_t). The twin's equation −a_r·dx − d_t·dz_t =
+    /// ρ_t and the row's a_r·dx − d_r·dz_r = ρ_r reach the variables only
+    /// through dz_r − dz_t ([`Ipm::twin_split`]).
+    fn merged_weight(&self, k: usize, d: &[f64]) -> f64 {
+        let r = self.kept[k];
+        match self.twin[k] {
+            usize::MAX => d[r],
+            t => d[r] * (d[t] / (d[r] + d[t])),
+        }
+    }
+
+    /// For kept row k with its twin: (θ_r, θ_t, c) with which the merged
+    /// row's right-hand side is θ_r ρ_r − θ_t ρ_t, and the two multipliers'
+    /// steps are dz_r = θ_r dz − c (ρ_r + ρ_t), dz_t = −θ_t dz − c (ρ_r +
+    /// ρ_t), dz the merged row's (no division by a single vanishing d).
+    fn twin_split(&self, k: usize, d: &[f64]) -> (f64, f64, f64) {
+        let (dr, dt) = (d[self.kept[k]], d[self.twin[k]]);
+        let c = 1.0 / (dr + dt);
+        (dt * c, dr * c, c)
+    }
+
+    /// Whether every twin row is still its row negated.
+    fn twins_hold(&self, a: &CscMatrix<f64>) -> bool {
+        self.twin_entries
+            .iter()
+            .all(|&(k, t)| a.nzval[t] == -a.nzval[k])
     }
 
     /// Whether the current factor has the inertia (n, kept rows, 0): n
@@ -636,7 +801,13 @@ impl Ipm {
             }
         }
         for (k, &r) in self.kept.iter().enumerate() {
-            rhs[n + k] = rr[r];
+            rhs[n + k] = match self.twin[k] {
+                usize::MAX => rr[r],
+                t => {
+                    let (theta_r, theta_t, _) = self.twin_split(k, d);
+                    theta_r * rr[r] - theta_t * rr[t]
+                }
+            };
         }
         sol.clone_from(rhs);
         self.ldlt_solve(sol);
@@ -670,10 +841,21 @@ impl Ipm {
         }
         dx.copy_from_slice(&sol[..n]);
         for r in 0..self.m {
-            dz[r] = match self.bound[r] {
-                Some((k, j)) => (a.nzval[k] * dx[j] - rr[r]) / d[r],
-                None => sol[n + self.kept_pos[r]],
-            };
+            if let Some((k, j)) = self.bound[r] {
+                dz[r] = (a.nzval[k] * dx[j] - rr[r]) / d[r];
+            }
+        }
+        for (k, &r) in self.kept.iter().enumerate() {
+            let dzk = sol[n + k];
+            match self.twin[k] {
+                usize::MAX => dz[r] = dzk,
+                t => {
+                    let (theta_r, theta_t, c) = self.twin_split(k, d);
+                    let both = c * (rr[r] + rr[t]);
+                    dz[r] = theta_r * dzk - both;
+                    dz[t] = -theta_t * dzk - both;
+                }
+            }
         }
         self.kkt_scratch = scratch;
     }
@@ -742,6 +924,10 @@ impl Ipm {
         out: &mut [f64],
     ) {
         let n = self.n;
+        let mut kept_pos = vec![usize::MAX; self.m];
+        for (k, &r) in self.kept.iter().enumerate() {
+            kept_pos[r] = k;
+        }
         out.iter_mut().for_each(|o| *o = 0.0);
         let (vx, vk) = v.split_at(n);
         {
@@ -758,15 +944,15 @@ impl Ipm {
         }
         for j in 0..n {
             for k in a.colptr[j]..a.colptr[j + 1] {
-                let pos = self.kept_pos[a.rowval[k]];
+                let pos = kept_pos[a.rowval[k]];
                 if pos != usize::MAX {
                     out[j] += a.nzval[k] * vk[pos];
                     out[n + pos] += a.nzval[k] * vx[j];
                 }
             }
         }
-        for (k, &r) in self.kept.iter().enumerate() {
-            out[n + k] -= d[r] * vk[k];
+        for k in 0..self.kept.len() {
+            out[n + k] -= self.merged_weight(k, d) * vk[k];
         }
     }
 
@@ -842,6 +1028,13 @@ impl Ipm {
         }
         let qs: Vec<f64> = q.iter().zip(&dv).map(|(q, d)| q * d).collect();
         let bs: Vec<f64> = b.iter().zip(&ev).map(|(b, e)| b * e).collect();
+        // A twin row's scale equals its row's (the same magnitudes), so the
+        // scaled rows stay negated where the given ones are.
+        if !self.twins_hold(&as_) {
+            self.iterations = 0;
+            return IpmStatus::Failed;
+        }
+        self.assembled = false;
         self.shift = 0.0;
         if self.inertia_correction {
             // The rows active at the last answer count as active (they
@@ -1387,6 +1580,153 @@ mod tests {
         (p, a, ne, r)
     }
 
+    /// Random convex QPs whose general rows are ranges l ≤ a·x ≤ u, written
+    /// as the SQP writes them (−a·x ≤ −l, then a·x ≤ u; some ranges
+    /// nearly equalities), solved with each pair merged into one KKT row
+    /// ([`Ipm::with_twins`]) and as separate rows: the same answer,
+    /// multipliers and slacks included; and against clarabel's objective.
+    /// A twin whose values stop being negated fails the solve, and twins
+    /// with different columns are refused.
+    #[test]
+    fn twin_rows_solve_as_the_rows_they_stand_for() {
+        use clarabel::solver::{
+            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+            ZeroConeT,
+        };
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
+        for case in 0..20 {
+            let n = rng.random_range(4..30);
+            let (ne, ng) = (rng.random_range(0..n / 3 + 1), rng.random_range(1..2 * n));
+            let k = (n / 2).max(1);
+            let bm: Vec<f64> = (0..n * k).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let mut entries = Vec::new();
+            for j in 0..n {
+                for i in 0..=j {
+                    let v: f64 = (0..k).map(|t| bm[i * k + t] * bm[j * k + t]).sum();
+                    entries.push((i, j, v));
+                }
+            }
+            let p = dense_csc(n, n, &entries);
+            let x0: Vec<f64> = (0..n).map(|_| rng.random_range(-0.5..0.5)).collect();
+            let (mut rows, mut b, mut twins) = (Vec::new(), Vec::new(), Vec::new());
+            let mut r = 0;
+            for g in 0..ne + ng {
+                let mut row = Vec::new();
+                for j in 0..n {
+                    if rng.random_bool(0.5) {
+                        row.push((j, rng.random_range(-1.0..1.0)));
+                    }
+                }
+                if row.len() < 2 {
+                    row.extend([(0, 1.0), (n - 1, -1.0)]);
+                    row.truncate(2);
+                }
+                let ax: f64 = row.iter().map(|&(j, v)| v * x0[j]).sum();
+                if g < ne {
+                    rows.extend(row.iter().map(|&(j, v)| (r, j, v)));
+                    b.push(ax);
+                    r += 1;
+                    continue;
+                }
+                let width = if g % 5 == 0 { 1e-9 } else { 0.3 };
+                let lower = ax - rng.random_range(0.0..width);
+                let upper = ax + rng.random_range(0.0..width);
+                rows.extend(row.iter().map(|&(j, v)| (r, j, -v)));
+                b.push(-lower);
+                rows.extend(row.iter().map(|&(j, v)| (r + 1, j, v)));
+                b.push(upper);
+                twins.push((r, r + 1));
+                r += 2;
+            }
+            for j in 0..n {
+                rows.push((r, j, -1.0));
+                rows.push((r + 1, j, 1.0));
+                b.extend([1.0, 1.0]);
+                r += 2;
+            }
+            let m = r;
+            let a = dense_csc(m, n, &rows);
+            assert_eq!(Ipm::detect_twins(&a, ne), twins, "case {case}");
+            let q: Vec<f64> = (0..n).map(|_| rng.random_range(-3.0..3.0)).collect();
+            let mut merged =
+                Ipm::with_twins(&p, &a, ne, KktOrdering::SmallerFactor, &twins).unwrap();
+            let mut separate = Ipm::new(&p, &a, ne).unwrap();
+            assert_eq!(merged.kept.len() + twins.len(), separate.kept.len());
+            for ipm in [&mut merged, &mut separate] {
+                assert_eq!(
+                    ipm.solve(&p, &a, &q, &b, 1e-10),
+                    IpmStatus::Solved,
+                    "case {case}"
+                );
+            }
+            let close = |x: &[f64], y: &[f64], what: &str| {
+                let scale = 1.0 + norm_inf(y);
+                for (i, (u, v)) in x.iter().zip(y).enumerate() {
+                    assert!(
+                        (u - v).abs() <= 1e-6 * scale,
+                        "case {case}: {what} {i}: merged {u} against separate {v}"
+                    );
+                }
+            };
+            close(&merged.x, &separate.x, "x");
+            close(&merged.s, &separate.s, "s");
+            // A range's multiplier is the difference of its rows' (as the
+            // SQP reads it); a nearly equal range leaves each row's own to
+            // the interior point's path (s·z ≈ μ on both sides).
+            let range = |z: &[f64]| -> Vec<f64> {
+                let mut v = z.to_vec();
+                for &(r, t) in &twins {
+                    (v[r], v[t]) = (z[t] - z[r], 0.0);
+                }
+                v
+            };
+            close(&range(&merged.z), &range(&separate.z), "z");
+            assert!(merged.z[ne..].iter().all(|&z| z >= 0.0), "case {case}");
+            let settings = DefaultSettingsBuilder::default()
+                .verbose(false)
+                .presolve_enable(false)
+                .build()
+                .unwrap();
+            let cones = [ZeroConeT(ne), NonnegativeConeT(m - ne)];
+            let mut cl = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
+            cl.solve();
+            assert_eq!(cl.solution.status, SolverStatus::Solved, "case {case}");
+            let obj = |x: &[f64]| {
+                let mut px = vec![0.0; n];
+                Ipm::p_mul(&p, x, &mut px);
+                (0..n)
+                    .map(|j| 0.5 * x[j] * px[j] + q[j] * x[j])
+                    .sum::<f64>()
+            };
+            let (f, f_cl) = (obj(&merged.x), obj(&cl.solution.x));
+            assert!(
+                (f - f_cl).abs() <= 1e-7 * (1.0 + f_cl.abs()),
+                "case {case}: objective {f} against clarabel's {f_cl}"
+            );
+            // A twin that is no longer its row negated fails the solve.
+            let (t0, _) = twins[0];
+            let mut broken = a.clone();
+            let e = (0..n)
+                .flat_map(|j| broken.colptr[j]..broken.colptr[j + 1])
+                .find(|&e| broken.rowval[e] == t0)
+                .unwrap();
+            broken.nzval[e] *= 1.5;
+            assert_eq!(merged.solve(&p, &broken, &q, &b, 1e-10), IpmStatus::Failed);
+        }
+        // Twins must have the same columns.
+        let p = dense_csc(3, 3, &[(0, 0, 1.0), (1, 1, 1.0), (2, 2, 1.0)]);
+        let a = dense_csc(
+            2,
+            3,
+            &[(0, 0, 1.0), (0, 1, 1.0), (1, 0, -1.0), (1, 2, -1.0)],
+        );
+        let e = Ipm::with_twins(&p, &a, 0, KktOrdering::Amd, &[(0, 1)])
+            .err()
+            .unwrap();
+        assert!(e.contains("different columns"), "{e}");
+    }
+
     /// A QP of direct shooting's shape: the excitations of `stages` nodes
     /// and a final time, a dense P (BFGS), and per stage rows on every
     /// variable of its own and earlier stages and the final time (the
@@ -1484,6 +1824,7 @@ mod tests {
             ne,
             SupernodalThreshold::FORCE_SUPERNODAL,
             KktOrdering::SmallerFactor,
+            &Ipm::detect_twins(a, ne),
         )
         .unwrap();
         let min_work = if threads == 2 { 0.0 } else { f64::INFINITY };

@@ -453,7 +453,18 @@ impl Qp {
             } else {
                 KktOrdering::SmallerFactor
             };
-            let mut ipm = Ipm::with_ordering(&self.p, &self.a, self.num_eq, ordering)?;
+            // A constraint bounded on both sides has two rows, the lower
+            // one its upper one negated: one KKT row stands for both.
+            let twins: Vec<(usize, usize)> = self
+                .rows
+                .windows(2)
+                .enumerate()
+                .filter_map(|(r, w)| match (w[0], w[1]) {
+                    (Row::Lower(i), Row::Upper(k)) if i == k => Some((r, r + 1)),
+                    _ => None,
+                })
+                .collect();
+            let mut ipm = Ipm::with_twins(&self.p, &self.a, self.num_eq, ordering, &twins)?;
             ipm.inertia_correction = self.inertia_correction;
             ipm.warm_start = self.warm_start;
             self.ipm = Some(ipm);
