@@ -327,6 +327,9 @@ fn row_entries(a: &CscMatrix<f64>) -> Vec<Vec<(usize, usize)>> {
     rows
 }
 
+/// Each row's twin or mark, and the pairs' A entries ([`twin_rows`]).
+type TwinRows = (Vec<usize>, Vec<(usize, usize)>);
+
 /// The twin pairs of [`Ipm::with_twins`], checked: for each row its twin
 /// (kept rows), [`TWIN`] (twin rows) or usize::MAX, and the A entries
 /// (row's, twin's) of every pair. Pairs whose rows are single-entry
@@ -336,7 +339,7 @@ fn twin_rows(
     num_eq: usize,
     bound: &[Option<(usize, usize)>],
     twins: &[(usize, usize)],
-) -> Result<(Vec<usize>, Vec<(usize, usize)>), String> {
+) -> Result<TwinRows, String> {
     let mut partner = vec![usize::MAX; a.m];
     let mut entries = Vec::new();
     if twins.is_empty() {
