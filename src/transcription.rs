@@ -80,6 +80,13 @@ use std::sync::Arc;
 /// [`time_point_jacobian`] for the measurements behind the choice).
 pub const LANES: usize = 8;
 
+/// Lanes of a point Jacobian of direct shooting ([`PointJacobian`]): with
+/// the paths walked once per point, the jump's 38 colours take two passes
+/// (gait2392's jumper, `transcription::timing`: 55 µs per point against
+/// 68 µs with 8 lanes and 89 µs with 8 lanes and the paths walked in every
+/// pass).
+const POINT_LANES: usize = 19;
+
 /// The collocation scheme of the defects.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Scheme {
@@ -262,7 +269,15 @@ impl StatePattern {
         let (mut used, mut rejected) = (0, 0);
         for s in 0..samples {
             sample_state(ocp, s % 3, &mut rng, &mut w.x, &mut w.u);
-            match eval_jac(ocp, &dense, &mut w, &mut out, &mut jac, Some(&mut found)) {
+            match eval_jac(
+                ocp,
+                &dense,
+                &mut w,
+                &mut out,
+                &mut jac,
+                Some(&mut found),
+                None,
+            ) {
                 Ok(()) => used += 1,
                 Err(_) => {
                     rejected += 1;
@@ -312,7 +327,7 @@ impl StatePattern {
         let mut worst = vec![0.0f64; nout * nin];
         for s in 0..samples {
             sample_state(ocp, s % 3, &mut rng, &mut w.x, &mut w.u);
-            if eval_jac(ocp, &dense, &mut w, &mut out, &mut jac, None).is_err() {
+            if eval_jac(ocp, &dense, &mut w, &mut out, &mut jac, None, None).is_err() {
                 continue;
             }
             mark_significant(&dense, &jac, nin, |r, c, ratio| {
@@ -621,10 +636,18 @@ fn eval_jac<const W: usize>(
     out: &mut [f64],
     jac: &mut [f64],
     mut path_columns: Option<&mut Vec<Vec<bool>>>,
+    mut paths: Option<&mut FirstOrderPaths>,
 ) -> Result<(), String> {
     let (nx, nu) = (w.x.len(), w.u.len());
     let (n, nm) = (ocp.nq(), ocp.nm());
+    if let Some(p) = paths.as_deref_mut() {
+        p.walk.run(ocp, &w.x)?;
+    }
     for (s, pass) in cp.passes.iter().enumerate() {
+        match paths.as_deref() {
+            Some(p) => p.walk.lift_first_order(&p.lanes[s], &mut w.wd.given_paths),
+            None => w.wd.given_paths = None,
+        }
         for i in 0..nx {
             w.xd[i] = DualSVec64::from(w.x[i]);
         }
@@ -677,7 +700,44 @@ fn eval_jac<const W: usize>(
 /// shooting's sensitivities ([`crate::shooting`]).
 pub struct PointJacobian {
     cp: Compiled,
-    w: Worker<LANES>,
+    w: Worker<POINT_LANES>,
+    /// The muscle paths walked once per point (models of at most
+    /// [`HESS_Q`] coordinates; others walk them in every pass).
+    paths: Option<FirstOrderPaths>,
+}
+
+/// The muscle paths of a point Jacobian, walked once per point in dual
+/// numbers over (q, q̇) and lifted into each pass's lanes (see
+/// [`GivenPaths`]): the paths depend on (q, q̇) alone, so a pass's lane
+/// holds the path's derivative along the (q, q̇) column seeded in it. The
+/// jump's point Jacobian has 5 passes; walking the paths in each was most
+/// of its cost.
+struct FirstOrderPaths {
+    walk: PathPass,
+    /// Per pass, the lane of each (q, q̇) direction seeded in it.
+    lanes: Vec<Vec<Option<usize>>>,
+}
+
+impl FirstOrderPaths {
+    fn new(ocp: &JumpOcp, cp: &Compiled) -> Option<Self> {
+        let n2 = 2 * ocp.nq();
+        (ocp.nq() <= HESS_Q).then(|| FirstOrderPaths {
+            walk: PathPass::new(ocp),
+            lanes: cp
+                .passes
+                .iter()
+                .map(|pass| {
+                    let mut lanes = vec![None; n2];
+                    for &(c, l) in &pass.seeds {
+                        if c < n2 {
+                            lanes[c] = Some(l);
+                        }
+                    }
+                    lanes
+                })
+                .collect(),
+        })
+    }
 }
 
 impl PointJacobian {
@@ -694,10 +754,19 @@ impl PointJacobian {
                 ocp.nu()
             )));
         }
+        let cp = Compiled::new(&pattern.rows, pattern.nx + pattern.nu, true, POINT_LANES);
         Ok(PointJacobian {
-            cp: Compiled::new(&pattern.rows, pattern.nx + pattern.nu, true, LANES),
+            paths: FirstOrderPaths::new(ocp, &cp),
+            cp,
             w: Worker::new(ocp, ocp.nu()),
         })
+    }
+
+    /// Walk the muscle paths in every pass, as collocation's Jacobian does,
+    /// instead of once per point (for comparisons: the two agree to
+    /// rounding).
+    pub fn walk_paths_in_every_pass(&mut self) {
+        self.paths = None;
     }
 
     /// The Jacobian's entries (output row, input column), in the order
@@ -730,7 +799,15 @@ impl PointJacobian {
         }
         self.w.x.copy_from_slice(x);
         self.w.u.copy_from_slice(u);
-        eval_jac(ocp, &self.cp, &mut self.w, g, jac, None)
+        eval_jac(
+            ocp,
+            &self.cp,
+            &mut self.w,
+            g,
+            jac,
+            None,
+            self.paths.as_mut(),
+        )
     }
 }
 
@@ -1885,7 +1962,15 @@ impl Transcription {
                 set_point_inputs(p, node, node_f, h, (lm0, fiber_speed), &mut w.x, &mut w.u);
                 let out = &mut vals[i * nout..(i + 1) * nout];
                 let r = if jac {
-                    eval_jac(ocp, cp, w, out, &mut jacs[i * nnz..(i + 1) * nnz], None)
+                    eval_jac(
+                        ocp,
+                        cp,
+                        w,
+                        out,
+                        &mut jacs[i * nnz..(i + 1) * nnz],
+                        None,
+                        None,
+                    )
                 } else {
                     eval_value(ocp, w, out)
                 };
@@ -2600,12 +2685,14 @@ pub fn time_point_jacobian<const W: usize>(
     ocp: &JumpOcp,
     pattern: &StatePattern,
     compress: bool,
+    walk_paths_once: bool,
     x: &[f64],
     u: &[f64],
     reps: usize,
 ) -> Result<f64, String> {
     let nin = pattern.nx + pattern.nu;
     let cp = Compiled::new(&pattern.rows, nin, compress, W);
+    let mut paths = FirstOrderPaths::new(ocp, &cp).filter(|_| walk_paths_once);
     let mut w = Worker::<W>::new(ocp, ocp.nu());
     w.x.copy_from_slice(x);
     w.u.copy_from_slice(u);
@@ -2614,7 +2701,7 @@ pub fn time_point_jacobian<const W: usize>(
     let mut times = Vec::with_capacity(reps);
     for _ in 0..reps.max(1) {
         let t = std::time::Instant::now();
-        eval_jac(ocp, &cp, &mut w, &mut out, &mut jac, None)?;
+        eval_jac(ocp, &cp, &mut w, &mut out, &mut jac, None, paths.as_mut())?;
         times.push(t.elapsed().as_secs_f64());
     }
     times.sort_by(|a, b| a.total_cmp(b));
@@ -2892,6 +2979,44 @@ impl PathPass {
         ocp.eq
             .path_values(&mut self.ws, &self.q, &self.qd, &mut self.out)
             .map_err(|e| e.to_string())
+    }
+
+    /// The paths lifted into a first-order pass's numbers: direction c of
+    /// (q, q̇) goes to lane `lanes[c]` (summed where two share one).
+    fn lift_first_order<const W: usize>(
+        &self,
+        lanes: &[Option<usize>],
+        to: &mut Option<GivenPaths<DualSVec64<W>>>,
+    ) {
+        let one = |d: &DualSVec64<{ 2 * HESS_Q }>| {
+            let mut e = [0.0; W];
+            let mut any = false;
+            if let Some(src) = &d.eps.0 {
+                for (c, lane) in lanes.iter().enumerate() {
+                    if let Some(l) = *lane {
+                        if src[c] != 0.0 {
+                            e[l] += src[c];
+                            any = true;
+                        }
+                    }
+                }
+            }
+            let mut v = DualSVec64::<W>::from(d.re);
+            if any {
+                v.eps = num_dual::Derivative::some(nalgebra::SVector::from(e));
+            }
+            v
+        };
+        let to = to.get_or_insert_with(GivenPaths::default);
+        to.at.clone_from(&self.out.at);
+        for (dst, src) in [
+            (&mut to.length, &self.out.length),
+            (&mut to.speed, &self.out.speed),
+            (&mut to.unit, &self.out.unit),
+        ] {
+            dst.clear();
+            dst.extend(src.iter().map(one));
+        }
     }
 
     /// The paths lifted into a pass's numbers: direction c of (q, q̇) goes

@@ -612,6 +612,61 @@ fn compressed_uncompressed_and_parallel_jacobians_agree() {
     }
 }
 
+/// Direct shooting's point Jacobian walks the muscle paths once per point
+/// and lifts them into each pass's lanes: the same entries, to rounding,
+/// as walking them in every pass (the way of collocation's Jacobian, which
+/// the tests above check against finite differences), at points along the
+/// bang-bang guess and perturbed ones.
+#[test]
+fn point_jacobian_with_paths_walked_once_matches_every_pass() {
+    let (ocp, pattern, guess) = setup();
+    let (nx, nu) = (ocp.nx(), ocp.nu());
+    let mut once = PointJacobian::new(ocp, pattern).unwrap();
+    let mut every = PointJacobian::new(ocp, pattern).unwrap();
+    every.walk_paths_in_every_pass();
+    let entries = once.entries().to_vec();
+    assert_eq!(entries, every.entries());
+    let tr = transcription(TranscriptionOptions::default());
+    let perturbed = perturbed_by(&tr, guess, 5, 1e-2);
+    let (mut g1, mut g2) = (vec![0.0; nx + 2], vec![0.0; nx + 2]);
+    let (mut j1, mut j2) = (vec![0.0; entries.len()], vec![0.0; entries.len()]);
+    let (mut checked, mut worst) = (0, 0.0f64);
+    for v in [guess, &perturbed] {
+        for node in [2, 6, 10, 16, 22, 27] {
+            let at = (nx + nu) * node;
+            let (x, u) = (&v[at..at + nx], &v[at + nx..at + nx + nu]);
+            once.eval(ocp, x, u, &mut g1, &mut j1).unwrap();
+            every.eval(ocp, x, u, &mut g2, &mut j2).unwrap();
+            // The paths' unit forces scaled by the tension instead of the
+            // tension carried along the path: rounding apart, which the
+            // muscle moments' cancellation in q̈ (kN·m for rad/s²) enlarges.
+            for (i, (a, b)) in g1.iter().zip(&g2).enumerate() {
+                assert!(
+                    (a - b).abs() <= 1e-10 * b.abs().max(1.0),
+                    "node {node}, output {i}: {a} against {b}"
+                );
+            }
+            // Relative to the largest entry of the row (the sums run in
+            // another order).
+            let mut row_max = vec![0.0f64; nx + 2];
+            for (&(r, _), b) in entries.iter().zip(&j2) {
+                row_max[r] = row_max[r].max(b.abs());
+            }
+            for (k, (&(r, c), (a, b))) in entries.iter().zip(j1.iter().zip(&j2)).enumerate() {
+                worst = worst.max((a - b).abs() / row_max[r].max(1.0));
+                assert!(
+                    (a - b).abs() <= 1e-10 * row_max[r].max(1.0),
+                    "node {node}, entry {k} (row {r}, column {c}): {a} against {b}"
+                );
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 12);
+    assert!(j1.iter().any(|&v| v != 0.0));
+    eprintln!("point Jacobian, paths walked once against every pass: {worst:.1e} of the row's largest entry");
+}
+
 #[test]
 fn pattern_holds_at_fresh_random_states() {
     let (ocp, pattern, _) = setup();
@@ -1150,23 +1205,23 @@ fn timing() {
             1e6 * t * colors as f64
         );
     }
-    for compress in [true, false] {
+    for (compress, once) in [(true, false), (false, false), (true, true)] {
         let mut best = [f64::INFINITY; 7];
         for _ in 0..5 {
             let t = [
-                time_point_jacobian::<1>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<4>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<6>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<8>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<10>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<13>(ocp, pattern, compress, xs, us, 20).unwrap(),
-                time_point_jacobian::<19>(ocp, pattern, compress, xs, us, 20).unwrap(),
+                time_point_jacobian::<1>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<4>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<6>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<8>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<10>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<13>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
+                time_point_jacobian::<19>(ocp, pattern, compress, once, xs, us, 20).unwrap(),
             ];
             for i in 0..7 {
                 best[i] = best[i].min(t[i]);
             }
         }
-        eprintln!("one Jacobian of (f, Ÿ_C, F_y) (compress {compress}), µs for W = 1, 4, 6, 8, 10, 13, 19 lanes: {:?}", best.map(|v| (v * 1e6).round()));
+        eprintln!("one Jacobian of (f, Ÿ_C, F_y) (compress {compress}, paths walked once {once}), µs for W = 1, 4, 6, 8, 10, 13, 19 lanes: {:?}", best.map(|v| (v * 1e6).round()));
     }
     {
         let mut tr = transcription(TranscriptionOptions::default());
