@@ -2981,6 +2981,24 @@ impl PathPass {
             .map_err(|e| e.to_string())
     }
 
+    /// The paths' values mapped one by one into `to` by `one`.
+    fn lift_each<T: crate::scalar::Scalar>(
+        &self,
+        one: impl Fn(&DualSVec64<{ 2 * HESS_Q }>) -> T,
+        to: &mut Option<GivenPaths<T>>,
+    ) {
+        let to = to.get_or_insert_with(GivenPaths::default);
+        to.at.clone_from(&self.out.at);
+        for (dst, src) in [
+            (&mut to.length, &self.out.length),
+            (&mut to.speed, &self.out.speed),
+            (&mut to.unit, &self.out.unit),
+        ] {
+            dst.clear();
+            dst.extend(src.iter().map(&one));
+        }
+    }
+
     /// The paths lifted into a first-order pass's numbers: direction c of
     /// (q, q̇) goes to lane `lanes[c]` (summed where two share one).
     fn lift_first_order<const W: usize>(
@@ -3007,16 +3025,7 @@ impl PathPass {
             }
             v
         };
-        let to = to.get_or_insert_with(GivenPaths::default);
-        to.at.clone_from(&self.out.at);
-        for (dst, src) in [
-            (&mut to.length, &self.out.length),
-            (&mut to.speed, &self.out.speed),
-            (&mut to.unit, &self.out.unit),
-        ] {
-            dst.clear();
-            dst.extend(src.iter().map(one));
-        }
+        self.lift_each(one, to);
     }
 
     /// The paths lifted into a pass's numbers: direction c of (q, q̇) goes
@@ -3054,16 +3063,7 @@ impl PathPass {
             }
             h
         };
-        let to = to.get_or_insert_with(GivenPaths::default);
-        to.at.clone_from(&self.out.at);
-        for (dst, src) in [
-            (&mut to.length, &self.out.length),
-            (&mut to.speed, &self.out.speed),
-            (&mut to.unit, &self.out.unit),
-        ] {
-            dst.clear();
-            dst.extend(src.iter().map(one));
-        }
+        self.lift_each(one, to);
     }
 }
 

@@ -1412,15 +1412,49 @@ mod tests {
         assert!(ipm.z[4].abs() < 1e-7);
     }
 
+    /// The objective at `x` within 1e-7 (relative) of clarabel's optimum of
+    /// the same QP (the first `ne` rows equalities).
+    fn assert_objective_matches_clarabel(
+        p: &CscMatrix<f64>,
+        a: &CscMatrix<f64>,
+        q: &[f64],
+        b: &[f64],
+        ne: usize,
+        x: &[f64],
+        case: usize,
+    ) {
+        use clarabel::solver::{
+            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
+            ZeroConeT,
+        };
+        let settings = DefaultSettingsBuilder::default()
+            .verbose(false)
+            .presolve_enable(false)
+            .build()
+            .unwrap();
+        let cones = [ZeroConeT(ne), NonnegativeConeT(a.m - ne)];
+        let mut cl = DefaultSolver::new(p, q, a, b, &cones, settings).unwrap();
+        cl.solve();
+        assert_eq!(cl.solution.status, SolverStatus::Solved, "case {case}");
+        let obj = |x: &[f64]| {
+            let mut px = vec![0.0; p.n];
+            Ipm::p_mul(p, x, &mut px);
+            (0..p.n)
+                .map(|j| 0.5 * x[j] * px[j] + q[j] * x[j])
+                .sum::<f64>()
+        };
+        let (f, f_cl) = (obj(x), obj(&cl.solution.x));
+        assert!(
+            (f - f_cl).abs() <= 1e-7 * (1.0 + f_cl.abs()),
+            "case {case}: objective {f} against clarabel's {f_cl}"
+        );
+    }
+
     /// Random feasible convex QPs with equality rows, general inequality
     /// rows and bound rows (single entries), against clarabel's solution
     /// of the same QP.
     #[test]
     fn random_qps_match_clarabel() {
-        use clarabel::solver::{
-            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
-            ZeroConeT,
-        };
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         for case in 0..20 {
@@ -1472,27 +1506,7 @@ mod tests {
                 IpmStatus::Solved,
                 "case {case}"
             );
-            let settings = DefaultSettingsBuilder::default()
-                .verbose(false)
-                .presolve_enable(false)
-                .build()
-                .unwrap();
-            let cones = [ZeroConeT(ne), NonnegativeConeT(m - ne)];
-            let mut cl = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
-            cl.solve();
-            assert_eq!(cl.solution.status, SolverStatus::Solved, "case {case}");
-            let obj = |x: &[f64]| {
-                let mut px = vec![0.0; n];
-                Ipm::p_mul(&p, x, &mut px);
-                (0..n)
-                    .map(|j| 0.5 * x[j] * px[j] + q[j] * x[j])
-                    .sum::<f64>()
-            };
-            let (f, f_cl) = (obj(&ipm.x), obj(&cl.solution.x));
-            assert!(
-                (f - f_cl).abs() <= 1e-7 * (1.0 + f_cl.abs()),
-                "case {case}: objective {f} against clarabel's {f_cl}"
-            );
+            assert_objective_matches_clarabel(&p, &a, &q, &b, ne, &ipm.x, case);
             // Feasibility and dual sign of leap's own answer.
             for r in 0..m {
                 let ax: f64 = rows
@@ -1592,10 +1606,6 @@ mod tests {
     /// with different columns are refused.
     #[test]
     fn twin_rows_solve_as_the_rows_they_stand_for() {
-        use clarabel::solver::{
-            DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
-            ZeroConeT,
-        };
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(21);
         for case in 0..20 {
@@ -1686,27 +1696,7 @@ mod tests {
             };
             close(&range(&merged.z), &range(&separate.z), "z");
             assert!(merged.z[ne..].iter().all(|&z| z >= 0.0), "case {case}");
-            let settings = DefaultSettingsBuilder::default()
-                .verbose(false)
-                .presolve_enable(false)
-                .build()
-                .unwrap();
-            let cones = [ZeroConeT(ne), NonnegativeConeT(m - ne)];
-            let mut cl = DefaultSolver::new(&p, &q, &a, &b, &cones, settings).unwrap();
-            cl.solve();
-            assert_eq!(cl.solution.status, SolverStatus::Solved, "case {case}");
-            let obj = |x: &[f64]| {
-                let mut px = vec![0.0; n];
-                Ipm::p_mul(&p, x, &mut px);
-                (0..n)
-                    .map(|j| 0.5 * x[j] * px[j] + q[j] * x[j])
-                    .sum::<f64>()
-            };
-            let (f, f_cl) = (obj(&merged.x), obj(&cl.solution.x));
-            assert!(
-                (f - f_cl).abs() <= 1e-7 * (1.0 + f_cl.abs()),
-                "case {case}: objective {f} against clarabel's {f_cl}"
-            );
+            assert_objective_matches_clarabel(&p, &a, &q, &b, ne, &merged.x, case);
             // A twin that is no longer its row negated fails the solve.
             let (t0, _) = twins[0];
             let mut broken = a.clone();
