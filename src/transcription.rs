@@ -762,6 +762,12 @@ impl PointJacobian {
         })
     }
 
+    /// Whether the muscle paths are walked once per point (models of at
+    /// most 7 coordinates) rather than in every pass.
+    pub fn walks_paths_once(&self) -> bool {
+        self.paths.is_some()
+    }
+
     /// Walk the muscle paths in every pass, as collocation's Jacobian does,
     /// instead of once per point (for comparisons: the two agree to
     /// rounding).
@@ -796,6 +802,14 @@ impl PointJacobian {
                 nx + 2,
                 self.cp.entries.len()
             ));
+        }
+        if let Some((i, v)) = x.iter().chain(u).enumerate().find(|(_, v)| !v.is_finite()) {
+            let what = if i < nx {
+                format!("state {i}")
+            } else {
+                format!("excitation {}", i - nx)
+            };
+            return Err(format!("point Jacobian: {what} is {v}"));
         }
         self.w.x.copy_from_slice(x);
         self.w.u.copy_from_slice(u);

@@ -623,7 +623,9 @@ fn point_jacobian_with_paths_walked_once_matches_every_pass() {
     let (nx, nu) = (ocp.nx(), ocp.nu());
     let mut once = PointJacobian::new(ocp, pattern).unwrap();
     let mut every = PointJacobian::new(ocp, pattern).unwrap();
+    assert!(once.walks_paths_once());
     every.walk_paths_in_every_pass();
+    assert!(!every.walks_paths_once());
     let entries = once.entries().to_vec();
     assert_eq!(entries, every.entries());
     let tr = transcription(TranscriptionOptions::default());
@@ -633,7 +635,8 @@ fn point_jacobian_with_paths_walked_once_matches_every_pass() {
     let (mut checked, mut worst) = (0, 0.0f64);
     for v in [guess, &perturbed] {
         for node in [2, 6, 10, 16, 22, 27] {
-            let at = (nx + nu) * node;
+            // Node 0 (the squat) is not among the variables.
+            let at = (nx + nu) * (node - 1);
             let (x, u) = (&v[at..at + nx], &v[at + nx..at + nx + nu]);
             once.eval(ocp, x, u, &mut g1, &mut j1).unwrap();
             every.eval(ocp, x, u, &mut g2, &mut j2).unwrap();
@@ -664,6 +667,15 @@ fn point_jacobian_with_paths_walked_once_matches_every_pass() {
     }
     assert_eq!(checked, 12);
     assert!(j1.iter().any(|&v| v != 0.0));
+    // The two ways differ, if only by rounding (the lift is in use).
+    assert!(worst > 0.0);
+    // A non-finite state is named, not taken for paths of another point.
+    let mut bad = guess[..nx].to_vec();
+    bad[3] = f64::NAN;
+    let e = once
+        .eval(ocp, &bad, &guess[nx..nx + nu], &mut g1, &mut j1)
+        .unwrap_err();
+    assert!(e.contains("state 3 is NaN"), "{e}");
     eprintln!("point Jacobian, paths walked once against every pass: {worst:.1e} of the row's largest entry");
 }
 

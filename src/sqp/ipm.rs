@@ -1632,8 +1632,7 @@ mod tests {
                     }
                 }
                 if row.len() < 2 {
-                    row.extend([(0, 1.0), (n - 1, -1.0)]);
-                    row.truncate(2);
+                    row = vec![(0, 1.0), (n - 1, -1.0)];
                 }
                 let ax: f64 = row.iter().map(|&(j, v)| v * x0[j]).sum();
                 if g < ne {
@@ -1718,6 +1717,73 @@ mod tests {
             .err()
             .unwrap();
         assert!(e.contains("different columns"), "{e}");
+    }
+
+    /// One supernodal solver with twin rows (on two threads), reused for
+    /// QPs of the same pattern whose P, A, q and b all change, as the SQP
+    /// reuses it: each answer equals a fresh solver's without twins, so the
+    /// KKT values assembled once per QP are assembled again for each.
+    #[test]
+    fn twin_solver_reused_across_qps_matches_fresh_solvers() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(31);
+        let (mut p, mut a, ne, m) = shooting_qp(9);
+        let twins = Ipm::detect_twins(&a, ne);
+        assert!(twins.len() > 20);
+        let mut reused = supernodal_ipm(&p, &a, ne, 2);
+        assert!(!reused.twin_entries.is_empty());
+        let rows = row_entries(&a);
+        for round in 0..3 {
+            for j in 0..p.n {
+                for k in p.colptr[j]..p.colptr[j + 1] {
+                    p.nzval[k] = if p.rowval[k] == j {
+                        p.n as f64
+                    } else {
+                        rng.random_range(-0.5..0.5)
+                    };
+                }
+            }
+            for entries in &rows {
+                for &(_, k) in entries {
+                    a.nzval[k] = if entries.len() == 1 {
+                        1.0
+                    } else {
+                        rng.random_range(-1.0..1.0)
+                    };
+                }
+            }
+            for &(r, t) in &twins {
+                for (&(_, kr), &(_, kt)) in rows[r].iter().zip(&rows[t]) {
+                    a.nzval[kt] = -a.nzval[kr];
+                }
+            }
+            let q: Vec<f64> = (0..p.n).map(|_| rng.random_range(-3.0..3.0)).collect();
+            // x = 0 is feasible, strictly for the inequalities.
+            let b: Vec<f64> = (0..m)
+                .map(|r| {
+                    if r < ne {
+                        0.0
+                    } else {
+                        rng.random_range(0.05..0.5)
+                    }
+                })
+                .collect();
+            let mut fresh = Ipm::new(&p, &a, ne).unwrap();
+            for ipm in [&mut reused, &mut fresh] {
+                assert_eq!(
+                    ipm.solve(&p, &a, &q, &b, 1e-10),
+                    IpmStatus::Solved,
+                    "round {round}"
+                );
+            }
+            let scale = 1.0 + norm_inf(&fresh.x);
+            for (j, (u, v)) in reused.x.iter().zip(&fresh.x).enumerate() {
+                assert!(
+                    (u - v).abs() <= 1e-6 * scale,
+                    "round {round}: x {j}: reused {u} against fresh {v}"
+                );
+            }
+        }
     }
 
     /// A QP of direct shooting's shape: the excitations of `stages` nodes
@@ -1897,6 +1963,7 @@ mod tests {
         let dense = [1, DENSE_KERNEL_MIN_COLUMNS, usize::MAX];
         let batch = [1, BATCH_MIN_COLUMNS, usize::MAX];
         let cases = [(1, false), (2, false), (2, true)];
+        let mut batches = [0usize; 3];
         for (qp, (p, a, ne, r)) in [("stage", stage_qp(5)), ("shooting", shooting_qp(6))] {
             for ((threads, inertia), (dense_min, batch_min)) in cases.into_iter().flat_map(|c| {
                 dense
@@ -1930,6 +1997,10 @@ mod tests {
                         Default::default(),
                     )
                     .unwrap();
+                let counts = ipm.layout.as_ref().unwrap().batch_counts();
+                for k in 0..3 {
+                    batches[k] += counts[k];
+                }
                 let scale = norm_inf(&ipm.l_values);
                 assert!(scale > 1.0);
                 for (k, (x, y)) in ours.iter().zip(&ipm.l_values).enumerate() {
@@ -1940,6 +2011,8 @@ mod tests {
                 }
             }
         }
+        // Batches as products, with rows below the target, and by loops.
+        assert!(batches.iter().all(|&c| c > 0), "{batches:?}");
     }
 
     /// The SQP's next QP (the stage QP with its linear term and equality

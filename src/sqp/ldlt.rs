@@ -11,6 +11,10 @@
 //!   columns (the jump's supernodes are mostly one or two columns wide,
 //!   where faer's dense kernels cost more in setup than in arithmetic);
 //!   wider ones use faer's blocked LDLᵀ and matrix product;
+//! * a wide supernode gathers the updates of its narrow descendants in
+//!   batches, each one matrix product over the union of the members' rows
+//!   ([`BATCH_MIN_COLUMNS`]): a shooting QP's dense root takes the updates
+//!   of thousands of one-column constraint rows;
 //! * a supernode reads only its own descendants, so disjoint subtrees of the
 //!   supernodal elimination tree factorise independently (the tree-level
 //!   parallelism of sparse direct solvers): the subtrees below the top
@@ -127,6 +131,11 @@ struct Batch {
     weighted: Vec<f64>,
     /// The product of the panel and `weighted`ᵀ.
     product: Vec<f64>,
+    /// Batches taken as products, products with rows below the target's
+    /// columns, and batches left to the loops (the tests check that each
+    /// ran).
+    #[cfg(test)]
+    counts: [usize; 3],
 }
 
 /// A pivot at `column` (in the factor's order) that is zero or not finite
@@ -283,6 +292,14 @@ impl FactorLayout {
             top_len,
             scratch,
         })
+    }
+
+    /// Batches gathered by both threads: as products, as products with
+    /// rows below the target's columns, and by the loops.
+    #[cfg(test)]
+    pub(crate) fn batch_counts(&self) -> [usize; 3] {
+        let [a, b] = &self.scratch;
+        [0, 1, 2].map(|k| a.batch.counts[k] + b.batch.counts[k])
     }
 
     /// Whether the factorisation and the solves use a second thread.
@@ -824,6 +841,9 @@ impl Tree<'_> {
         let end = self.begin[sn + 1];
         let nc = end - self.begin[sn];
         let nr = nc + self.row_ptr[sn + 1] - self.row_ptr[sn];
+        if scratch.batch.members.is_empty() {
+            return;
+        }
         let mut b = std::mem::take(&mut scratch.batch);
         let pattern_of = |d: usize| &self.row_idx[self.row_ptr[d]..self.row_ptr[d + 1]];
         b.rows.clear();
@@ -842,6 +862,15 @@ impl Tree<'_> {
         // uc × uc block and the rows below it.
         let (uf, ucf) = (u as f64, uc as f64);
         let product_work = k as f64 * (ucf * (ucf + 1.0) / 2.0 + (uf - ucf) * ucf);
+        #[cfg(test)]
+        {
+            let kind = if product_work > BATCH_WORK_RATIO * b.loop_work {
+                2
+            } else {
+                usize::from(u > uc)
+            };
+            b.counts[kind] += 1;
+        }
         if product_work > BATCH_WORK_RATIO * b.loop_work {
             for &row in &b.rows {
                 b.position[row] = usize::MAX;
