@@ -667,8 +667,6 @@ fn point_jacobian_with_paths_walked_once_matches_every_pass() {
     }
     assert_eq!(checked, 12);
     assert!(j1.iter().any(|&v| v != 0.0));
-    // The two ways differ, if only by rounding (the lift is in use).
-    assert!(worst > 0.0);
     // A non-finite state is named, not taken for paths of another point.
     let mut bad = guess[..nx].to_vec();
     bad[3] = f64::NAN;

@@ -1412,6 +1412,22 @@ mod tests {
         assert!(ipm.z[4].abs() < 1e-7);
     }
 
+    /// P = B Bᵀ (upper triangle) with B random, n × ⌊n/2⌋: positive
+    /// semidefinite and singular.
+    fn random_singular_psd(rng: &mut rand_chacha::ChaCha8Rng, n: usize) -> CscMatrix<f64> {
+        use rand::Rng;
+        let k = (n / 2).max(1);
+        let bm: Vec<f64> = (0..n * k).map(|_| rng.random_range(-1.0..1.0)).collect();
+        let mut entries = Vec::new();
+        for j in 0..n {
+            for i in 0..=j {
+                let v: f64 = (0..k).map(|t| bm[i * k + t] * bm[j * k + t]).sum();
+                entries.push((i, j, v));
+            }
+        }
+        dense_csc(n, n, &entries)
+    }
+
     /// The objective at `x` within 1e-7 (relative) of clarabel's optimum of
     /// the same QP (the first `ne` rows equalities).
     fn assert_objective_matches_clarabel(
@@ -1460,17 +1476,7 @@ mod tests {
         for case in 0..20 {
             let n = rng.random_range(3..30);
             let (ne, ng) = (rng.random_range(0..n / 2 + 1), rng.random_range(0..n));
-            // P = B Bᵀ with B n×(n/2): PSD and singular.
-            let k = (n / 2).max(1);
-            let bm: Vec<f64> = (0..n * k).map(|_| rng.random_range(-1.0..1.0)).collect();
-            let mut entries = Vec::new();
-            for j in 0..n {
-                for i in 0..=j {
-                    let v: f64 = (0..k).map(|t| bm[i * k + t] * bm[j * k + t]).sum();
-                    entries.push((i, j, v));
-                }
-            }
-            let p = dense_csc(n, n, &entries);
+            let p = random_singular_psd(&mut rng, n);
             // Rows: equalities, general inequalities, then x ≥ −1, x ≤ 1.
             let x0: Vec<f64> = (0..n).map(|_| rng.random_range(-0.5..0.5)).collect();
             let mut rows = Vec::new();
@@ -1611,16 +1617,7 @@ mod tests {
         for case in 0..20 {
             let n = rng.random_range(4..30);
             let (ne, ng) = (rng.random_range(0..n / 3 + 1), rng.random_range(1..2 * n));
-            let k = (n / 2).max(1);
-            let bm: Vec<f64> = (0..n * k).map(|_| rng.random_range(-1.0..1.0)).collect();
-            let mut entries = Vec::new();
-            for j in 0..n {
-                for i in 0..=j {
-                    let v: f64 = (0..k).map(|t| bm[i * k + t] * bm[j * k + t]).sum();
-                    entries.push((i, j, v));
-                }
-            }
-            let p = dense_csc(n, n, &entries);
+            let p = random_singular_psd(&mut rng, n);
             let x0: Vec<f64> = (0..n).map(|_| rng.random_range(-0.5..0.5)).collect();
             let (mut rows, mut b, mut twins) = (Vec::new(), Vec::new(), Vec::new());
             let mut r = 0;

@@ -937,14 +937,7 @@ impl Tree<'_> {
                     Par::Seq,
                 );
             }
-            let map = &scratch.map;
-            for j in 0..uc {
-                let col = self.local(sn, map, b.rows[j]) * nr;
-                let pj = &b.product[j * u..(j + 1) * u];
-                for i in j..u {
-                    target[col + self.local(sn, map, b.rows[i])] -= pj[i];
-                }
-            }
+            self.scatter_lower(sn, &scratch.map, &b.rows, uc, &b.product, target, nr);
             for &row in &b.rows {
                 b.position[row] = usize::MAX;
             }
@@ -1034,20 +1027,38 @@ impl Tree<'_> {
         let column = &mut scratch.column;
         column.clear();
         column.resize(m * k, 0.0);
-        let mut product = MatMut::from_column_major_slice_mut(column, m, k);
         faer::linalg::matmul::matmul(
-            product.as_mut(),
+            MatMut::from_column_major_slice_mut(column, m, k),
             Accum::Replace,
             below,
             w.as_ref().transpose(),
             1.0,
             Par::Seq,
         );
-        let map = &scratch.map;
+        self.scatter_lower(sn, &scratch.map, rows, k, &scratch.column, target, nr);
+    }
+
+    /// Subtract from `target` (supernode `sn`'s block, `nr` rows per
+    /// column) the lower triangle of an update over the global `rows`, the
+    /// first `k` of them the target's columns: `product` is column-major,
+    /// `rows.len()` × k.
+    #[allow(clippy::too_many_arguments)]
+    fn scatter_lower(
+        &self,
+        sn: usize,
+        map: &[usize],
+        rows: &[usize],
+        k: usize,
+        product: &[f64],
+        target: &mut [f64],
+        nr: usize,
+    ) {
+        let m = rows.len();
         for j in 0..k {
             let col = self.local(sn, map, rows[j]) * nr;
+            let pj = &product[j * m..(j + 1) * m];
             for i in j..m {
-                target[col + self.local(sn, map, rows[i])] -= product[(i, j)];
+                target[col + self.local(sn, map, rows[i])] -= pj[i];
             }
         }
     }
