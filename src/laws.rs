@@ -860,6 +860,50 @@ where
     }
 }
 
+/// OpenSim's laws owned, with settable normalised fibre velocities: while
+/// `vn` is empty, [`OpenSimLaws`]' own; while it holds one velocity per
+/// carried muscle, each fibre-length rate is that muscle's force balance
+/// ([`BalanceLaws`]). The laws of [`crate::ocp::SimbodyRates`]' force
+/// element, which outlives any borrowed velocities.
+pub struct SettableBalanceLaws {
+    pub laws: OpenSimLaws,
+    pub slot: Vec<usize>,
+    pub vn: std::sync::Mutex<Vec<f64>>,
+}
+
+impl ForceLaws<f64> for SettableBalanceLaws {
+    fn muscle(
+        &self,
+        m: usize,
+        a: f64,
+        lm: f64,
+        lmt: f64,
+        vmt: f64,
+        u: f64,
+    ) -> Result<MuscleRates<f64>, String> {
+        let vn = self
+            .vn
+            .lock()
+            .map_err(|_| "fibre velocity lock poisoned".to_string())?;
+        if vn.is_empty() {
+            self.laws.muscle(m, a, lm, lmt, vmt, u)
+        } else {
+            let balance = BalanceLaws {
+                laws: &self.laws,
+                vn: &vn,
+                slot: &self.slot,
+            };
+            balance.muscle(m, a, lm, lmt, vmt, u)
+        }
+    }
+    fn sphere(&self, k: usize, p: [f64; 3], v: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        self.laws.sphere(k, p, v)
+    }
+    fn ligament(&self, l: usize, q: f64, qd: f64) -> f64 {
+        self.laws.ligament(l, q, qd)
+    }
+}
+
 impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
     fn muscle(
         &self,

@@ -428,6 +428,12 @@ impl JumpOcp {
         Ok((ydd, fy * (1.0 / self.body_weight)))
     }
 
+    /// The same rates as [`JumpOcp::state_rates`] computed by Simbody
+    /// ([`SimbodyRates`]).
+    pub fn simbody_rates(&self) -> Result<SimbodyRates, crate::simbody::SimbodyError> {
+        SimbodyRates::new(self)
+    }
+
     /// Bounds of the lift-off row F_y(t_f)/(m g).
     pub fn liftoff_bounds(&self) -> (f64, f64) {
         match self.options.liftoff {
@@ -478,5 +484,68 @@ impl JumpOcp {
             self.standing_com_height,
             opts,
         )
+    }
+}
+
+/// The point rates of [`JumpOcp::state_rates_with`], ẋ = f(x, u), Ÿ_C and
+/// F_y/(m g), evaluated by Simbody: q and q̇ in Simbody's multibody system,
+/// the muscle states as its auxiliary states, the muscle, contact and
+/// ligament laws (the problem's, with its smoothing) inside a Simbody force
+/// element from Simbody's kinematics ([`crate::ode::SimbodyStateEquation`]),
+/// Ÿ_C Simbody's mass-centre acceleration. Inputs beyond the excitations
+/// are normalised fibre velocities: the fibre-length rows are then the
+/// force balances (implicit fibre dynamics), as in the Rust-native rates.
+pub struct SimbodyRates {
+    sb: crate::ode::SimbodyStateEquation,
+    laws: std::sync::Arc<crate::laws::SettableBalanceLaws>,
+    spheres: Vec<[f64; 3]>,
+    nu: usize,
+    body_weight: f64,
+}
+
+impl SimbodyRates {
+    fn new(ocp: &JumpOcp) -> Result<Self, crate::simbody::SimbodyError> {
+        let laws = std::sync::Arc::new(crate::laws::SettableBalanceLaws {
+            laws: ocp.laws.clone(),
+            slot: ocp.muscle_slot.clone(),
+            vn: std::sync::Mutex::new(Vec::new()),
+        });
+        let sb = crate::ode::SimbodyStateEquation::new(
+            std::sync::Arc::new(ocp.eq.clone()),
+            laws.clone(),
+        )?;
+        let ns = ocp.eq.model.contact.as_ref().map_or(0, |c| c.spheres.len());
+        Ok(SimbodyRates {
+            sb,
+            laws,
+            spheres: vec![[0.0; 3]; ns],
+            nu: ocp.nu(),
+            body_weight: ocp.body_weight,
+        })
+    }
+
+    /// ẋ into `xdot` and (Ÿ_C, F_y/(m g)) at (x, u).
+    pub fn eval(&mut self, x: &[f64], u: &[f64], xdot: &mut [f64]) -> Result<(f64, f64), String> {
+        let nu = self.nu.min(u.len());
+        {
+            let mut vn = self
+                .laws
+                .vn
+                .lock()
+                .map_err(|_| "fibre velocity lock poisoned".to_string())?;
+            vn.clear();
+            vn.extend_from_slice(&u[nu..]);
+        }
+        self.sb.rhs(x, &u[..nu], xdot).map_err(|e| e.to_string())?;
+        let ydd = self
+            .sb
+            .simbody
+            .com_acceleration()
+            .map_err(|e| e.to_string())?[1];
+        self.sb
+            .sphere_forces(&mut self.spheres)
+            .map_err(|e| e.to_string())?;
+        let fy: f64 = self.spheres.iter().map(|f| f[1]).sum();
+        Ok((ydd, fy / self.body_weight))
     }
 }

@@ -626,6 +626,9 @@ pub struct SimbodyStateEquation {
     pub equation: std::sync::Arc<StateEquation>,
     pub simbody: crate::simbody::SimbodyModel,
     excitation: std::sync::Arc<std::sync::Mutex<Excitation>>,
+    /// The contact force on each sphere (ground) at the last force
+    /// evaluation.
+    spheres: std::sync::Arc<std::sync::Mutex<Vec<[f64; 3]>>>,
     perm: Vec<usize>,
 }
 
@@ -656,13 +659,14 @@ impl SimbodyStateEquation {
             .as_ref()
             .map(|c| c.spheres.len())
             .unwrap_or(0);
-        let (mut o1, mut o2, mut o3, mut o4, mut o5) = (
+        let (mut o1, mut o2, mut o3, mut o5) = (
             vec![0.0; nm],
             vec![0.0; nm],
             vec![0.0; nm],
-            vec![[0.0; 3]; ns],
             vec![0.0; eq.model.ligaments.len()],
         );
+        let spheres = std::sync::Arc::new(std::sync::Mutex::new(vec![[0.0; 3]; ns]));
+        let o4 = spheres.clone();
         let f: Box<crate::simbody::ForceFn> = Box::new(move |ctx, t, q, qd, z, zdot| {
             match &*exc
                 .lock()
@@ -682,6 +686,9 @@ impl SimbodyStateEquation {
                     error: Default::default(),
                 };
                 let (lm, act) = z.split_at(nm);
+                let mut sphere_force = o4
+                    .lock()
+                    .map_err(|_| "sphere force lock poisoned".to_string())?;
                 eq.apply_forces(
                     &*laws,
                     &kin,
@@ -694,7 +701,7 @@ impl SimbodyStateEquation {
                         mtu_length: &mut o1,
                         mtu_speed: &mut o2,
                         tendon_force: &mut o3,
-                        sphere_force: &mut o4,
+                        sphere_force: &mut sphere_force,
                         ligament_torque: &mut o5,
                     },
                     &mut unit,
@@ -716,6 +723,7 @@ impl SimbodyStateEquation {
             equation,
             simbody,
             excitation,
+            spheres,
             perm,
         })
     }
@@ -725,6 +733,23 @@ impl SimbodyStateEquation {
         if let Ok(mut g) = self.excitation.lock() {
             *g = e;
         }
+    }
+
+    /// The contact force on each sphere (ground frame, N) at the state of
+    /// the last force evaluation (after [`Self::rhs`]: at its x and u).
+    pub fn sphere_forces(&self, out: &mut [[f64; 3]]) -> Result<(), crate::simbody::SimbodyError> {
+        let f = self.spheres.lock().map_err(|_| {
+            crate::simbody::SimbodyError::Input("sphere force lock poisoned".into())
+        })?;
+        if out.len() != f.len() {
+            return Err(crate::simbody::SimbodyError::Input(format!(
+                "{} sphere forces asked for, the model has {}",
+                out.len(),
+                f.len()
+            )));
+        }
+        out.copy_from_slice(&f);
+        Ok(())
     }
 
     /// Simbody's q index of each system coordinate.
