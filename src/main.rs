@@ -132,6 +132,12 @@ enum Command {
         /// inertia correction) or bfgs.
         #[arg(long)]
         hessian: Option<String>,
+        /// rust-native (default: leap's dynamics, exact Jacobian from dual
+        /// numbers) or simbody (Simbody's multibody system with the same
+        /// force laws, Jacobian by coloured central differences: the
+        /// cross-check path; collocation only).
+        #[arg(long)]
+        backend: Option<String>,
         /// Skip the forward simulation of the optimal excitations.
         #[arg(long)]
         no_forward_check: bool,
@@ -388,6 +394,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             scheme,
             fiber_dynamics,
             hessian,
+            backend,
             no_forward_check,
             dump_qps,
             json,
@@ -403,6 +410,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 scheme,
                 fiber_dynamics,
                 hessian,
+                backend,
                 no_forward_check,
                 dump_qps,
             };

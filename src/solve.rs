@@ -36,7 +36,7 @@ use crate::simulate::{
 };
 use crate::sqp::{HessianMode, SqpResult, SqpStatus};
 use crate::study::{
-    fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method, SolveConfig,
+    backend_name, fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method, SolveConfig,
 };
 use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
 use serde::Serialize;
@@ -197,6 +197,9 @@ pub struct SolveReport {
     pub scheme: &'static str,
     /// "explicit" or "implicit" ([`crate::transcription::FiberDynamics`]).
     pub fiber_dynamics: &'static str,
+    /// Where collocation's points were evaluated: "rust-native" or
+    /// "simbody" ([`crate::transcription::Backend`]).
+    pub backend: &'static str,
     pub hessian: HessianMode,
     pub variables: usize,
     pub constraints: usize,
@@ -278,10 +281,11 @@ pub fn run(
     progress("static squat and jump problem");
     let ocp = Arc::new(JumpOcp::new(&model, options)?);
     progress(&format!(
-        "collocation: {} mesh intervals, {}, {} fibre dynamics",
+        "collocation: {} mesh intervals, {}, {} fibre dynamics, {} points",
         big_n,
         scheme_name(config.transcription.scheme),
-        fiber_dynamics_name(config.transcription.fiber_dynamics)
+        fiber_dynamics_name(config.transcription.fiber_dynamics),
+        backend_name(config.transcription.backend)
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
@@ -595,6 +599,7 @@ fn shooting_report(
             peak_grf: (max(&force), max(&nodes.vertical_force_bw)),
             violation,
             mesh: (sh.num_intervals(), "direct shooting", "explicit"),
+            backend: "rust-native",
             size: (sh.num_variables(), sh.num_constraints()),
         },
     )
@@ -688,6 +693,7 @@ fn evaluate(tr: &mut Transcription, r: &SqpResult) -> SolveReport {
                 scheme_name(tr.options().scheme),
                 fiber_dynamics_name(tr.options().fiber_dynamics),
             ),
+            backend: backend_name(tr.options().backend),
             size: (tr.num_variables(), tr.num_constraints()),
         },
     )
@@ -713,6 +719,8 @@ struct SolutionQuantities {
     violation: f64,
     /// Intervals, scheme, fibre dynamics.
     mesh: (usize, &'static str, &'static str),
+    /// Where the points were evaluated ("rust-native", "simbody").
+    backend: &'static str,
     /// Variables, constraints.
     size: (usize, usize),
 }
@@ -753,6 +761,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         num_mesh_intervals: q.mesh.0,
         scheme: q.mesh.1,
         fiber_dynamics: q.mesh.2,
+        backend: q.backend,
         hessian: r.hessian,
         variables: q.size.0,
         constraints: q.size.1,
@@ -1009,11 +1018,16 @@ impl SolveReport {
             "",
         ]);
         let mut s = format!(
-            "jump solve ({} mesh intervals, {}, {} fibre dynamics, {:?} Hessian): {} ({}){}\n{t}\n",
+            "jump solve ({} mesh intervals, {}, {} fibre dynamics, {:?} Hessian{}): {} ({}){}\n{t}\n",
             self.num_mesh_intervals,
             self.scheme,
             self.fiber_dynamics,
             self.hessian,
+            if self.backend == "rust-native" {
+                String::new()
+            } else {
+                format!(", {} backend", self.backend)
+            },
             serde_json::to_value(self.status)
                 .ok()
                 .and_then(|v| v.as_str().map(String::from))

@@ -30,7 +30,7 @@ use crate::model::parse_json_object;
 use crate::simbody::SimbodyIntegrator;
 use crate::simulate::{check_integrator_accuracy, parse_integrator, IntegratorChoice};
 use crate::sqp::{Convexification, HessianMode, QpSolver, SqpSettings};
-use crate::transcription::{FiberDynamics, Scheme, TranscriptionOptions};
+use crate::transcription::{Backend, FiberDynamics, Scheme, TranscriptionOptions};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -150,6 +150,13 @@ pub struct SolveStudy {
     /// element's largest (default 1e-4).
     #[serde(default)]
     pub hessian_eigenvalue_floor: Option<f64>,
+    /// Where collocation's points are evaluated: "rust-native" (default:
+    /// leap's dynamics, the exact Jacobian from dual numbers) or "simbody"
+    /// (Simbody's multibody system with the same force laws, the Jacobian
+    /// by coloured central differences: the cross-check path;
+    /// [`crate::transcription::Backend`]).
+    #[serde(default)]
+    pub backend: Option<String>,
     /// QP subproblem solver: "interior-point" (default: leap's own, with
     /// clarabel where it fails; faster, see [`QpSolver::InteriorPoint`])
     /// or "clarabel".
@@ -324,6 +331,8 @@ pub struct Overrides {
     pub scheme: Option<String>,
     pub fiber_dynamics: Option<String>,
     pub hessian: Option<String>,
+    /// "rust-native" or "simbody".
+    pub backend: Option<String>,
     pub no_forward_check: bool,
     /// `--dump-qps`.
     pub dump_qps: bool,
@@ -434,6 +443,10 @@ impl SolveStudy {
         for (given, field) in [
             (self.mesh.scheme.is_some(), "mesh.scheme"),
             (self.mesh.fiber_dynamics.is_some(), "mesh.fiber_dynamics"),
+            (
+                self.backend.as_deref().is_some_and(|b| b != "rust-native"),
+                "backend",
+            ),
             (resampled, "guess"),
             (
                 self.hessian.as_deref().is_some_and(|h| h != "bfgs"),
@@ -486,6 +499,9 @@ impl SolveStudy {
                 parse_fiber_dynamics(s).map_err(|r| err("mesh.fiber_dynamics", r))?;
         }
         check_fiber_dynamics(&transcription).map_err(|r| err("mesh.fiber_dynamics", r))?;
+        if let Some(b) = &self.backend {
+            transcription.backend = parse_backend(b).map_err(|r| err("backend", r))?;
+        }
 
         let guess = match self.guess.as_deref() {
             None => GuessChoice::BangBang,
@@ -688,6 +704,10 @@ impl SolveConfig {
             for (given, option) in [
                 (o.scheme.is_some(), "--scheme"),
                 (o.fiber_dynamics.is_some(), "--fiber-dynamics"),
+                (
+                    o.backend.as_deref().is_some_and(|b| b != "rust-native"),
+                    "--backend",
+                ),
                 (resampled, "--guess"),
             ] {
                 if given {
@@ -721,6 +741,9 @@ impl SolveConfig {
                 parse_fiber_dynamics(s).map_err(|r| err("--fiber-dynamics", r))?;
         }
         check_fiber_dynamics(&self.transcription).map_err(|r| err("--fiber-dynamics", r))?;
+        if let Some(b) = &o.backend {
+            self.transcription.backend = parse_backend(b).map_err(|r| err("--backend", r))?;
+        }
         if let Some(h) = &o.hessian {
             apply_hessian(&mut self.settings, h).map_err(|r| err("--hessian", r))?;
         }
@@ -888,6 +911,25 @@ fn check_fiber_dynamics(t: &TranscriptionOptions) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// A points backend by name ("rust-native" or "simbody").
+pub fn parse_backend(s: &str) -> Result<Backend, String> {
+    match s {
+        "rust-native" => Ok(Backend::RustNative),
+        "simbody" => Ok(Backend::Simbody),
+        _ => Err(format!(
+            "unknown backend '{s}' (valid: rust-native, simbody)"
+        )),
+    }
+}
+
+/// The name of a points backend.
+pub fn backend_name(b: Backend) -> &'static str {
+    match b {
+        Backend::RustNative => "rust-native",
+        Backend::Simbody => "simbody",
+    }
 }
 
 /// The name of a fibre dynamics form.
@@ -1264,5 +1306,74 @@ mod tests {
             e.contains("--fiber-dynamics") && e.contains("midpoint-euler"),
             "{e}"
         );
+    }
+
+    /// `backend` in the study and `--backend` on the command line: parsed,
+    /// refused by name where unknown, and refused with method shooting
+    /// (whose integration is Rust-native), by field or option.
+    #[test]
+    fn backend_is_collocations_and_errors_name_it() {
+        let c = SolveStudy::from_json_str(r#"{"backend": "simbody"}"#, "s.json")
+            .unwrap()
+            .resolve(None)
+            .unwrap();
+        assert_eq!(c.transcription.backend, Backend::Simbody);
+        assert_eq!(
+            SolveConfig::builtin().unwrap().transcription.backend,
+            Backend::RustNative
+        );
+        let (f, r) = field_error(r#"{"backend": "opensim"}"#);
+        assert_eq!(f, "backend");
+        assert!(
+            r.contains("'opensim'") && r.contains("rust-native, simbody"),
+            "{r}"
+        );
+        let (f, r) = field_error(r#"{"method": "shooting", "backend": "simbody"}"#);
+        assert_eq!(f, "backend");
+        assert!(r.contains("collocation"), "{r}");
+        // Rust-native is shooting's own: no error.
+        SolveStudy::from_json_str(
+            r#"{"method": "shooting", "backend": "rust-native"}"#,
+            "s.json",
+        )
+        .unwrap()
+        .resolve(None)
+        .unwrap();
+        let mut c = SolveConfig::builtin().unwrap();
+        let e = c
+            .apply(&Overrides {
+                backend: Some("dual".into()),
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--backend") && e.contains("'dual'"), "{e}");
+        let e = c
+            .apply(&Overrides {
+                method: Some("shooting".into()),
+                backend: Some("simbody".into()),
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--backend") && e.contains("collocation"), "{e}");
+        let mut c = SolveConfig::builtin().unwrap();
+        c.apply(&Overrides {
+            backend: Some("simbody".into()),
+            ..Default::default()
+        })
+        .unwrap();
+        assert_eq!(c.transcription.backend, Backend::Simbody);
+        // A collocation study's backend is listed as ignored by --method shooting.
+        let mut c = SolveStudy::from_json_str(r#"{"backend": "simbody"}"#, "s.json")
+            .unwrap()
+            .resolve(None)
+            .unwrap();
+        c.apply(&Overrides {
+            method: Some("shooting".into()),
+            ..Default::default()
+        })
+        .unwrap();
+        assert!(c.ignored.iter().any(|f| f == "backend"), "{:?}", c.ignored);
     }
 }
