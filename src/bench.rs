@@ -873,6 +873,22 @@ pub struct MethodsReport {
     pub shooting_jacobians: Vec<ShootingJacobianCost>,
     /// The study's shooting settings (the derivatives: both, as above).
     pub shooting: crate::shooting::ShootingOptions,
+    /// One collocation Jacobian (at the bang-bang guess) with each backend.
+    pub collocation_jacobians: Vec<CollocationJacobianCost>,
+}
+
+/// One collocation Jacobian with one backend
+/// ([`crate::transcription::Backend`]).
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CollocationJacobianCost {
+    pub backend: &'static str,
+    /// Points where the state equation is evaluated, and evaluations of it
+    /// per point (dual passes of `lanes` directions; Simbody: the value and
+    /// four differences per colour).
+    pub points: usize,
+    pub evaluations_per_point: usize,
+    /// Median wall time over 5 Jacobians (s).
+    pub seconds: f64,
 }
 
 /// The work of one shooting Jacobian.
@@ -943,6 +959,39 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
     let (mut guess, _) = tr.bang_bang_guess().map_err(|e| e.to_string())?;
     tr.integrate_on_mesh(&mut guess)
         .map_err(|e| e.to_string())?;
+    let mut collocation_jacobians = Vec::new();
+    for backend in [
+        crate::transcription::Backend::RustNative,
+        crate::transcription::Backend::Simbody,
+    ] {
+        let mut t = crate::transcription::Transcription::with_pattern(
+            ocp.clone(),
+            crate::transcription::TranscriptionOptions {
+                backend,
+                ..config.transcription
+            },
+            tr.pattern().clone(),
+        )
+        .map_err(|e| e.to_string())?;
+        let mut values = vec![0.0; t.jacobian_nnz()];
+        let mut times = Vec::new();
+        for _ in 0..5 {
+            let started = std::time::Instant::now();
+            t.jacobian_values(&guess, &mut values)
+                .map_err(|e| e.to_string())?;
+            times.push(started.elapsed().as_secs_f64());
+        }
+        let stats = t.jacobian_stats();
+        collocation_jacobians.push(CollocationJacobianCost {
+            backend: crate::study::backend_name(backend),
+            points: t.num_points(),
+            evaluations_per_point: match backend {
+                crate::transcription::Backend::RustNative => stats.passes,
+                crate::transcription::Backend::Simbody => 1 + 4 * stats.colors,
+            },
+            seconds: median(times),
+        });
+    }
     let r = crate::sqp::solve_from(&mut tr, &guess, &settings);
     let collocation = method_row(
         "collocation",
@@ -1024,6 +1073,7 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
             num_intervals: config.transcription.num_mesh_intervals,
             ..config.shooting
         },
+        collocation_jacobians,
     })
 }
 
@@ -1068,6 +1118,19 @@ impl MethodsReport {
             self.shooting.accuracy,
             self.shooting.threads,
         );
+        for j in &self.collocation_jacobians {
+            text += &format!(
+                "  one collocation Jacobian through {}: {:.4} s, {} points × {}\n",
+                j.backend,
+                j.seconds,
+                j.points,
+                if j.backend == "simbody" {
+                    format!("{} Simbody evaluations (the value, central differences of two steps per colour)", j.evaluations_per_point)
+                } else {
+                    format!("{} coloured dual passes", j.evaluations_per_point)
+                }
+            );
+        }
         for j in &self.shooting_jacobians {
             let work = if j.integrations > 0 {
                 format!(

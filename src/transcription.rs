@@ -1984,7 +1984,14 @@ impl Transcription {
         self.structure.len()
     }
 
+    /// Points where the state equation is evaluated (midpoints, nodes,
+    /// Hermite–Simpson centres).
+    pub fn num_points(&self) -> usize {
+        self.points.len()
+    }
+
     /// Sizes of the Jacobian and its blocks.
+
     pub fn jacobian_stats(&self) -> JacobianStats {
         let [_, cm, lo, cv, end] = self.block_offsets;
         let nx = self.nx;
