@@ -99,6 +99,11 @@ fn bad_command_line_values_name_the_option() {
         (vec!["solve", "--max-iterations", "0"], "--max-iterations"),
         (vec!["solve", "--scheme", "euler"], "--scheme"),
         (vec!["solve", "--guess", "no_such_guess.sto"], "--guess"),
+        (vec!["solve", "--backend", "opensim"], "--backend"),
+        (
+            vec!["solve", "--method", "shooting", "--backend", "simbody"],
+            "--backend",
+        ),
         (vec!["solve", "no_such_study.json"], "no_such_study.json"),
     ] {
         let err = refused(&args);
