@@ -529,3 +529,295 @@ impl CrosscheckReport {
         )
     }
 }
+
+/// The largest difference between the Rust-native and Simbody collocation
+/// Jacobians the cross-check accepts away from kinks, relative to the
+/// largest entry of the row (the bound `tests/transcription.rs` sets the
+/// exact Jacobian against Rust-native finite differences).
+pub const JACOBIAN_TOLERANCE: f64 = 1e-6;
+/// The largest entry Simbody's differences may find outside the pattern,
+/// relative to the row's largest (the transcription tests' bound on
+/// Rust-native differences outside it).
+pub const PATTERN_TOLERANCE: f64 = 1e-7;
+
+/// One point of [`jacobian`]: the rows and the Jacobian at a variable
+/// vector, Rust-native against Simbody.
+#[derive(Debug, Clone, Serialize)]
+pub struct JacobianPoint {
+    /// "bang-bang guess" or "perturbed guess <k>".
+    pub point: String,
+    /// Whether the point is held to [`JACOBIAN_TOLERANCE`]: not the guess,
+    /// whose muscles at a = u = a_min sit on the activation switch, where
+    /// the one-sided derivatives differ.
+    pub checked: bool,
+    /// max |c_rust − c_simbody| / max(1, |c_rust|), and its row.
+    pub rows: f64,
+    pub rows_at: String,
+    /// max |J_rust − J_simbody| / max(1, the row's largest |J_rust|), and
+    /// its entry; entries beyond [`JACOBIAN_TOLERANCE`].
+    pub jacobian: f64,
+    pub jacobian_at: String,
+    pub entries_beyond: usize,
+    /// Of those, entries at a kink of a curve (Thelen's tendon and
+    /// force–velocity curves are piecewise, continuously differentiable
+    /// where the pieces meet): differenced again with a tenth of the step,
+    /// their difference from the exact entry shrinks at least threefold
+    /// (first order: tenfold), as it does where a difference straddles a
+    /// jump in the second derivative; a wrong derivative does not shrink.
+    pub entries_at_kinks: usize,
+    /// The largest difference among the other entries beyond the tolerance
+    /// (zero if none).
+    pub unexplained: f64,
+}
+
+/// [`jacobian`]'s report.
+#[derive(Debug, Clone, Serialize)]
+pub struct JacobianReport {
+    pub model: String,
+    pub num_mesh_intervals: usize,
+    pub scheme: &'static str,
+    pub fiber_dynamics: &'static str,
+    pub entries: usize,
+    pub points: Vec<JacobianPoint>,
+    /// Simbody's differences over every column, not coloured, at the first
+    /// perturbed point: the largest entry outside the Rust-native pattern
+    /// relative to its row's largest, and where.
+    pub outside_pattern: f64,
+    pub outside_pattern_at: String,
+    pub tolerance: f64,
+    pub pattern_tolerance: f64,
+    pub passed: bool,
+}
+
+/// The collocation Jacobian of the jump on `model`, Rust-native (exact, by
+/// dual numbers) against Simbody (central differences through Simbody's
+/// multibody system, [`crate::transcription::Backend::Simbody`]), at the
+/// bang-bang guess and at `perturbed` points near it: each variable moved
+/// by up to 1e-3 of its range (at most 2), kept inside its bounds with a
+/// margin, so that no activation equals its excitation.
+pub fn jacobian(
+    model: &Model,
+    options: crate::transcription::TranscriptionOptions,
+    perturbed: usize,
+    seed: u64,
+) -> Result<JacobianReport, String> {
+    use crate::nlp::Nlp;
+    use crate::transcription::{Backend, StatePattern, Transcription, TranscriptionOptions};
+    let ocp = std::sync::Arc::new(
+        crate::ocp::JumpOcp::new(model, crate::solve::collocation_ocp_options(&options))
+            .map_err(|e| e.to_string())?,
+    );
+    let pattern = StatePattern::detect_for(
+        &ocp,
+        options.fiber_dynamics,
+        options.pattern_samples,
+        options.pattern_seed,
+    )
+    .map_err(|e| e.to_string())?;
+    let build = |backend: Backend, pattern: StatePattern, compress_columns: bool| {
+        let options = TranscriptionOptions {
+            backend,
+            compress_columns,
+            ..options
+        };
+        Transcription::with_pattern(ocp.clone(), options, pattern).map_err(|e| e.to_string())
+    };
+    let mut rust = build(
+        Backend::RustNative,
+        pattern.clone(),
+        options.compress_columns,
+    )?;
+    let mut sb = build(Backend::Simbody, pattern.clone(), options.compress_columns)?;
+    let (mut guess, _) = rust.bang_bang_guess().map_err(|e| e.to_string())?;
+    rust.integrate_on_mesh(&mut guess)
+        .map_err(|e| e.to_string())?;
+    let (n, m) = (rust.num_variables(), rust.num_constraints());
+    let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
+    rust.variable_bounds(&mut lo, &mut hi);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut points = vec![("bang-bang guess".to_string(), guess.clone())];
+    for k in 1..=perturbed {
+        let x = (0..n)
+            .map(|i| {
+                let width = (hi[i] - lo[i]).min(2.0);
+                // Distinct margins keep clipped values apart (an activation
+                // equal to its excitation sits on the activation switch).
+                let margin = (1e-4 + 1e-3 * (i % 7) as f64) * width;
+                let v = guess[i] + 1e-3 * width * rng.random_range(-1.0..1.0);
+                v.clamp(lo[i] + margin, hi[i] - margin)
+            })
+            .collect();
+        points.push((format!("perturbed guess {k}"), x));
+    }
+    let structure = rust.jacobian_structure();
+    let nnz = structure.len();
+    let row_scale = |values: &[f64]| {
+        let mut scale = vec![1.0f64; m];
+        for (&(i, _), v) in structure.iter().zip(values) {
+            scale[i] = scale[i].max(v.abs());
+        }
+        scale
+    };
+    let mut reports = Vec::new();
+    let (mut cr, mut cs) = (vec![0.0; m], vec![0.0; m]);
+    let (mut jr, mut js) = (vec![0.0; nnz], vec![0.0; nnz]);
+    for (k, (point, x)) in points.iter().enumerate() {
+        let err = |e: crate::nlp::EvalError| format!("{point}: {e}");
+        rust.constraints(x, &mut cr).map_err(err)?;
+        sb.constraints(x, &mut cs).map_err(err)?;
+        rust.jacobian_values(x, &mut jr).map_err(err)?;
+        sb.jacobian_values(x, &mut js).map_err(err)?;
+        let (mut rows, mut rows_row) = (0.0f64, 0);
+        for (i, (a, b)) in cr.iter().zip(&cs).enumerate() {
+            let e = (a - b).abs() / a.abs().max(1.0);
+            if !(e <= rows) {
+                (rows, rows_row) = (e, i);
+            }
+        }
+        let scale = row_scale(&jr);
+        let (mut worst, mut at, mut beyond) = (0.0f64, String::new(), Vec::new());
+        for (e, &(i, j)) in structure.iter().enumerate() {
+            let d = (jr[e] - js[e]).abs() / scale[i];
+            if !(d <= JACOBIAN_TOLERANCE) {
+                beyond.push((e, d));
+            }
+            if !(d <= worst) {
+                worst = d;
+                at = format!(
+                    "∂{}/∂{}: {} (Rust-native) against {} (Simbody), row scale {}",
+                    rust.constraint_name(i),
+                    rust.variable_name(j),
+                    jr[e],
+                    js[e],
+                    scale[i]
+                );
+            }
+        }
+        let (mut kinks, mut unexplained) = (0, 0.0f64);
+        if k > 0 && !beyond.is_empty() {
+            sb.set_difference_step(crate::transcription::FD_STEP / 10.0)
+                .map_err(|e| e.to_string())?;
+            let mut fine = vec![0.0; nnz];
+            let r = sb.jacobian_values(x, &mut fine).map_err(err);
+            sb.set_difference_step(crate::transcription::FD_STEP)
+                .map_err(|e| e.to_string())?;
+            r?;
+            for &(e, d) in &beyond {
+                let d_fine = (jr[e] - fine[e]).abs() / scale[structure[e].0];
+                if d_fine <= d / 3.0 {
+                    kinks += 1;
+                } else {
+                    unexplained = unexplained.max(d);
+                }
+            }
+        }
+        reports.push(JacobianPoint {
+            point: point.clone(),
+            checked: k > 0,
+            rows,
+            rows_at: rust.constraint_name(rows_row),
+            jacobian: worst,
+            jacobian_at: at,
+            entries_beyond: beyond.len(),
+            entries_at_kinks: kinks,
+            unexplained,
+        });
+    }
+    // Every column differenced apart: what lies outside the pattern.
+    let (mut outside, mut outside_at) = (0.0f64, String::new());
+    if let Some((_, x)) = points.get(1) {
+        let dense = StatePattern {
+            rows: vec![(0..pattern.nx + pattern.nu).collect(); pattern.rows.len()],
+            ..pattern.clone()
+        };
+        let mut all = build(Backend::Simbody, dense, false)?;
+        let all_structure = all.jacobian_structure();
+        let mut jd = vec![0.0; all_structure.len()];
+        all.jacobian_values(x, &mut jd)
+            .map_err(|e| format!("every column apart: {e}"))?;
+        let inside: std::collections::HashSet<(usize, usize)> = structure.iter().copied().collect();
+        let mut scale = vec![1.0f64; m];
+        for (&(i, _), v) in all_structure.iter().zip(&jd) {
+            scale[i] = scale[i].max(v.abs());
+        }
+        for (&(i, j), v) in all_structure.iter().zip(&jd) {
+            let r = v.abs() / scale[i];
+            if !inside.contains(&(i, j)) && !(r <= outside) {
+                outside = r;
+                outside_at = format!(
+                    "∂{}/∂{} = {v}",
+                    all.constraint_name(i),
+                    all.variable_name(j)
+                );
+            }
+        }
+    }
+    let passed = reports
+        .iter()
+        .all(|p| p.rows <= STATE_EQUATION_TOLERANCE && (!p.checked || p.unexplained == 0.0))
+        && outside <= PATTERN_TOLERANCE;
+    Ok(JacobianReport {
+        model: model.file.display().to_string(),
+        num_mesh_intervals: options.num_mesh_intervals,
+        scheme: crate::study::scheme_name(options.scheme),
+        fiber_dynamics: crate::study::fiber_dynamics_name(options.fiber_dynamics),
+        entries: nnz,
+        points: reports,
+        outside_pattern: outside,
+        outside_pattern_at: outside_at,
+        tolerance: JACOBIAN_TOLERANCE,
+        pattern_tolerance: PATTERN_TOLERANCE,
+        passed,
+    })
+}
+
+impl JacobianReport {
+    /// Lines a person can read.
+    pub fn table(&self) -> String {
+        let mut t = comfy_table::Table::new();
+        t.set_header(vec![
+            "point",
+            "rows",
+            "Jacobian",
+            &format!("entries beyond {:.0e}", self.tolerance),
+            "of them at kinks",
+            "largest Jacobian difference",
+        ]);
+        for p in &self.points {
+            t.add_row(vec![
+                format!(
+                    "{}{}",
+                    p.point,
+                    if p.checked {
+                        ""
+                    } else {
+                        " (not held: on the activation switch)"
+                    }
+                ),
+                format!("{:.2e}", p.rows),
+                format!("{:.2e}", p.jacobian),
+                p.entries_beyond.to_string(),
+                if p.checked {
+                    p.entries_at_kinks.to_string()
+                } else {
+                    "-".into()
+                },
+                p.jacobian_at.clone(),
+            ]);
+        }
+        format!(
+            "collocation Jacobian of the jump, Rust-native (dual numbers) against Simbody (central differences): model {}, {} mesh intervals, {}, {} fibre dynamics, {} entries\n{t}\noutside the pattern (every column differenced through Simbody): largest {:.2e} (tolerance {:.0e}){}\nrows within {:.0e}, Jacobians within {:.0e} of each row's largest entry but at kinks: {}",
+            self.model,
+            self.num_mesh_intervals,
+            self.scheme,
+            self.fiber_dynamics,
+            self.entries,
+            self.outside_pattern,
+            self.pattern_tolerance,
+            if self.outside_pattern_at.is_empty() { String::new() } else { format!(", {}", self.outside_pattern_at) },
+            STATE_EQUATION_TOLERANCE,
+            self.tolerance,
+            if self.passed { "PASS" } else { "FAIL" }
+        )
+    }
+}

@@ -47,12 +47,27 @@ enum Command {
         /// Model file (JSON).
         #[arg(long, default_value = "models/jumper.json")]
         model: PathBuf,
-        /// Number of random states.
-        #[arg(long, default_value_t = 100)]
-        samples: usize,
+        /// Number of random states (default 100).
+        #[arg(long)]
+        samples: Option<usize>,
         /// Seed of the random states.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Instead: the collocation Jacobian of the jump, exact Rust-native
+        /// (dual numbers) against Simbody's central differences, at the
+        /// bang-bang guess and --samples perturbed points (default 2 here).
+        #[arg(long)]
+        jacobian: bool,
+        /// With --jacobian: mesh intervals (default 28).
+        #[arg(long)]
+        num_mesh_intervals: Option<i64>,
+        /// With --jacobian: midpoint-euler (default), trapezoidal,
+        /// hermite-simpson or backward-euler.
+        #[arg(long)]
+        scheme: Option<String>,
+        /// With --jacobian: implicit (midpoint-euler's default) or explicit.
+        #[arg(long)]
+        fiber_dynamics: Option<String>,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
@@ -348,17 +363,56 @@ fn run(cli: Cli) -> Result<ExitCode> {
             model,
             samples,
             seed,
+            jacobian,
+            num_mesh_intervals,
+            scheme,
+            fiber_dynamics,
             json,
         } => {
-            if samples == 0 {
+            if !jacobian {
+                for (given, option) in [
+                    (num_mesh_intervals.is_some(), "--num-mesh-intervals"),
+                    (scheme.is_some(), "--scheme"),
+                    (fiber_dynamics.is_some(), "--fiber-dynamics"),
+                ] {
+                    if given {
+                        anyhow::bail!("{option}: applies to --jacobian only");
+                    }
+                }
+            }
+            let samples = samples.unwrap_or(if jacobian { 2 } else { 100 });
+            if samples == 0 && !jacobian {
                 anyhow::bail!("--samples must be at least 1");
             }
-            if samples > 1_000_000 {
+            let limit = if jacobian { 100 } else { 1_000_000 };
+            if samples > limit {
                 anyhow::bail!(
-                    "--samples: at most 1000000, got {samples} (about a millisecond each: a million take a quarter of an hour)"
+                    "--samples: at most {limit}, got {samples}{}",
+                    if jacobian {
+                        " (each perturbed point costs two collocation Jacobians)"
+                    } else {
+                        " (about a millisecond each: a million take a quarter of an hour)"
+                    }
                 );
             }
             let m = leap::model::Model::from_file(&model)?;
+            if jacobian {
+                let options = jacobian_options(num_mesh_intervals, scheme, fiber_dynamics)?;
+                let report =
+                    leap::crosscheck::jacobian(&m, options, samples, seed).map_err(|e| {
+                        anyhow::anyhow!("Jacobian cross-check of {}: {e}", model.display())
+                    })?;
+                if json {
+                    outln!("{}", serde_json::to_string_pretty(&report)?);
+                } else {
+                    outln!("{}", report.table());
+                }
+                return Ok(if report.passed {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::from(1)
+                });
+            }
             let report = leap::crosscheck::run(&m, samples, seed)
                 .with_context(|| format!("cross-check of {}", model.display()))?;
             if json {
@@ -969,4 +1023,28 @@ fn solve(
     } else {
         ExitCode::from(1)
     })
+}
+
+/// `leap crosscheck --jacobian`'s transcription: the built-in study's, with
+/// the options given.
+fn jacobian_options(
+    num_mesh_intervals: Option<i64>,
+    scheme: Option<String>,
+    fiber_dynamics: Option<String>,
+) -> anyhow::Result<leap::transcription::TranscriptionOptions> {
+    let mut t = leap::transcription::TranscriptionOptions::default();
+    if let Some(n) = num_mesh_intervals {
+        t.num_mesh_intervals = leap::study::check_mesh_intervals(n)
+            .map_err(|r| anyhow::anyhow!("--num-mesh-intervals: {r}"))?;
+    }
+    if let Some(s) = &scheme {
+        t.scheme = leap::study::parse_scheme(s).map_err(|r| anyhow::anyhow!("--scheme: {r}"))?;
+    }
+    t.fiber_dynamics = match &fiber_dynamics {
+        Some(f) => leap::study::parse_fiber_dynamics(f)
+            .map_err(|r| anyhow::anyhow!("--fiber-dynamics: {r}"))?,
+        None => leap::study::default_fiber_dynamics(t.scheme),
+    };
+    leap::study::check_fiber_dynamics(&t).map_err(|r| anyhow::anyhow!("--fiber-dynamics: {r}"))?;
+    Ok(t)
 }

@@ -244,6 +244,22 @@ pub fn moco_status(s: SqpStatus) -> &'static str {
     }
 }
 
+/// The jump problem's options for a collocation: the paper constrains 7
+/// intervals against countermovement (eq. 4), a coarser mesh all it has;
+/// schemes that evaluate the dynamics at the nodes get Thelen's fibre clamp
+/// spread over a band.
+pub fn collocation_ocp_options(t: &crate::transcription::TranscriptionOptions) -> OcpOptions {
+    let defaults = OcpOptions::default();
+    OcpOptions {
+        no_countermovement_nodes: defaults.no_countermovement_nodes.min(t.num_mesh_intervals),
+        fiber_clamp_smoothing: t
+            .scheme
+            .evaluates_dynamics_at_nodes()
+            .then_some(FIBER_CLAMP_BAND),
+        ..defaults
+    }
+}
+
 /// Run a study: build the problem, solve it, write the outputs, check the
 /// solution forward. `verbose` prints the SQP's iteration log to standard
 /// error; `progress` receives one line per stage.
@@ -265,19 +281,7 @@ pub fn run(
         return run_shooting(config, &model, verbose, progress);
     }
     let big_n = config.transcription.num_mesh_intervals;
-    let defaults = OcpOptions::default();
-    // The paper constrains 7 intervals against countermovement (eq. 4); a
-    // coarser mesh constrains all it has. Schemes that evaluate the
-    // dynamics at the nodes get Thelen's fibre clamp spread over a band.
-    let options = OcpOptions {
-        no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
-        fiber_clamp_smoothing: config
-            .transcription
-            .scheme
-            .evaluates_dynamics_at_nodes()
-            .then_some(FIBER_CLAMP_BAND),
-        ..defaults
-    };
+    let options = collocation_ocp_options(&config.transcription);
     progress("static squat and jump problem");
     let ocp = Arc::new(JumpOcp::new(&model, options)?);
     progress(&format!(

@@ -894,7 +894,7 @@ pub fn parse_fiber_dynamics(s: &str) -> Result<FiberDynamics, String> {
 /// intervals solved (112-829 iterations) where the explicit rows solved two
 /// of four (810 and 954 iterations; `leap bench solve --num-mesh-intervals
 /// 24,26,28,30`, README).
-fn default_fiber_dynamics(scheme: Scheme) -> FiberDynamics {
+pub fn default_fiber_dynamics(scheme: Scheme) -> FiberDynamics {
     if scheme == Scheme::MidpointEuler {
         FiberDynamics::Implicit
     } else {
@@ -903,7 +903,7 @@ fn default_fiber_dynamics(scheme: Scheme) -> FiberDynamics {
 }
 
 /// Implicit fibre dynamics are stated at the midpoints of midpoint Euler.
-fn check_fiber_dynamics(t: &TranscriptionOptions) -> Result<(), String> {
+pub fn check_fiber_dynamics(t: &TranscriptionOptions) -> Result<(), String> {
     if t.fiber_dynamics == FiberDynamics::Implicit && t.scheme != Scheme::MidpointEuler {
         return Err(format!(
             "implicit fibre dynamics need the midpoint-euler scheme, not {}",

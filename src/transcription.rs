@@ -600,6 +600,8 @@ struct Worker<const W: usize> {
 /// x + h and x − h, and the point's inputs (x, u).
 struct SimbodyPoint {
     rates: crate::ocp::SimbodyRates,
+    /// The relative difference step ([`FD_STEP`] unless set).
+    step: f64,
     gp: Vec<f64>,
     gm: Vec<f64>,
     base: Vec<f64>,
@@ -633,6 +635,7 @@ impl<const W: usize> Worker<W> {
             let nout = ocp.nx() + 2;
             w.simbody = Some(SimbodyPoint {
                 rates,
+                step: FD_STEP,
                 gp: vec![0.0; nout],
                 gm: vec![0.0; nout],
                 base: vec![0.0; ocp.nx() + nu],
@@ -782,6 +785,7 @@ fn simbody_jac<const W: usize>(
     let nx = w.x.len();
     let Some(SimbodyPoint {
         rates,
+        step: rel,
         gp,
         gm,
         base,
@@ -792,7 +796,8 @@ fn simbody_jac<const W: usize>(
     base.clear();
     base.extend(w.x.iter().chain(&w.u));
     let base = &*base;
-    let step = |c: usize, sign: f64| base[c] + sign * FD_STEP * base[c].abs().max(1.0);
+    let rel = *rel;
+    let step = |c: usize, sign: f64| base[c] + sign * rel * base[c].abs().max(1.0);
     for pass in &cp.passes {
         let lanes = pass.seeds.iter().map(|&(_, l)| l + 1).max().unwrap_or(0);
         for lane in 0..lanes {
@@ -1982,6 +1987,28 @@ impl Transcription {
     /// Non-zeros of the constraint Jacobian.
     pub fn jacobian_nnz(&self) -> usize {
         self.structure.len()
+    }
+
+    /// [`Backend::Simbody`]: the relative step of the central differences
+    /// (default [`FD_STEP`]), e.g. a smaller one to tell a curve's kink (the
+    /// difference error shrinks with the step) from a wrong derivative.
+    pub fn set_difference_step(&mut self, step: f64) -> Result<(), TranscriptionError> {
+        if !(step.is_finite() && step > 0.0 && step < 1.0) {
+            return Err(TranscriptionError::Invalid(format!(
+                "difference step must lie in (0, 1), got {step}"
+            )));
+        }
+        if self.options.backend != Backend::Simbody {
+            return Err(TranscriptionError::Invalid(
+                "a difference step needs the Simbody backend".into(),
+            ));
+        }
+        for w in &mut self.workers {
+            if let Some(p) = &mut w.simbody {
+                p.step = step;
+            }
+        }
+        Ok(())
     }
 
     /// Points where the state equation is evaluated (midpoints, nodes,

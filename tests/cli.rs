@@ -28,6 +28,71 @@ fn crosscheck_json_reports_error_and_samples() {
     assert!(e <= 1e-10, "max_rel_error {e}");
 }
 
+/// `leap crosscheck --jacobian` on the default model: exit 0 with the
+/// verdict, each point's rows and Jacobian, and what lies outside the
+/// pattern (the bounds are the library's, tested in
+/// `transcription::simbody_backend_matches_rust_native_rows_and_jacobian`);
+/// mesh options without `--jacobian`, and bad ones with it, are refused by
+/// name.
+#[test]
+fn crosscheck_jacobian_reports_each_point() {
+    let out = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "crosscheck",
+            "--jacobian",
+            "--num-mesh-intervals",
+            "12",
+            "--samples",
+            "1",
+            "--json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["passed"].as_bool(), Some(true));
+    assert_eq!(v["num_mesh_intervals"].as_u64(), Some(12));
+    let points = v["points"].as_array().unwrap();
+    assert_eq!(points.len(), 2);
+    assert_eq!(points[1]["checked"].as_bool(), Some(true));
+    assert!(points[1]["rows"].as_f64().unwrap() <= 1e-9);
+    assert!(v["outside_pattern"].as_f64().unwrap() <= 1e-7);
+    for (args, what) in [
+        (vec!["crosscheck", "--scheme", "trapezoidal"], "--scheme"),
+        (
+            vec!["crosscheck", "--jacobian", "--scheme", "euler"],
+            "--scheme",
+        ),
+        (
+            vec!["crosscheck", "--jacobian", "--num-mesh-intervals", "1"],
+            "--num-mesh-intervals",
+        ),
+        (
+            vec![
+                "crosscheck",
+                "--jacobian",
+                "--scheme",
+                "trapezoidal",
+                "--fiber-dynamics",
+                "implicit",
+            ],
+            "--fiber-dynamics",
+        ),
+        (
+            vec!["crosscheck", "--jacobian", "--samples", "1000"],
+            "--samples",
+        ),
+    ] {
+        let err = refused(
+            Command::cargo_bin("leap").unwrap().args(&args),
+            &format!("{args:?}"),
+        );
+        assert!(err.contains(what), "{args:?}: {err}");
+    }
+}
+
 #[test]
 fn bad_model_files_exit_nonzero_naming_file_and_field() {
     for (file, field) in [

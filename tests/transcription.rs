@@ -1689,52 +1689,23 @@ fn implicit_and_explicit_fiber_rows_vanish_together() {
     assert_eq!(checked, 12);
 }
 
-/// The largest difference between two Jacobians of one structure, each
-/// entry relative to the largest entry of its row in `a` (at least 1),
-/// where it is, and how many entries differ by more than `tol`.
-fn worst_row_scaled(tr: &Transcription, a: &[f64], b: &[f64], tol: f64) -> (f64, String, usize) {
-    let structure = tr.jacobian_structure();
-    let mut row_max = vec![1.0f64; tr.num_constraints()];
-    for (&(i, _), v) in structure.iter().zip(a) {
-        row_max[i] = row_max[i].max(v.abs());
-    }
-    let (mut worst, mut at, mut above) = (0.0, String::new(), 0);
-    for (k, &(i, j)) in structure.iter().enumerate() {
-        let e = (a[k] - b[k]).abs() / row_max[i];
-        above += usize::from(e > tol);
-        if e > worst {
-            worst = e;
-            at = format!(
-                "∂{}/∂{}: {} vs {} (row scale {})",
-                tr.constraint_name(i),
-                tr.variable_name(j),
-                a[k],
-                b[k],
-                row_max[i]
-            );
-        }
-    }
-    (worst, at, above)
-}
-
 /// `Backend::Simbody` (`leap solve --backend simbody`), the cross-check path
-/// of the derivatives: every point evaluated by Simbody's multibody system
-/// (the same force laws in a Simbody force element) and the Jacobian by
+/// of the derivatives, through `leap crosscheck --jacobian`
+/// (`crosscheck::jacobian`): every point evaluated by Simbody's multibody
+/// system (the same force laws in a Simbody force element), the Jacobian by
 /// central differences over the same colouring.
 /// - Its rows agree with the Rust-native ones to the agreement of the two
 ///   dynamics (`leap crosscheck` asserts ẋ within 1e-9).
 /// - Its Jacobian agrees with the exact dual-number one to 1e-6 of each
 ///   row's largest entry, as `jacobian_matches_finite_differences_*` asks of
-///   Rust-native differences, at points off the activation switch and
-///   Thelen's clamp (perturbed guesses: where a = u = a_min, as at the
-///   bang-bang guess, the one-sided derivatives differ).
+///   Rust-native differences, at points off the activation switch (perturbed
+///   guesses; where a = u = a_min, as at the bang-bang guess, the one-sided
+///   derivatives differ).
 /// - Simbody's differences over every column, not coloured, find nothing
 ///   outside the pattern that the Rust-native samples detected.
 #[test]
 fn simbody_backend_matches_rust_native_rows_and_jacobian() {
-    let (ocp, _, guess) = setup();
-    let full = transcription(TranscriptionOptions::default());
-    let traj = full.unpack(guess);
+    let model = leap::model::Model::from_file("models/jumper_gait2392.json").unwrap();
     for (fiber_dynamics, scheme, n) in [
         (FiberDynamics::Explicit, Scheme::MidpointEuler, 28),
         (FiberDynamics::Implicit, Scheme::MidpointEuler, 28),
@@ -1746,96 +1717,28 @@ fn simbody_backend_matches_rust_native_rows_and_jacobian() {
             fiber_dynamics,
             ..Default::default()
         };
-        let pattern = StatePattern::detect_for(
-            ocp,
-            fiber_dynamics,
-            options.pattern_samples,
-            options.pattern_seed,
-        )
-        .unwrap();
-        let simbody = |options: TranscriptionOptions, pattern: StatePattern| {
-            let options = TranscriptionOptions {
-                backend: Backend::Simbody,
-                ..options
-            };
-            Transcription::with_pattern(ocp.clone(), options, pattern).unwrap()
-        };
-        let mut rust = Transcription::with_pattern(ocp.clone(), options, pattern.clone()).unwrap();
-        let mut sb = simbody(options, pattern.clone());
-        let x0 = rust
-            .guess_from_trajectory(
-                &traj.time,
-                &traj.states,
-                &traj.controls,
-                full.final_time(guess),
-            )
-            .unwrap();
+        let r = leap::crosscheck::jacobian(&model, options, 2, 5).unwrap();
+        eprintln!("{}", r.table());
         let what = format!("{fiber_dynamics:?} {scheme:?}");
-        for (name, x) in [
-            ("guess", x0.clone()),
-            ("perturbed 5", perturbed_by(&rust, &x0, 5, 1e-3)),
-            ("perturbed 6", perturbed_by(&rust, &x0, 6, 1e-2)),
-        ] {
-            let m = rust.num_constraints();
-            let (mut cr, mut cs) = (vec![0.0; m], vec![0.0; m]);
-            rust.constraints(&x, &mut cr).unwrap();
-            sb.constraints(&x, &mut cs).unwrap();
-            let (rows, at) = cr
-                .iter()
-                .zip(&cs)
-                .enumerate()
-                .map(|(i, (a, b))| ((a - b).abs() / a.abs().max(1.0), i))
-                .fold((0.0, 0), |w, e| if e.0 > w.0 { e } else { w });
-            let nnz = rust.jacobian_nnz();
-            let (mut jr, mut js) = (vec![0.0; nnz], vec![0.0; nnz]);
-            rust.jacobian_values(&x, &mut jr).unwrap();
-            sb.jacobian_values(&x, &mut js).unwrap();
-            let (worst, worst_at, above) = worst_row_scaled(&rust, &jr, &js, 1e-6);
-            eprintln!("{what}, {name}: rows {rows:.1e} ({}), Jacobian {worst:.1e} ({worst_at}), {above} of {nnz} entries above 1e-6", rust.constraint_name(at));
-            assert!(rows <= 1e-9, "{what}, {name}: {}", rust.constraint_name(at));
-            if name != "guess" {
-                assert!(worst <= 1e-6, "{what}, {name}: {worst_at}");
+        assert_eq!(r.points.len(), 3);
+        for p in &r.points {
+            assert!(p.rows <= 1e-9, "{what}, {}: {}", p.point, p.rows_at);
+            if p.checked {
+                assert!(
+                    p.jacobian <= 1e-6 || p.entries_at_kinks == p.entries_beyond,
+                    "{what}, {}: {}",
+                    p.point,
+                    p.jacobian_at
+                );
             }
         }
-        // Every column differenced apart, at a perturbed guess: the entries
-        // outside the Rust-native pattern.
-        let dense = StatePattern {
-            rows: vec![(0..pattern.nx + pattern.nu).collect(); pattern.rows.len()],
-            ..pattern.clone()
-        };
-        let mut all = simbody(
-            TranscriptionOptions {
-                compress_columns: false,
-                ..options
-            },
-            dense,
+        // The guess's muscles that are off sit on the activation switch.
+        assert!(!r.points[0].checked && r.points[0].entries_beyond > 0);
+        assert!(
+            r.outside_pattern <= 1e-7,
+            "{what}: {}",
+            r.outside_pattern_at
         );
-        let x = perturbed_by(&rust, &x0, 5, 1e-3);
-        let mut jd = vec![0.0; all.jacobian_nnz()];
-        all.jacobian_values(&x, &mut jd).unwrap();
-        let inside: std::collections::HashSet<(usize, usize)> =
-            rust.jacobian_structure().into_iter().collect();
-        let mut row_max = vec![1.0f64; all.num_constraints()];
-        let structure = all.jacobian_structure();
-        for (&(i, _), v) in structure.iter().zip(&jd) {
-            row_max[i] = row_max[i].max(v.abs());
-        }
-        let (mut outside, mut outside_at, mut nonzero) = (0.0f64, String::new(), 0);
-        for (&(i, j), v) in structure.iter().zip(&jd) {
-            if !inside.contains(&(i, j)) && *v != 0.0 {
-                nonzero += 1;
-                if v.abs() / row_max[i] > outside {
-                    outside = v.abs() / row_max[i];
-                    outside_at = format!(
-                        "∂{}/∂{} = {v}",
-                        all.constraint_name(i),
-                        all.variable_name(j)
-                    );
-                }
-            }
-        }
-        eprintln!("{what}: {} entries differenced, {nonzero} outside the pattern non-zero, largest {outside:.1e} ({outside_at})", structure.len());
-        assert!(structure.len() > 2 * inside.len());
-        assert!(outside <= 1e-7, "{what}: {outside_at}");
+        assert!(r.passed, "{what}");
     }
 }
