@@ -540,6 +540,11 @@ pub const JACOBIAN_TOLERANCE: f64 = 1e-6;
 /// Rust-native differences outside it).
 pub const PATTERN_TOLERANCE: f64 = 1e-7;
 
+/// Whether `d` exceeds `bound`, NaN counting as exceeding.
+fn exceeds(d: f64, bound: f64) -> bool {
+    d.is_nan() || d > bound
+}
+
 /// One point of [`jacobian`]: the rows and the Jacobian at a variable
 /// vector, Rust-native against Simbody.
 #[derive(Debug, Clone, Serialize)]
@@ -670,7 +675,7 @@ pub fn jacobian(
         let (mut rows, mut rows_row) = (0.0f64, 0);
         for (i, (a, b)) in cr.iter().zip(&cs).enumerate() {
             let e = (a - b).abs() / a.abs().max(1.0);
-            if !(e <= rows) {
+            if exceeds(e, rows) {
                 (rows, rows_row) = (e, i);
             }
         }
@@ -678,10 +683,10 @@ pub fn jacobian(
         let (mut worst, mut at, mut beyond) = (0.0f64, String::new(), Vec::new());
         for (e, &(i, j)) in structure.iter().enumerate() {
             let d = (jr[e] - js[e]).abs() / scale[i];
-            if !(d <= JACOBIAN_TOLERANCE) {
+            if exceeds(d, JACOBIAN_TOLERANCE) {
                 beyond.push((e, d));
             }
-            if !(d <= worst) {
+            if exceeds(d, worst) {
                 worst = d;
                 at = format!(
                     "∂{}/∂{}: {} (Rust-native) against {} (Simbody), row scale {}",
@@ -742,7 +747,7 @@ pub fn jacobian(
         }
         for (&(i, j), v) in all_structure.iter().zip(&jd) {
             let r = v.abs() / scale[i];
-            if !inside.contains(&(i, j)) && !(r <= outside) {
+            if !inside.contains(&(i, j)) && exceeds(r, outside) {
                 outside = r;
                 outside_at = format!(
                     "∂{}/∂{} = {v}",

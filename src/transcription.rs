@@ -2018,7 +2018,6 @@ impl Transcription {
     }
 
     /// Sizes of the Jacobian and its blocks.
-
     pub fn jacobian_stats(&self) -> JacobianStats {
         let [_, cm, lo, cv, end] = self.block_offsets;
         let nx = self.nx;
