@@ -25,8 +25,10 @@ fn solve_with(study: &str, tag: &str, overrides: Overrides) -> SolveReport {
     let verbose = std::env::var_os("LEAP_SQP_VERBOSE").is_some();
     let report = leap::solve::run(&config, verbose, &mut |_| {}).unwrap();
     eprintln!(
-        "{study} ({} fibre dynamics): {:?} after {} iterations, {:.1} s; jump {:.2} cm, forward check {:+.2} cm, violation {:.1e}",
+        "{study} ({:?}, {} fibre dynamics, {} backend): {:?} after {} iterations, {:.1} s; jump {:.2} cm, forward check {:+.2} cm, violation {:.1e}",
+        report.method,
         report.fiber_dynamics,
+        report.backend,
         report.status,
         report.iterations,
         report.wall_time_s,
