@@ -381,7 +381,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 }
             }
             let samples = samples.unwrap_or(if jacobian { 2 } else { 100 });
-            if samples == 0 && !jacobian {
+            if samples == 0 {
                 anyhow::bail!("--samples must be at least 1");
             }
             let limit = if jacobian { 100 } else { 1_000_000 };

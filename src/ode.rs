@@ -629,6 +629,8 @@ pub struct SimbodyStateEquation {
     /// The contact force on each sphere (ground) at the last force
     /// evaluation.
     spheres: std::sync::Arc<std::sync::Mutex<Vec<[f64; 3]>>>,
+    /// No applied generalized forces (`rhs`).
+    zero_forces: Vec<f64>,
     perm: Vec<usize>,
 }
 
@@ -719,11 +721,13 @@ impl SimbodyStateEquation {
             &equation.system,
             Some((f, 2 * nm)),
         )?;
+        let nq = equation.nq();
         Ok(SimbodyStateEquation {
             equation,
             simbody,
             excitation,
             spheres,
+            zero_forces: vec![0.0; nq],
             perm,
         })
     }
@@ -794,11 +798,18 @@ impl SimbodyStateEquation {
                 "wrong length of u or xdot".into(),
             ));
         }
-        self.set_excitation(Excitation::Constant(u.to_vec()));
+        // The excitations in place (this runs for every difference of
+        // `Backend::Simbody`'s Jacobians).
+        if let Ok(mut e) = self.excitation.lock() {
+            match &mut *e {
+                Excitation::Constant(v) if v.len() == u.len() => v.copy_from_slice(u),
+                other => *other = Excitation::Constant(u.to_vec()),
+            }
+        }
         // Setting the state invalidates every cached force (the excitation
         // lives outside Simbody's state).
         self.set_state(0.0, x)?;
-        self.simbody.set_applied_forces(&vec![0.0; n], &[])?;
+        self.simbody.set_applied_forces(&self.zero_forces, &[])?;
         xdot[..n].copy_from_slice(&x[n..2 * n]);
         self.simbody.accelerations(&mut xdot[n..2 * n])?;
         self.simbody.zdot(&mut xdot[2 * n..])

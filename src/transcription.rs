@@ -149,9 +149,10 @@ pub enum Backend {
     /// differences over the same column colouring: the cross-check path of
     /// the Rust-native derivatives. Each column c of a colour moves by
     /// ±[`FD_STEP`]·max(1, |v_c|) and by half that at once (columns of one
-    /// colour share no row), the two differences extrapolated. The Hessians stay the Rust-native ones: they steer the steps,
-    /// and the solution is the point where the Simbody rows and their
-    /// Jacobian satisfy the optimality conditions.
+    /// colour share no row), the two differences extrapolated. The Hessians
+    /// stay the Rust-native ones: they steer the steps, and the solution is
+    /// the point where the Simbody rows and their Jacobian satisfy the
+    /// optimality conditions.
     Simbody,
 }
 
