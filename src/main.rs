@@ -59,7 +59,7 @@ enum Command {
         #[arg(long)]
         jacobian: bool,
         /// With --jacobian: mesh intervals (default 28).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true)]
         num_mesh_intervals: Option<i64>,
         /// With --jacobian: midpoint-euler (default), trapezoidal,
         /// hermite-simpson or backward-euler.

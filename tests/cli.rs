@@ -70,6 +70,10 @@ fn crosscheck_jacobian_reports_each_point() {
             "--num-mesh-intervals",
         ),
         (
+            vec!["crosscheck", "--jacobian", "--num-mesh-intervals", "-2"],
+            "-2",
+        ),
+        (
             vec![
                 "crosscheck",
                 "--jacobian",
