@@ -540,6 +540,11 @@ pub const JACOBIAN_TOLERANCE: f64 = 1e-6;
 /// Rust-native differences outside it).
 pub const PATTERN_TOLERANCE: f64 = 1e-7;
 
+/// Relative step of the one-sided differences that tell a jump in a
+/// derivative (a kink) from a wrong derivative (the transcription tests'
+/// step for the same check).
+pub const KINK_ONE_SIDED_STEP: f64 = 1e-8;
+
 /// Whether `d` exceeds `bound`, NaN counting as exceeding.
 fn exceeds(d: f64, bound: f64) -> bool {
     d.is_nan() || d > bound
@@ -563,12 +568,19 @@ pub struct JacobianPoint {
     pub jacobian: f64,
     pub jacobian_at: String,
     pub entries_beyond: usize,
-    /// Of those, entries at a kink of a curve (Thelen's tendon and
-    /// force–velocity curves are piecewise, continuously differentiable
-    /// where the pieces meet): differenced again with a tenth of the step,
-    /// their difference from the exact entry shrinks at least threefold
-    /// (first order: tenfold), as it does where a difference straddles a
-    /// jump in the second derivative; a wrong derivative does not shrink.
+    /// Of those, entries at a kink, of one of two kinds; a wrong
+    /// derivative is neither.
+    /// - A jump in the second derivative (Thelen's tendon and
+    ///   force–velocity curves are piecewise, their pieces meeting with
+    ///   equal slopes): differenced again with a tenth of the step, the
+    ///   entry's difference from the exact one shrinks at least threefold
+    ///   (first order: tenfold).
+    /// - A jump in the derivative itself (a clamp, a tendon at its slack
+    ///   length; the schemes that evaluate the dynamics at the nodes meet
+    ///   them): one-sided differences of step [`KINK_ONE_SIDED_STEP`] differ
+    ///   by more than 1e-3 of the row's largest entry and the exact entry is
+    ///   one of them within 1e-4 (the bounds of the transcription tests'
+    ///   kink check).
     pub entries_at_kinks: usize,
     /// The largest difference among the other entries beyond the tolerance
     /// (zero if none).
@@ -700,16 +712,28 @@ pub fn jacobian(
         }
         let (mut kinks, mut unexplained) = (0, 0.0f64);
         if k > 0 && !beyond.is_empty() {
-            sb.set_difference_step(crate::transcription::FD_STEP / 10.0)
-                .map_err(|e| e.to_string())?;
-            let mut fine = vec![0.0; nnz];
-            let r = sb.jacobian_values(x, &mut fine).map_err(err);
-            sb.set_difference_step(crate::transcription::FD_STEP)
-                .map_err(|e| e.to_string())?;
-            r?;
+            use crate::transcription::{Differences, FD_STEP};
+            let mut with = |d: Differences| -> Result<Vec<f64>, String> {
+                sb.set_differences(d).map_err(|e| e.to_string())?;
+                let mut values = vec![0.0; nnz];
+                let r = sb.jacobian_values(x, &mut values).map_err(err);
+                sb.set_differences(Differences::Central { step: FD_STEP })
+                    .map_err(|e| e.to_string())?;
+                r.map(|_| values)
+            };
+            let fine = with(Differences::Central {
+                step: FD_STEP / 10.0,
+            })?;
+            let step = KINK_ONE_SIDED_STEP;
+            let forward = with(Differences::Forward { step })?;
+            let backward = with(Differences::Backward { step })?;
             for &(e, d) in &beyond {
-                let d_fine = (jr[e] - fine[e]).abs() / scale[structure[e].0];
-                if d_fine <= d / 3.0 {
+                let s = scale[structure[e].0];
+                let smooth_kink = (jr[e] - fine[e]).abs() / s <= d / 3.0;
+                let (f, b) = (forward[e], backward[e]);
+                let jump = (f - b).abs() / s > 1e-3
+                    && (jr[e] - f).abs().min((jr[e] - b).abs()) / s <= 1e-4;
+                if smooth_kink || jump {
                     kinks += 1;
                 } else {
                     unexplained = unexplained.max(d);

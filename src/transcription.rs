@@ -171,6 +171,25 @@ pub enum Backend {
 /// fibre dynamics and Hermite–Simpson).
 pub const FD_STEP: f64 = 1e-7;
 
+/// How [`Backend::Simbody`] differences its columns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Differences {
+    /// Central differences of relative steps h and h/2, extrapolated
+    /// (default, h = [`FD_STEP`]).
+    Central {
+        step: f64,
+    },
+    /// One-sided, (g(x + h) − g(x))/h: with `Backward`, the two sides of a
+    /// kink where the derivative jumps (a clamp, a slack tendon), which
+    /// central differences average.
+    Forward {
+        step: f64,
+    },
+    Backward {
+        step: f64,
+    },
+}
+
 /// Settings of the transcription.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TranscriptionOptions {
@@ -601,8 +620,8 @@ struct Worker<const W: usize> {
 /// x + h and x − h, and the point's inputs (x, u).
 struct SimbodyPoint {
     rates: crate::ocp::SimbodyRates,
-    /// The relative difference step ([`FD_STEP`] unless set).
-    step: f64,
+    /// How columns are differenced (central of [`FD_STEP`] unless set).
+    differences: Differences,
     gp: Vec<f64>,
     gm: Vec<f64>,
     base: Vec<f64>,
@@ -636,7 +655,7 @@ impl<const W: usize> Worker<W> {
             let nout = ocp.nx() + 2;
             w.simbody = Some(SimbodyPoint {
                 rates,
-                step: FD_STEP,
+                differences: Differences::Central { step: FD_STEP },
                 gp: vec![0.0; nout],
                 gm: vec![0.0; nout],
                 base: vec![0.0; ocp.nx() + nu],
@@ -786,7 +805,7 @@ fn simbody_jac<const W: usize>(
     let nx = w.x.len();
     let Some(SimbodyPoint {
         rates,
-        step: rel,
+        differences,
         gp,
         gm,
         base,
@@ -797,18 +816,27 @@ fn simbody_jac<const W: usize>(
     base.clear();
     base.extend(w.x.iter().chain(&w.u));
     let base = &*base;
-    let rel = *rel;
+    // Relative step; the steps taken (one-sided: one, central: h and
+    // h/2, each to both sides).
+    let (rel, steps): (f64, &[f64]) = match *differences {
+        Differences::Central { step } => (step, &[1.0, 0.5]),
+        Differences::Forward { step } => (step, &[1.0]),
+        Differences::Backward { step } => (step, &[-1.0]),
+    };
+    let central = steps.len() == 2;
     let step = |c: usize, sign: f64| base[c] + sign * rel * base[c].abs().max(1.0);
     for pass in &cp.passes {
         let lanes = pass.seeds.iter().map(|&(_, l)| l + 1).max().unwrap_or(0);
         for lane in 0..lanes {
             let colour = || pass.seeds.iter().filter(move |&&(_, l)| l == lane);
             // Central differences of steps h and h/2, then Richardson's
-            // extrapolation (4·D(h/2) − D(h))/3, whose error is O(h⁴).
-            for half in [1.0, 0.5] {
-                for (sign, g) in [(half, &mut *gp), (-half, &mut *gm)] {
+            // extrapolation (4·D(h/2) − D(h))/3, whose error is O(h⁴); or
+            // one difference to one side of x.
+            for &half in steps {
+                let sides: &[f64] = if central { &[1.0, -1.0] } else { &[1.0] };
+                for (&side, g) in sides.iter().zip([&mut *gp, &mut *gm]) {
                     for &(c, _) in colour() {
-                        let v = step(c, sign);
+                        let v = step(c, side * half);
                         if c < nx {
                             w.x[c] = v;
                         } else {
@@ -829,11 +857,15 @@ fn simbody_jac<const W: usize>(
                 }
                 for &(e, r, _) in pass.extract.iter().filter(|&&(_, _, l)| l == lane) {
                     let c = cp.entries[e].1;
-                    let d = (gp[r] - gm[r]) / (step(c, half) - step(c, -half));
-                    jac[e] = if half == 1.0 {
-                        d
+                    jac[e] = if !central {
+                        (gp[r] - out[r]) / (step(c, half) - base[c])
                     } else {
-                        (4.0 * d - jac[e]) / 3.0
+                        let d = (gp[r] - gm[r]) / (step(c, half) - step(c, -half));
+                        if half == 1.0 {
+                            d
+                        } else {
+                            (4.0 * d - jac[e]) / 3.0
+                        }
                     };
                 }
             }
@@ -1990,10 +2022,13 @@ impl Transcription {
         self.structure.len()
     }
 
-    /// [`Backend::Simbody`]: the relative step of the central differences
-    /// (default [`FD_STEP`]), e.g. a smaller one to tell a curve's kink (the
-    /// difference error shrinks with the step) from a wrong derivative.
-    pub fn set_difference_step(&mut self, step: f64) -> Result<(), TranscriptionError> {
+    /// [`Backend::Simbody`]: how the columns are differenced (default
+    /// central, [`FD_STEP`]); e.g. a smaller step or one side to tell a
+    /// curve's kink from a wrong derivative.
+    pub fn set_differences(&mut self, d: Differences) -> Result<(), TranscriptionError> {
+        let (Differences::Central { step }
+        | Differences::Forward { step }
+        | Differences::Backward { step }) = d;
         if !(step.is_finite() && step > 0.0 && step < 1.0) {
             return Err(TranscriptionError::Invalid(format!(
                 "difference step must lie in (0, 1), got {step}"
@@ -2001,12 +2036,12 @@ impl Transcription {
         }
         if self.options.backend != Backend::Simbody {
             return Err(TranscriptionError::Invalid(
-                "a difference step needs the Simbody backend".into(),
+                "differences need the Simbody backend".into(),
             ));
         }
         for w in &mut self.workers {
             if let Some(p) = &mut w.simbody {
-                p.step = step;
+                p.differences = d;
             }
         }
         Ok(())
