@@ -545,6 +545,15 @@ pub const PATTERN_TOLERANCE: f64 = 1e-7;
 /// step for the same check).
 pub const KINK_ONE_SIDED_STEP: f64 = 1e-8;
 
+/// Per row of a sparse Jacobian, its largest |entry| (at least 1).
+fn row_scale(structure: &[(usize, usize)], values: &[f64], rows: usize) -> Vec<f64> {
+    let mut scale = vec![1.0f64; rows];
+    for (&(i, _), v) in structure.iter().zip(values) {
+        scale[i] = scale[i].max(v.abs());
+    }
+    scale
+}
+
 /// Whether `d` exceeds `bound`, NaN counting as exceeding.
 fn exceeds(d: f64, bound: f64) -> bool {
     d.is_nan() || d > bound
@@ -668,13 +677,6 @@ pub fn jacobian(
     }
     let structure = rust.jacobian_structure();
     let nnz = structure.len();
-    let row_scale = |values: &[f64]| {
-        let mut scale = vec![1.0f64; m];
-        for (&(i, _), v) in structure.iter().zip(values) {
-            scale[i] = scale[i].max(v.abs());
-        }
-        scale
-    };
     let mut reports = Vec::new();
     let (mut cr, mut cs) = (vec![0.0; m], vec![0.0; m]);
     let (mut jr, mut js) = (vec![0.0; nnz], vec![0.0; nnz]);
@@ -691,7 +693,7 @@ pub fn jacobian(
                 (rows, rows_row) = (e, i);
             }
         }
-        let scale = row_scale(&jr);
+        let scale = row_scale(&structure, &jr, m);
         let (mut worst, mut at, mut beyond) = (0.0f64, String::new(), Vec::new());
         for (e, &(i, j)) in structure.iter().enumerate() {
             let d = (jr[e] - js[e]).abs() / scale[i];
@@ -736,7 +738,12 @@ pub fn jacobian(
                 if smooth_kink || jump {
                     kinks += 1;
                 } else {
-                    unexplained = unexplained.max(d);
+                    // A NaN difference is unexplained too.
+                    unexplained = if d.is_nan() {
+                        f64::INFINITY
+                    } else {
+                        unexplained.max(d)
+                    };
                 }
             }
         }
@@ -765,10 +772,7 @@ pub fn jacobian(
         all.jacobian_values(x, &mut jd)
             .map_err(|e| format!("every column apart: {e}"))?;
         let inside: std::collections::HashSet<(usize, usize)> = structure.iter().copied().collect();
-        let mut scale = vec![1.0f64; m];
-        for (&(i, _), v) in all_structure.iter().zip(&jd) {
-            scale[i] = scale[i].max(v.abs());
-        }
+        let scale = row_scale(&all_structure, &jd, m);
         for (&(i, j), v) in all_structure.iter().zip(&jd) {
             let r = v.abs() / scale[i];
             if !inside.contains(&(i, j)) && exceeds(r, outside) {
