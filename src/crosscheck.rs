@@ -581,9 +581,10 @@ pub struct JacobianPoint {
     /// derivative is neither.
     /// - A jump in the second derivative (Thelen's tendon and
     ///   force–velocity curves are piecewise, their pieces meeting with
-    ///   equal slopes): differenced again with a tenth of the step, the
-    ///   entry's difference from the exact one shrinks at least threefold
-    ///   (first order: tenfold).
+    ///   equal slopes): differenced again with a tenth and a hundredth of
+    ///   the step, the entry's difference from the exact one shrinks at
+    ///   least threefold each time (first order: tenfold), or falls within
+    ///   the tolerance.
     /// - A jump in the derivative itself (a clamp, a tendon at its slack
     ///   length; the schemes that evaluate the dynamics at the nodes meet
     ///   them): one-sided differences of step [`KINK_ONE_SIDED_STEP`] differ
@@ -592,7 +593,8 @@ pub struct JacobianPoint {
     ///   kink check).
     pub entries_at_kinks: usize,
     /// The largest difference among the other entries beyond the tolerance
-    /// (zero if none).
+    /// (zero if none). The point passes with none, and with at most one
+    /// entry in a thousand at kinks.
     pub unexplained: f64,
 }
 
@@ -629,6 +631,9 @@ pub fn jacobian(
 ) -> Result<JacobianReport, String> {
     use crate::nlp::Nlp;
     use crate::transcription::{Backend, StatePattern, Transcription, TranscriptionOptions};
+    if perturbed == 0 {
+        return Err("at least one perturbed point is needed (the guess sits on kinks)".into());
+    }
     let ocp = std::sync::Arc::new(
         crate::ocp::JumpOcp::new(model, crate::solve::collocation_ocp_options(&options))
             .map_err(|e| e.to_string())?,
@@ -726,16 +731,22 @@ pub fn jacobian(
             let fine = with(Differences::Central {
                 step: FD_STEP / 10.0,
             })?;
+            let finer = with(Differences::Central {
+                step: FD_STEP / 100.0,
+            })?;
             let step = KINK_ONE_SIDED_STEP;
             let forward = with(Differences::Forward { step })?;
             let backward = with(Differences::Backward { step })?;
             for &(e, d) in &beyond {
                 let s = scale[structure[e].0];
-                let smooth_kink = (jr[e] - fine[e]).abs() / s <= d / 3.0;
+                let off = |v: f64| (jr[e] - v).abs() / s;
+                // Converging on the exact entry as the step shrinks tenfold,
+                // twice: a wrong entry stops converging at its error.
+                let (d1, d2) = (off(fine[e]), off(finer[e]));
+                let smooth_kink = d1 <= d / 3.0 && d2 <= (d1 / 3.0).max(JACOBIAN_TOLERANCE);
                 let (f, b) = (forward[e], backward[e]);
-                let jump = (f - b).abs() / s > 1e-3
-                    && (jr[e] - f).abs().min((jr[e] - b).abs()) / s <= 1e-4;
-                if smooth_kink || jump {
+                let jump = (f - b).abs() / s > 1e-3 && off(f).min(off(b)) <= 1e-4;
+                if !d.is_nan() && (smooth_kink || jump) {
                     kinks += 1;
                 } else {
                     // A NaN difference is unexplained too.
@@ -785,10 +796,12 @@ pub fn jacobian(
             }
         }
     }
-    let passed = reports
-        .iter()
-        .all(|p| p.rows <= STATE_EQUATION_TOLERANCE && (!p.checked || p.unexplained == 0.0))
-        && outside <= PATTERN_TOLERANCE;
+    // Kinks are rare: at most one entry in a thousand (the transcription
+    // tests' allowance).
+    let passed = reports.iter().all(|p| {
+        p.rows <= STATE_EQUATION_TOLERANCE
+            && (!p.checked || (p.unexplained == 0.0 && p.entries_at_kinks <= nnz / 1000))
+    }) && outside <= PATTERN_TOLERANCE;
     Ok(JacobianReport {
         model: model.file.display().to_string(),
         num_mesh_intervals: options.num_mesh_intervals,

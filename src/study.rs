@@ -444,7 +444,7 @@ impl SolveStudy {
             (self.mesh.scheme.is_some(), "mesh.scheme"),
             (self.mesh.fiber_dynamics.is_some(), "mesh.fiber_dynamics"),
             (
-                self.backend.as_deref().is_some_and(|b| b != "rust-native"),
+                self.backend.as_deref().map(parse_backend) == Some(Ok(Backend::Simbody)),
                 "backend",
             ),
             (resampled, "guess"),
@@ -705,7 +705,7 @@ impl SolveConfig {
                 (o.scheme.is_some(), "--scheme"),
                 (o.fiber_dynamics.is_some(), "--fiber-dynamics"),
                 (
-                    o.backend.as_deref().is_some_and(|b| b != "rust-native"),
+                    o.backend.as_deref().map(parse_backend) == Some(Ok(Backend::Simbody)),
                     "--backend",
                 ),
                 (resampled, "--guess"),
@@ -1328,6 +1328,10 @@ mod tests {
             r.contains("'opensim'") && r.contains("rust-native, simbody"),
             "{r}"
         );
+        // An unknown name is reported as such, with either method.
+        let (f, r) = field_error(r#"{"method": "shooting", "backend": "opensim"}"#);
+        assert_eq!(f, "backend");
+        assert!(r.contains("unknown backend 'opensim'"), "{r}");
         let (f, r) = field_error(r#"{"method": "shooting", "backend": "simbody"}"#);
         assert_eq!(f, "backend");
         assert!(r.contains("collocation"), "{r}");

@@ -651,7 +651,7 @@ impl<const W: usize> Worker<W> {
         if backend == Backend::Simbody {
             let rates = ocp
                 .simbody_rates()
-                .map_err(|e| format!("the Simbody backend cannot be built: {e}"))?;
+                .map_err(|e| format!("backend simbody: the Simbody system cannot be built: {e}"))?;
             let nout = ocp.nx() + 2;
             w.simbody = Some(SimbodyPoint {
                 rates,
@@ -1573,19 +1573,19 @@ impl Transcription {
             }
         }
         let off_end = structure.len();
-        // Node 0.
-        let backend = |e: String| TranscriptionError::Invalid(e);
-        let mut w0 = Worker::<LANES>::with_backend(&ocp, npu, options.backend).map_err(backend)?;
-        w0.x.copy_from_slice(ocp.x0());
-        w0.u[..nu].copy_from_slice(ocp.u0());
-        let mut node0 = vec![0.0; nx + 2];
-        eval_value(&ocp, &mut w0, &mut node0).map_err(|e| {
-            TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}"))
-        })?;
-        let workers = (0..options.threads)
+        let mut workers: Vec<Worker<LANES>> = (0..options.threads)
             .map(|_| Worker::with_backend(&ocp, npu, options.backend))
             .collect::<Result<_, _>>()
-            .map_err(backend)?;
+            .map_err(TranscriptionError::Invalid)?;
+        // Node 0 by the first worker (threads ≥ 1).
+        let w0 = &mut workers[0];
+        w0.x.copy_from_slice(ocp.x0());
+        w0.u.fill(0.0);
+        w0.u[..nu].copy_from_slice(ocp.u0());
+        let mut node0 = vec![0.0; nx + 2];
+        eval_value(&ocp, w0, &mut node0).map_err(|e| {
+            TranscriptionError::Invalid(format!("the state equation fails at the fixed start: {e}"))
+        })?;
         let npts = points.len();
         let nnz_g = compiled.entries.len();
         let mut me = Transcription {

@@ -1750,4 +1750,46 @@ fn simbody_backend_matches_rust_native_rows_and_jacobian() {
     assert!(tr
         .set_differences(Differences::Forward { step: 1e-8 })
         .is_err());
+    // The one-sided differences the kink check uses: their mean, the
+    // central difference of the same step, is within 1e-6 of each row's
+    // largest exact entry (the tolerance above).
+    let (_, _, guess) = setup();
+    let x = perturbed_by(&tr, guess, 5, 1e-3);
+    let mut exact = vec![0.0; tr.jacobian_nnz()];
+    tr.jacobian_values(&x, &mut exact).unwrap();
+    let mut sb = transcription(TranscriptionOptions {
+        backend: Backend::Simbody,
+        ..Default::default()
+    });
+    let mut sides = Vec::new();
+    for d in [
+        Differences::Forward { step: 1e-8 },
+        Differences::Backward { step: 1e-8 },
+    ] {
+        sb.set_differences(d).unwrap();
+        let mut one_sided = vec![0.0; exact.len()];
+        sb.jacobian_values(&x, &mut one_sided).unwrap();
+        sides.push(one_sided);
+    }
+    let structure = tr.jacobian_structure();
+    let mut scale = vec![1.0f64; tr.num_constraints()];
+    for (&(i, _), v) in structure.iter().zip(&exact) {
+        scale[i] = scale[i].max(v.abs());
+    }
+    let (mut mean_worst, mut beyond) = (0.0f64, 0);
+    for (e, &(i, _)) in structure.iter().enumerate() {
+        let (f, b) = (sides[0][e], sides[1][e]);
+        let m = ((f + b) / 2.0 - exact[e]).abs() / scale[i];
+        mean_worst = mean_worst.max(m);
+        beyond += usize::from(!(m <= 1e-6));
+    }
+    eprintln!("one-sided differences: mean within {mean_worst:.1e} of the exact entry, {beyond} of {} beyond 1e-6", exact.len());
+    // Rounding at step 1e-8 (ε·|f|/h): at most one entry in a thousand.
+    assert!(
+        mean_worst.is_finite() && beyond <= exact.len() / 1000,
+        "{beyond} entries, worst {mean_worst}"
+    );
+    assert!(sb
+        .set_differences(Differences::Central { step: 0.0 })
+        .is_err());
 }
