@@ -421,11 +421,10 @@ impl JumpOcp {
         let n = self.nq();
         self.eq.rhs(laws, ws, x, u, xdot)?;
         let ydd = self.eq.multibody.com_acceleration(&ws.mb, &xdot[n..2 * n])[1];
-        let mut fy = S::zero();
-        for f in ws.sphere_force.iter() {
-            fy += f[1];
-        }
-        Ok((ydd, fy * (1.0 / self.body_weight)))
+        Ok((
+            ydd,
+            vertical_ground_force_bw(&ws.sphere_force, self.body_weight),
+        ))
     }
 
     /// The same rates as [`JumpOcp::state_rates`] computed by Simbody
@@ -487,6 +486,16 @@ impl JumpOcp {
     }
 }
 
+/// The vertical ground force on the contact spheres in body weights (the
+/// lift-off row's F_y/(m g)), from each sphere's force.
+fn vertical_ground_force_bw<S: Scalar>(sphere_force: &[[S; 3]], body_weight: f64) -> S {
+    let mut fy = S::zero();
+    for f in sphere_force {
+        fy += f[1];
+    }
+    fy * (1.0 / body_weight)
+}
+
 /// The point rates of [`JumpOcp::state_rates_with`], ẋ = f(x, u), Ÿ_C and
 /// F_y/(m g), evaluated by Simbody: q and q̇ in Simbody's multibody system,
 /// the muscle states as its auxiliary states, the muscle, contact and
@@ -545,7 +554,9 @@ impl SimbodyRates {
         self.sb
             .sphere_forces(&mut self.spheres)
             .map_err(|e| e.to_string())?;
-        let fy: f64 = self.spheres.iter().map(|f| f[1]).sum();
-        Ok((ydd, fy / self.body_weight))
+        Ok((
+            ydd,
+            vertical_ground_force_bw(&self.spheres, self.body_weight),
+        ))
     }
 }

@@ -1007,6 +1007,19 @@ mod tests {
         }
     }
 
+    /// The error of command-line overrides `o` applied to `c`.
+    fn override_error(c: &mut SolveConfig, o: Overrides) -> String {
+        c.apply(&o).unwrap_err().to_string()
+    }
+
+    /// A study resolved from JSON.
+    fn resolved(json: &str) -> SolveConfig {
+        SolveStudy::from_json_str(json, "s.json")
+            .unwrap()
+            .resolve(None)
+            .unwrap()
+    }
+
     #[test]
     fn defaults_are_the_papers_problem() {
         let c = SolveStudy::default().resolve(None).unwrap();
@@ -1121,13 +1134,13 @@ mod tests {
             assert!(r.contains("at most 1000") && r.contains(n), "{r}");
         }
         let mut c = SolveConfig::builtin().unwrap();
-        let e = c
-            .apply(&Overrides {
+        let e = override_error(
+            &mut c,
+            Overrides {
                 num_mesh_intervals: Some(i64::MAX),
                 ..Default::default()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        );
         assert!(
             e.starts_with("command line: --num-mesh-intervals: must be at most 1000"),
             "{e}"
@@ -1275,13 +1288,13 @@ mod tests {
     #[test]
     fn overrides_name_the_option() {
         let mut c = SolveConfig::builtin().unwrap();
-        let e = c
-            .apply(&Overrides {
+        let e = override_error(
+            &mut c,
+            Overrides {
                 num_mesh_intervals: Some(1),
                 ..Default::default()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        );
         assert!(e.contains("--num-mesh-intervals"), "{e}");
         c.apply(&Overrides {
             num_mesh_intervals: Some(4),
@@ -1294,14 +1307,14 @@ mod tests {
         assert_eq!(c.settings.max_iterations, 3);
         assert_eq!(c.transcription.scheme, Scheme::Trapezoidal);
         assert_eq!(c.transcription.fiber_dynamics, FiberDynamics::Explicit);
-        let e = c
-            .apply(&Overrides {
+        let e = override_error(
+            &mut c,
+            Overrides {
                 scheme: Some("backward-euler".into()),
                 fiber_dynamics: Some("implicit".into()),
                 ..Default::default()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        );
         assert!(
             e.contains("--fiber-dynamics") && e.contains("midpoint-euler"),
             "{e}"
@@ -1313,10 +1326,7 @@ mod tests {
     /// (whose integration is Rust-native), by field or option.
     #[test]
     fn backend_is_collocations_and_errors_name_it() {
-        let c = SolveStudy::from_json_str(r#"{"backend": "simbody"}"#, "s.json")
-            .unwrap()
-            .resolve(None)
-            .unwrap();
+        let c = resolved(r#"{"backend": "simbody"}"#);
         assert_eq!(c.transcription.backend, Backend::Simbody);
         assert_eq!(
             SolveConfig::builtin().unwrap().transcription.backend,
@@ -1336,30 +1346,24 @@ mod tests {
         assert_eq!(f, "backend");
         assert!(r.contains("collocation"), "{r}");
         // Rust-native is shooting's own: no error.
-        SolveStudy::from_json_str(
-            r#"{"method": "shooting", "backend": "rust-native"}"#,
-            "s.json",
-        )
-        .unwrap()
-        .resolve(None)
-        .unwrap();
+        resolved(r#"{"method": "shooting", "backend": "rust-native"}"#);
         let mut c = SolveConfig::builtin().unwrap();
-        let e = c
-            .apply(&Overrides {
+        let e = override_error(
+            &mut c,
+            Overrides {
                 backend: Some("dual".into()),
                 ..Default::default()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        );
         assert!(e.contains("--backend") && e.contains("'dual'"), "{e}");
-        let e = c
-            .apply(&Overrides {
+        let e = override_error(
+            &mut c,
+            Overrides {
                 method: Some("shooting".into()),
                 backend: Some("simbody".into()),
                 ..Default::default()
-            })
-            .unwrap_err()
-            .to_string();
+            },
+        );
         assert!(e.contains("--backend") && e.contains("collocation"), "{e}");
         let mut c = SolveConfig::builtin().unwrap();
         c.apply(&Overrides {
@@ -1369,10 +1373,7 @@ mod tests {
         .unwrap();
         assert_eq!(c.transcription.backend, Backend::Simbody);
         // A collocation study's backend is listed as ignored by --method shooting.
-        let mut c = SolveStudy::from_json_str(r#"{"backend": "simbody"}"#, "s.json")
-            .unwrap()
-            .resolve(None)
-            .unwrap();
+        let mut c = resolved(r#"{"backend": "simbody"}"#);
         c.apply(&Overrides {
             method: Some("shooting".into()),
             ..Default::default()

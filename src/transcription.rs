@@ -791,6 +791,16 @@ fn eval_jac<const W: usize>(
     Ok(())
 }
 
+/// Point input c of (x, u): a state, or after them an input u.
+fn input<'a>(x: &'a mut [f64], u: &'a mut [f64], c: usize) -> &'a mut f64 {
+    let nx = x.len();
+    if c < nx {
+        &mut x[c]
+    } else {
+        &mut u[c - nx]
+    }
+}
+
 /// g and its Jacobian entries in `cp`'s pattern at the worker's (x, u) by
 /// Simbody ([`Backend::Simbody`]): central differences, all columns of one
 /// colour moved together, each entry read from its column's colour.
@@ -836,20 +846,11 @@ fn simbody_jac<const W: usize>(
                 let sides: &[f64] = if central { &[1.0, -1.0] } else { &[1.0] };
                 for (&side, g) in sides.iter().zip([&mut *gp, &mut *gm]) {
                     for &(c, _) in colour() {
-                        let v = step(c, side * half);
-                        if c < nx {
-                            w.x[c] = v;
-                        } else {
-                            w.u[c - nx] = v;
-                        }
+                        *input(&mut w.x, &mut w.u, c) = step(c, side * half);
                     }
                     let r = rates.eval(&w.x, &w.u, &mut g[..nx]);
                     for &(c, _) in colour() {
-                        if c < nx {
-                            w.x[c] = base[c];
-                        } else {
-                            w.u[c - nx] = base[c];
-                        }
+                        *input(&mut w.x, &mut w.u, c) = base[c];
                     }
                     let (ydd, fy) = r?;
                     g[nx] = ydd;
