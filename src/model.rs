@@ -576,6 +576,18 @@ impl Model {
             if let Some(reason) = inertia_problem(&b.inertia) {
                 return Err(err(p("inertia"), reason));
             }
+            // Simbody and leap's multibody take the inertia about the body's
+            // origin, I + m·(|c|²·1 − c·cᵀ): it must be finite too.
+            let c2: f64 = b.mass_center.iter().map(|c| c * c).sum();
+            if !(b.mass * c2).is_finite() {
+                return Err(err(
+                    p("mass_center"),
+                    format!(
+                        "the inertia about the body's origin, mass · |mass_center|² = {:e} kg·m², is not finite",
+                        b.mass * c2
+                    ),
+                ));
+            }
             bodies.push(Body {
                 name: b.name.clone(),
                 mass: b.mass,
@@ -1216,14 +1228,18 @@ fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
     Ok(())
 }
 
-/// Why an inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` is not physical, if it is not.
+/// Why an inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` (about the mass centre,
+/// in the body frame) is not physical, if it is not. A rigid body's inertia
+/// is positive definite and its principal moments satisfy the triangle
+/// inequality; in any frame its moments then satisfy it too and each
+/// product is at most half the third moment (|2·Iyz| ≤ Ixx, ...), the
+/// conditions Simbody's `Inertia` checks.
 fn inertia_problem(i: &[f64; 6]) -> Option<String> {
     if i.iter().any(|v| !v.is_finite()) {
         return Some("inertia must be finite".into());
     }
     let [xx, yy, zz, xy, xz, yz] = *i;
-    // Positive definite (Sylvester's criterion) and the triangle inequality
-    // that every rigid body's principal moments satisfy (Simbody checks it too).
+    // Positive definite (Sylvester's criterion).
     let d1 = xx;
     let d2 = xx * yy - xy * xy;
     let d3 = xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz);
@@ -1234,6 +1250,20 @@ fn inertia_problem(i: &[f64; 6]) -> Option<String> {
     if xx + yy + tol < zz || yy + zz + tol < xx || xx + zz + tol < yy {
         return Some(format!(
             "inertia {i:?} violates the triangle inequality (Ixx + Iyy >= Izz, ...)"
+        ));
+    }
+    if (2.0 * yz).abs() > xx + tol || (2.0 * xz).abs() > yy + tol || (2.0 * xy).abs() > zz + tol {
+        return Some(format!(
+            "inertia {i:?} has a product of inertia too large to be physical (|2 Iyz| <= Ixx, |2 Ixz| <= Iyy, |2 Ixy| <= Izz)"
+        ));
+    }
+    let m = nalgebra::Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz);
+    let p = m.symmetric_eigenvalues();
+    let (a, b, c) = (p[0], p[1], p[2]);
+    if a + b + tol < c || b + c + tol < a || a + c + tol < b {
+        return Some(format!(
+            "inertia {i:?} has principal moments {:?} that violate the triangle inequality: no rigid body has them",
+            [a, b, c]
         ));
     }
     None

@@ -533,3 +533,61 @@ fn flen_paths_of_conditional_points_duplicate_passive_torques_and_asymmetric_pos
     w["poses"]["squat"]["knee_angle_l"] = r.into();
     assert!(Model::from_json_str(&w.to_string(), "m.json").is_ok());
 }
+
+/// A rigid body's central inertia is positive definite, each product is at
+/// most half the third moment (Simbody's `Inertia` check) and its
+/// principal moments satisfy the triangle inequality; and the inertia about
+/// the body's origin, which Simbody and leap's multibody take, is finite.
+/// Each is refused at load, naming the field, rather than as a Simbody
+/// exception or a mass matrix of NaN at the squat.
+#[test]
+fn body_inertias_must_be_physical_and_finite_about_the_origin() {
+    let torso = |v: &serde_json::Value| {
+        v["bodies"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|b| b["name"] == "torso")
+            .unwrap()
+    };
+    // Positive definite and within the diagonal triangle inequality, but
+    // |2 Iyz| = 2 > Ixx = 1.4745.
+    let mut v = jumper_json();
+    let t = torso(&v);
+    v["bodies"][t]["inertia"] = serde_json::json!([1.4745, 0.7555, 1.4314, 0.0, 0.0, -1.0]);
+    let e = refused(&v);
+    assert_eq!(e.field(), format!("bodies[{t}].inertia"));
+    assert!(
+        e.to_string().contains("product of inertia too large"),
+        "{e}"
+    );
+    // Moments 1, 1, 1 and products 0.5 pass both, but the principal moments
+    // are 2, 0.5 and 0.5 (the eigenvalues of I + 0.5·(11ᵀ − I)).
+    v["bodies"][t]["inertia"] = serde_json::json!([1.0, 1.0, 1.0, 0.5, 0.5, 0.5]);
+    let e = refused(&v);
+    assert_eq!(e.field(), format!("bodies[{t}].inertia"));
+    assert!(
+        e.to_string().contains("principal moments")
+            && e.to_string().contains("violate the triangle inequality"),
+        "{e}"
+    );
+    // A physical inertia in a rotated frame is accepted: the torso's
+    // principal moments turned by 0.3 rad about x.
+    let (c, s) = (0.3f64.cos(), 0.3f64.sin());
+    let (yy, zz) = (0.7555, 1.4314);
+    v["bodies"][t]["inertia"] = serde_json::json!([
+        1.4745,
+        c * c * yy + s * s * zz,
+        s * s * yy + c * c * zz,
+        0.0,
+        0.0,
+        c * s * (yy - zz)
+    ]);
+    Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    // m·|c|² overflows.
+    let mut v = jumper_json();
+    v["bodies"][t]["mass_center"] = serde_json::json!([0.0, 1e300, 0.0]);
+    let e = refused(&v);
+    assert_eq!(e.field(), format!("bodies[{t}].mass_center"));
+    assert!(e.to_string().contains("is not finite"), "{e}");
+}
