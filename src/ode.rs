@@ -70,6 +70,16 @@ pub enum OdeError {
     /// A derivative that is not finite at the state given.
     #[error("the derivative of '{state}' is {value} at this state (a coordinate far outside its range?)")]
     NotFinite { state: String, value: f64 },
+    /// A muscle path without a positive finite length at one of the
+    /// model's poses.
+    #[error("{file}: forces.muscles[{index}].path: muscle '{muscle}' has length {length:e} m at {pose}: a path needs a positive finite length (a path point or spline value far off?)")]
+    PathLength {
+        file: String,
+        index: usize,
+        muscle: String,
+        pose: String,
+        length: f64,
+    },
 }
 
 /// The state equation of a model's full or symmetric system.
@@ -160,6 +170,7 @@ impl StateEquation {
                 model.file.display()
             )));
         }
+        check_path_lengths(model, &system, &multibody, smoothing)?;
         let mut muscles = Vec::new();
         let mut multiplicity = Vec::new();
         for (i, m) in model.muscles.iter().enumerate() {
@@ -544,6 +555,60 @@ pub struct Outputs<'a, S> {
 
 /// Check that muscle `j` (left) mirrors muscle `i` (right) in the symmetric
 /// system: equal parameters and equal path lengths at several poses.
+/// Every muscle path has a positive finite length at the coordinates'
+/// default values and at each of the model's poses, so that a path point or
+/// spline value far off (1e300 is finite) is named here rather than met as
+/// a non-finite fibre velocity, or an asymmetry, later.
+fn check_path_lengths(
+    model: &Model,
+    system: &SystemSpec,
+    mb: &Multibody,
+    smoothing: PathSmoothing,
+) -> Result<(), OdeError> {
+    let n = system.nq();
+    let mut ws = mb.workspace::<f64>();
+    let defaults: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
+    let poses = std::iter::once(("the coordinates' default values".to_string(), &defaults))
+        .chain(model.poses.iter().map(|(k, v)| (format!("poses.{k}"), v)));
+    for (pose, model_q) in poses {
+        mb.set_state(&mut ws, &system.q_from_model(model_q), &vec![0.0; n]);
+        let view = ModelView {
+            mb,
+            ws: &ws,
+            q_of: &system.q_of_model_coordinate,
+        };
+        for (index, m) in model.muscles.iter().enumerate() {
+            let length = m
+                .path
+                .calc::<f64, _, GeneralizedForces<f64>>(&view, smoothing, None)
+                .length;
+            // Each conditional point switched on too, so that one inactive
+            // at these poses is checked as well.
+            let with_each_on =
+                (0..m.path.num_conditional()).map(|j| (j, m.path.length_with(&view, j, true)));
+            let bad = std::iter::once((None, length))
+                .chain(with_each_on.map(|(j, l)| (Some(j), l)))
+                .find(|&(_, l)| !(l.is_finite() && l > 0.0));
+            if let Some((j, length)) = bad {
+                return Err(OdeError::PathLength {
+                    file: model.file.display().to_string(),
+                    index,
+                    muscle: m.spec.name.clone(),
+                    pose: match j {
+                        None => pose,
+                        Some(j) => format!(
+                            "{pose} with its conditional point path[{}] active",
+                            m.path.conditional_points()[j].0
+                        ),
+                    },
+                    length,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_mirror(
     model: &Model,
     system: &SystemSpec,
@@ -599,7 +664,8 @@ fn check_mirror(
             .path
             .calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None)
             .length;
-        if (li - lj).abs() > 1e-12 * li.abs().max(1.0) {
+        // (Written to fail on NaN too.)
+        if !((li - lj).abs() <= 1e-12 * li.abs().max(1.0)) {
             return Err(OdeError::Symmetry(format!(
                 "{}: forces.muscles[{j}].path: muscle '{}' is not the mirror image of '{}' (forces.muscles[{i}]): path lengths {lj} m and {li} m at the same symmetric pose",
                 model.file.display(),
