@@ -110,7 +110,7 @@ pub struct Workspace<S: Scalar> {
 
 /// The mass matrix was not positive definite (a degenerate model or NaN state).
 #[derive(Debug, Clone, thiserror::Error)]
-#[error("mass matrix is not positive definite at pivot {pivot} (value {value})")]
+#[error("mass matrix is not positive definite at pivot {pivot} (value {value:e}): a body's mass properties not physical or far apart in scale, or a state not finite")]
 pub struct SingularMassMatrix {
     pub pivot: usize,
     pub value: f64,

@@ -180,6 +180,15 @@ pub enum OcpError {
     Invalid(String),
     #[error("bang-bang jump: {0}")]
     Simulation(String),
+    /// The fixed start, the static squat, lies outside the problem's bounds.
+    #[error("{file}: poses.squat: the static squat violates the bounds of {name}: {value} not in [{lower}, {upper}]")]
+    StartOutOfBounds {
+        file: String,
+        name: String,
+        value: f64,
+        lower: f64,
+        upper: f64,
+    },
 }
 
 /// The jump problem: the state equation, its laws, the fixed start, bounds.
@@ -231,10 +240,11 @@ impl JumpOcp {
         }
         let eq = StateEquation::new(model, true, options.smoothing)?;
         let pose = model.poses.get("squat").cloned().ok_or_else(|| {
-            OcpError::Invalid(format!(
-                "{}: poses: the model has no 'squat' pose to start from",
-                model.file.display()
-            ))
+            OcpError::Model(ModelError::Invalid {
+                file: model.file.clone(),
+                path: "poses".into(),
+                reason: "the model has no 'squat' pose to start from".into(),
+            })
         })?;
         let squat = static_squat(&eq, &laws, &pose)?;
         Self::from_parts(eq, laws, squat, options)
@@ -320,20 +330,26 @@ impl JumpOcp {
         let names = eq.state_names();
         for i in 0..nx {
             if !(lo[i] <= squat.x[i] && squat.x[i] <= hi[i]) {
-                return Err(OcpError::Invalid(format!(
-                    "the start violates the bounds of {}: {} not in [{}, {}]",
-                    names[i], squat.x[i], lo[i], hi[i]
-                )));
+                return Err(OcpError::StartOutOfBounds {
+                    file: eq.model.file.display().to_string(),
+                    name: names[i].clone(),
+                    value: squat.x[i],
+                    lower: lo[i],
+                    upper: hi[i],
+                });
             }
         }
         let cnames = eq.control_names();
         for k in 0..nm {
             let v = squat.excitation[k];
             if !(ulo[k] <= v && v <= uhi[k]) {
-                return Err(OcpError::Invalid(format!(
-                    "the start violates the bounds of {}: {v} not in [{}, {}]",
-                    cnames[k], ulo[k], uhi[k]
-                )));
+                return Err(OcpError::StartOutOfBounds {
+                    file: eq.model.file.display().to_string(),
+                    name: cnames[k].clone(),
+                    value: v,
+                    lower: ulo[k],
+                    upper: uhi[k],
+                });
             }
         }
         let standing_com_height = crate::simulate::standing_com_height(&eq);

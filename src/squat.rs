@@ -31,13 +31,23 @@ pub struct StaticSquat {
     pub effort: f64,
 }
 
-/// The squat cannot be held.
+/// Why the squat cannot be held.
 #[derive(Debug, thiserror::Error)]
-pub enum SquatError {
+pub enum SquatFailure {
     #[error(transparent)]
     Ode(#[from] OdeError),
-    #[error("static squat: {0}")]
+    #[error("{0}")]
     Failed(String),
+}
+
+/// The squat of a model file's `poses.squat` cannot be held: the file and
+/// why. (The reason may lie in other fields: the bodies, the contact
+/// spheres, the ligaments.)
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: poses.squat: static squat: {why}")]
+pub struct SquatError {
+    pub file: String,
+    pub why: SquatFailure,
 }
 
 struct Setup<'a> {
@@ -83,7 +93,7 @@ impl Setup<'_> {
     }
 
     /// Generalized-force residual M·q̈ (zero iff q̈ = 0) and q̈.
-    fn residual(&self, x: &[f64], u: &[f64]) -> Result<(Vec<f64>, Vec<f64>, f64), SquatError> {
+    fn residual(&self, x: &[f64], u: &[f64]) -> Result<(Vec<f64>, Vec<f64>, f64), SquatFailure> {
         let eq = self.eq;
         let mut ws = eq.workspace::<f64>();
         let mut dx = vec![0.0; x.len()];
@@ -106,14 +116,25 @@ pub fn static_squat(
     laws: &OpenSimLaws,
     pose: &[f64],
 ) -> Result<StaticSquat, SquatError> {
+    squat_of(eq, laws, pose).map_err(|why| SquatError {
+        file: eq.model.file.display().to_string(),
+        why,
+    })
+}
+
+fn squat_of(
+    eq: &StateEquation,
+    laws: &OpenSimLaws,
+    pose: &[f64],
+) -> Result<StaticSquat, SquatFailure> {
     let (n, nm) = (eq.nq(), eq.nm());
     let s = Setup { eq, laws, n, nm };
     let model = &eq.model;
-    let idx = |name: &str| -> Result<usize, SquatError> {
+    let idx = |name: &str| -> Result<usize, SquatFailure> {
         model
             .coordinate_index(name)
             .map(|c| eq.system.q_of_model_coordinate[c])
-            .ok_or_else(|| SquatError::Failed(format!("the model has no coordinate '{name}'")))
+            .ok_or_else(|| SquatFailure::Failed(format!("the model has no coordinate '{name}'")))
     };
     let (i_ty, i_tilt) = (idx("pelvis_ty")?, idx("pelvis_tilt")?);
     let ankles: Vec<usize> = {
@@ -129,7 +150,7 @@ pub fn static_squat(
         v
     };
     if ankles.is_empty() {
-        return Err(SquatError::Failed(
+        return Err(SquatFailure::Failed(
             "the model has no ankle_angle coordinate".into(),
         ));
     }
@@ -137,7 +158,7 @@ pub fn static_squat(
     let a_min = vec![MIN_ACTIVATION; nm];
     let weight = model.total_mass() * model.gravity[1].abs();
     // 2. Ground support: Newton on (pelvis_ty, ankle) for the base residuals.
-    let base = |q: &[f64]| -> Result<[f64; 2], SquatError> {
+    let base = |q: &[f64]| -> Result<[f64; 2], SquatFailure> {
         let lmt = s.mtu_lengths(q);
         let x = s.state(q, &a_min, &lmt);
         let (r, _, _) = s.residual(&x, &a_min)?;
@@ -170,7 +191,7 @@ pub fn static_squat(
         ];
         let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
         if det.abs() < 1e-300 || !det.is_finite() {
-            return Err(SquatError::Failed(
+            return Err(SquatFailure::Failed(
                 "the feet do not touch the ground near the squat pose".into(),
             ));
         }
@@ -181,7 +202,7 @@ pub fn static_squat(
         ank += d_an.clamp(-0.05, 0.05);
     }
     if !converged {
-        return Err(SquatError::Failed(
+        return Err(SquatFailure::Failed(
             "no pelvis height and ankle angle put the centre of pressure under the centre of mass"
                 .into(),
         ));
@@ -298,13 +319,13 @@ pub fn static_squat(
             .verbose(false)
             .max_threads(1)
             .build()
-            .map_err(|e| SquatError::Failed(format!("{e:?}")))?;
+            .map_err(|e| SquatFailure::Failed(format!("{e:?}")))?;
         let mut solver = DefaultSolver::new(&pmat, &qv, &amat, &b, &cones, settings)
-            .map_err(|e| SquatError::Failed(e.to_string()))?;
+            .map_err(|e| SquatFailure::Failed(e.to_string()))?;
         solver.solve();
         match solver.solution.status {
             SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-            other => return Err(SquatError::Failed(format!("the muscles cannot hold the squat (static optimisation QP: {other:?}, joint residual {res:.3e} N·m)"))),
+            other => return Err(SquatFailure::Failed(format!("the muscles cannot hold the squat (static optimisation QP: {other:?}, joint residual {res:.3e} N·m)"))),
         }
         let anew: Vec<f64> = solver
             .solution
@@ -315,7 +336,7 @@ pub fn static_squat(
         a = anew;
     }
     if last_res >= 1e-9 {
-        return Err(SquatError::Failed(format!(
+        return Err(SquatFailure::Failed(format!(
             "static optimisation did not converge: joint residual {last_res:.3e} N·m"
         )));
     }

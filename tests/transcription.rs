@@ -410,7 +410,7 @@ fn settings_errors_name_what_is_wrong() {
     .unwrap_err()
     .to_string();
     assert!(
-        e.contains("the start violates the bounds of /forceset/"),
+        e.contains("the static squat violates the bounds of /forceset/"),
         "{e}"
     );
     let e = with(OcpOptions {
