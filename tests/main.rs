@@ -19,6 +19,7 @@ mod no_alloc;
 mod opensim_forward;
 mod paths;
 mod paths_opensim;
+mod robustness;
 mod shooting;
 mod simbody_bridge;
 mod simbody_callback;

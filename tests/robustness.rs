@@ -1,0 +1,308 @@
+//! Bad model files, made systematically: every value of the default model
+//! changed to one it must not take (zero, negative, 1e300, the wrong type,
+//! null), every key removed, every array shortened and given a duplicate:
+//! about 16,000 files. Each is taken as far as the jump problem's first
+//! evaluation, ẋ = f(x, u) at the static squat, through both backends. No
+//! mutant may panic; a refused one must name the file and a field of it
+//! (`<file>: <field>: <reason>`); an accepted one must give finite rates on
+//! which the Rust-native and Simbody backends agree.
+//!
+//! `LEAP_MUTANT_SHOW=1` prints every mutant's outcome.
+
+use leap::model::Model;
+use leap::ocp::{JumpOcp, OcpOptions};
+use serde_json::Value;
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+/// One change to the model file: where, and what it became.
+struct Mutant {
+    place: String,
+    what: String,
+    text: String,
+}
+
+/// Every value of `v` with its place (`.forces.muscles[3].path[1]`),
+/// objects and arrays as well as numbers, strings and booleans.
+fn values(v: &Value, place: String, out: &mut Vec<(String, Value)>) {
+    out.push((place.clone(), v.clone()));
+    match v {
+        Value::Object(m) => {
+            for (k, x) in m {
+                values(x, format!("{place}.{k}"), out);
+            }
+        }
+        Value::Array(a) => {
+            for (i, x) in a.iter().enumerate() {
+                values(x, format!("{place}[{i}]"), out);
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The value at `place` (as `values` writes it) of `root`.
+fn at<'a>(root: &'a mut Value, place: &str) -> &'a mut Value {
+    let mut v = root;
+    for part in place.split('.').skip(1) {
+        let (key, rest) = part.split_once('[').unwrap_or((part, ""));
+        if !key.is_empty() {
+            v = &mut v[key];
+        }
+        for idx in rest.split('[').filter(|s| !s.is_empty()) {
+            let i: usize = idx.trim_end_matches(']').parse().unwrap();
+            v = &mut v[i];
+        }
+    }
+    v
+}
+
+/// Each value of the model changed in each way it must not be: a number
+/// to zero, its negative (−1 for zero) and 1e300 (finite, but no length,
+/// mass or stiffness of a body), or a string; a string emptied, unknown or
+/// a number; a boolean flipped; anything null; each key of an object
+/// removed; an array without its first element, and with it twice.
+fn mutants(model: &Value) -> Vec<Mutant> {
+    let mut list = Vec::new();
+    let mut all = Vec::new();
+    values(model, String::new(), &mut all);
+    let mut push = |place: &str, what: String, m: Value| {
+        list.push(Mutant {
+            place: place.to_string(),
+            what,
+            text: m.to_string(),
+        })
+    };
+    for (place, v) in &all {
+        let replacements: Vec<(&str, Value)> = match v {
+            Value::Number(n) => {
+                let x = n.as_f64().unwrap();
+                vec![
+                    ("0", Value::from(0.0)),
+                    ("negated", Value::from(if x == 0.0 { -1.0 } else { -x })),
+                    ("1e300", Value::from(1e300)),
+                    ("a string", Value::from("1")),
+                ]
+            }
+            Value::String(_) => vec![
+                ("empty", Value::from("")),
+                ("unknown", Value::from("no_such_thing")),
+                ("a number", Value::from(1.0)),
+            ],
+            Value::Bool(b) => vec![("flipped", Value::from(!b))],
+            Value::Object(o) => {
+                for k in o.keys() {
+                    let mut m = model.clone();
+                    at(&mut m, place).as_object_mut().unwrap().remove(k);
+                    push(place, format!("without '{k}'"), m);
+                }
+                vec![]
+            }
+            Value::Array(a) => {
+                if let Some(first) = a.first() {
+                    let mut m = model.clone();
+                    at(&mut m, place).as_array_mut().unwrap().remove(0);
+                    push(place, "without its first element".into(), m);
+                    let mut m = model.clone();
+                    at(&mut m, place)
+                        .as_array_mut()
+                        .unwrap()
+                        .insert(0, first.clone());
+                    push(place, "with its first element twice".into(), m);
+                }
+                vec![]
+            }
+            Value::Null => vec![],
+        };
+        for (what, nv) in replacements.into_iter().chain([("null", Value::Null)]) {
+            if place.is_empty() {
+                continue; // the whole document: `a_model_file_is_one_json_object`
+            }
+            let mut m = model.clone();
+            *at(&mut m, place) = nv;
+            push(place, what.to_string(), m);
+        }
+    }
+    list
+}
+
+/// What became of one mutant.
+enum Outcome {
+    /// Refused, at load or later (the static squat, the state equation,
+    /// Simbody): the message.
+    Refused(String),
+    /// Evaluated by both backends: the largest difference of ẋ, relative
+    /// to max(1, |ẋ|).
+    Evaluated(f64),
+}
+
+/// Whether `path` (`forces.muscles[17].path`, `symmetry[2][1]`,
+/// `(document)`) names a value of `doc`.
+fn resolves(doc: &Value, path: &str) -> bool {
+    if path == "(document)" {
+        return true;
+    }
+    let mut v = doc;
+    for part in path.split('.') {
+        let (key, rest) = part.split_once('[').unwrap_or((part, ""));
+        let Some(next) = v.get(key) else {
+            return false;
+        };
+        v = next;
+        for idx in rest.split('[').filter(|s| !s.is_empty()) {
+            let Some(next) = idx
+                .trim_end_matches(']')
+                .parse::<usize>()
+                .ok()
+                .and_then(|i| v.get(i))
+            else {
+                return false;
+            };
+            v = next;
+        }
+    }
+    true
+}
+
+/// The field path an error names after the file (`<file>: <path>: why`):
+/// names, indices and `(document)`.
+fn named_field<'a>(message: &'a str, file: &str) -> Option<&'a str> {
+    let rest = message.strip_prefix(file)?.strip_prefix(": ")?;
+    let path = &rest[..rest.find(": ")?];
+    let ok = !path.is_empty()
+        && path
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_.[]()".contains(c));
+    ok.then_some(path)
+}
+
+fn take(text: &str) -> Result<Outcome, String> {
+    let model = match Model::from_json_str(text, "mutant.json") {
+        Ok(m) => m,
+        Err(e) => return Ok(Outcome::Refused(e.to_string())),
+    };
+    let ocp = match JumpOcp::new(&model, OcpOptions::default()) {
+        Ok(o) => o,
+        Err(e) => return Ok(Outcome::Refused(e.to_string())),
+    };
+    let (x, u) = (ocp.x0().to_vec(), ocp.u0().to_vec());
+    let mut rust = vec![0.0f64; x.len()];
+    let mut ws = ocp.eq.workspace::<f64>();
+    let (ydd, fy) = match ocp.state_rates(&mut ws, &x, &u, &mut rust) {
+        Ok(v) => v,
+        Err(e) => return Ok(Outcome::Refused(e.to_string())),
+    };
+    if !(rust.iter().all(|v| v.is_finite()) && ydd.is_finite() && fy.is_finite()) {
+        return Err(format!(
+            "Rust-native rates not finite: ẋ {rust:?}, Ÿ_C {ydd}, F_y {fy}"
+        ));
+    }
+    let mut sb = match ocp.simbody_rates() {
+        Ok(s) => s,
+        Err(e) => return Ok(Outcome::Refused(e.to_string())),
+    };
+    let mut simbody = vec![0.0f64; x.len()];
+    match sb.eval(&x, &u, &mut simbody) {
+        Ok(_) => {}
+        Err(e) => return Ok(Outcome::Refused(e)),
+    }
+    if !simbody.iter().all(|v| v.is_finite()) {
+        return Err(format!("Simbody rates not finite: {simbody:?}"));
+    }
+    let diff = rust
+        .iter()
+        .zip(&simbody)
+        .map(|(a, b)| (a - b).abs() / a.abs().max(1.0))
+        .fold(0.0, f64::max);
+    Ok(Outcome::Evaluated(diff))
+}
+
+#[test]
+fn every_mutated_field_is_refused_by_name_or_evaluates_finitely() {
+    let model: Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    let all = mutants(&model);
+    let mut failures = Vec::new();
+    let (mut refused, mut evaluated) = (0, 0);
+    let mut worst = (0.0, String::new());
+    let t = std::time::Instant::now();
+    for m in &all {
+        match catch_unwind(AssertUnwindSafe(|| take(&m.text))) {
+            Err(p) => {
+                let msg = p
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| p.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_default();
+                failures.push(format!("{} {}: panicked: {msg}", m.place, m.what));
+            }
+            Ok(Err(e)) => failures.push(format!("{} {}: {e}", m.place, m.what)),
+            Ok(Ok(Outcome::Refused(e))) => {
+                refused += 1;
+                if std::env::var("LEAP_MUTANT_SHOW").is_ok() {
+                    eprintln!("REFUSED {} {}: {e}", m.place, m.what);
+                }
+                // The error names the file and a field of it: the one
+                // changed, or one it made wrong (a reference to a renamed
+                // body, a pose outside a changed range, a mirror partner,
+                // the squat that no longer stands).
+                let doc: Value = serde_json::from_str(&m.text).unwrap();
+                // A field removed is named as missing: it, or the object
+                // that misses it.
+                let removed = m
+                    .what
+                    .strip_prefix("without '")
+                    .map(|k| format!("{}.{}", m.place, k.trim_end_matches('\'')));
+                let names_removed = |f: &str| {
+                    removed.as_deref().is_some_and(|r| {
+                        let r = r.trim_start_matches('.');
+                        r.starts_with(f) || f.starts_with(r)
+                    })
+                };
+                match named_field(&e, "mutant.json") {
+                    Some(f) if resolves(&doc, f) || names_removed(f) => {}
+                    _ => failures.push(format!(
+                        "{} {}: error without the file and a field of it: {e}",
+                        m.place, m.what
+                    )),
+                }
+            }
+            Ok(Ok(Outcome::Evaluated(d))) => {
+                evaluated += 1;
+                if std::env::var("LEAP_MUTANT_SHOW").is_ok() {
+                    eprintln!("EVALUATED {} {}: {d:.1e}", m.place, m.what);
+                }
+                if d > worst.0 {
+                    worst = (d, format!("{} {}", m.place, m.what));
+                }
+            }
+        }
+    }
+    eprintln!(
+        "{} mutants: {refused} refused, {evaluated} evaluated, {} failures, {:.1} s",
+        all.len(),
+        failures.len(),
+        t.elapsed().as_secs_f64()
+    );
+    eprintln!(
+        "largest difference of the backends' rates: {:.1e} ({})",
+        worst.0, worst.1
+    );
+    for f in &failures {
+        eprintln!("{f}");
+    }
+    assert!(failures.is_empty());
+    // Both backends compute the same laws; they differ in the multibody
+    // dynamics (leap's recursive one against Simbody's), which the changed
+    // masses, inertias, joint and contact locations exercise.
+    assert!(
+        worst.0 <= 1e-8,
+        "rates differ by {:.1e} at {}",
+        worst.0,
+        worst.1
+    );
+    // The mutants reach every stage: most are refused, some evaluated.
+    assert!(
+        refused > 10_000 && evaluated > 500,
+        "{refused} refused, {evaluated} evaluated"
+    );
+}
