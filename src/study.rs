@@ -601,6 +601,12 @@ impl SolveStudy {
         }
 
         let output_directory = match &self.output_directory {
+            Some(d) if d.is_empty() => {
+                return Err(err(
+                    "output_directory",
+                    "empty: name a directory ('.' for the study file's own)".into(),
+                ))
+            }
             Some(d) => rel(d),
             None => PathBuf::from(DEFAULT_OUTPUT_DIRECTORY),
         };

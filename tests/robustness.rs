@@ -306,3 +306,62 @@ fn every_mutated_field_is_refused_by_name_or_evaluates_finitely() {
         "{refused} refused, {evaluated} evaluated"
     );
 }
+
+/// The study files likewise: every value, key and array of the built-in
+/// study written out (`models/jump_collocation.json`) and of the shooting
+/// study changed, each mutant read and resolved as `leap solve` does. A
+/// removed or null field takes its default; a refused mutant names the
+/// study file and a field of it.
+#[test]
+fn every_mutated_study_field_is_refused_by_name_or_resolves() {
+    use leap::study::SolveStudy as Study;
+    let mut failures = Vec::new();
+    let (mut refused, mut resolved) = (0, 0);
+    for file in ["models/jump_collocation.json", "models/jump_shooting.json"] {
+        let study: Value = serde_json::from_str(&std::fs::read_to_string(file).unwrap()).unwrap();
+        for m in mutants(&study) {
+            let outcome = catch_unwind(AssertUnwindSafe(|| {
+                Study::from_json_str(&m.text, file)
+                    .and_then(|s| s.resolve(Some(std::path::Path::new(file))))
+            }));
+            match outcome {
+                Err(_) => failures.push(format!("{file} {} {}: panicked", m.place, m.what)),
+                Ok(Err(e)) => {
+                    refused += 1;
+                    let e = e.to_string();
+                    if std::env::var("LEAP_MUTANT_SHOW").is_ok() {
+                        eprintln!("REFUSED {} {}: {e}", m.place, m.what);
+                    }
+                    let doc: Value = serde_json::from_str(&m.text).unwrap();
+                    match named_field(&e, file) {
+                        Some(f)
+                            if resolves(&doc, f)
+                                || f.starts_with(m.place.trim_start_matches('.')) => {}
+                        _ => failures.push(format!(
+                            "{file} {} {}: error without the file and a field of it: {e}",
+                            m.place, m.what
+                        )),
+                    }
+                }
+                Ok(Ok(_)) => {
+                    resolved += 1;
+                    if std::env::var("LEAP_MUTANT_SHOW").is_ok() {
+                        eprintln!("RESOLVED {} {}", m.place, m.what);
+                    }
+                }
+            }
+        }
+    }
+    eprintln!(
+        "studies: {refused} refused, {resolved} resolved, {} failures",
+        failures.len()
+    );
+    for f in &failures {
+        eprintln!("{f}");
+    }
+    assert!(failures.is_empty());
+    assert!(
+        refused > 50 && resolved > 50,
+        "{refused} refused, {resolved} resolved"
+    );
+}
