@@ -641,8 +641,8 @@ impl SqpJumpReport {
             "QP iterations",
             "QP mode",
             "line search ms",
-            "objective (scaled)",
-            "inf_pr (scaled)",
+            "objective",
+            "inf_pr",
         ]);
         for r in &self.rows {
             t.add_row(vec![

@@ -89,6 +89,54 @@ fn iteration_history_as_csv() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// As IPOPT's log, the history's `objective` and `inf_pr` are in the
+/// problem's units, whatever the solver's scaling: the first record, at the
+/// start, is the same with IPOPT's gradient-based scaling and without it,
+/// on every problem, while the scaled dual infeasibility differs where the
+/// scaling acts (asserted to be on some problems). And a solve called
+/// solved is within `optim_constraint_tolerance` in these units (Moco's
+/// setting, IPOPT's `constr_viol_tol`).
+#[test]
+fn history_is_in_the_problems_units() {
+    let mut scaled = Vec::new();
+    for p in leap::testset::hock_schittkowski() {
+        let name = p.name;
+        let with = solve(&mut AdNlp::new(p.clone()), &SqpSettings::default());
+        let without = solve(
+            &mut AdNlp::new(p),
+            &SqpSettings {
+                nlp_scaling: false,
+                ..Default::default()
+            },
+        );
+        let (a, b) = (&with.history[0], &without.history[0]);
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-12 * x.abs().max(y.abs()).max(1e-300);
+        assert!(
+            close(a.objective, b.objective),
+            "{name}: objective {} against {}",
+            a.objective,
+            b.objective
+        );
+        assert!(
+            close(a.inf_pr, b.inf_pr),
+            "{name}: inf_pr {:e} against {:e}",
+            a.inf_pr,
+            b.inf_pr
+        );
+        if !close(a.inf_du, b.inf_du) {
+            scaled.push(name);
+        }
+        if with.status == SqpStatus::Solved {
+            assert!(
+                with.constraint_violation <= SqpSettings::default().optim_constraint_tolerance,
+                "{name}: solved at a violation of {:e}",
+                with.constraint_violation
+            );
+        }
+    }
+    assert!(scaled.len() >= 5, "the scaling acts on {scaled:?} only");
+}
+
 #[test]
 fn bad_problems_get_a_status_not_a_panic() {
     // Inverted bounds.

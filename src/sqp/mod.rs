@@ -29,7 +29,8 @@
 //!   Hessian falls in proportion, so Δ, not the floor, holds a step along a
 //!   direction without curvature.
 //! * Termination, with Moco's setting names: primal infeasibility (largest
-//!   constraint violation) ≤ `optim_constraint_tolerance` and scaled dual
+//!   constraint violation in the problem's units, IPOPT's `constr_viol_tol`,
+//!   which Moco sets to it) ≤ `optim_constraint_tolerance` and scaled dual
 //!   infeasibility and complementarity (IPOPT's scaling, s_max = 100, with
 //!   the divisor s_d capped at 1e4 so diverging multipliers cannot hide
 //!   a residual) ≤
@@ -250,7 +251,9 @@ pub struct SqpSettings {
     pub verbose_line_search: bool,
     /// Stop as [`SqpStatus::RestorationFailed`] when the last
     /// `stall_iterations` iterations made no progress: the violation (the
-    /// log's `inf_pr`) stayed above `stall_violation` and never fell 10%
+    /// largest row violation with the rows scaled as the solver scales them,
+    /// by at most 1: at most the log's `inf_pr`, on the jump about a tenth
+    /// of it) stayed above `stall_violation` and never fell 10%
     /// below its value at the window's start, while the objective moved
     /// less than 1e-3·(1 + |f|). 0 turns the test off. Default 50: the
     /// full jump with Hermite–Simpson stalls in elastic mode at a violation
@@ -353,8 +356,9 @@ impl SqpStatus {
 #[derive(Debug, Clone, Serialize, Default)]
 pub struct IterationRecord {
     pub iter: usize,
+    /// The objective in the problem's units.
     pub objective: f64,
-    /// Largest constraint violation.
+    /// Largest constraint violation in the problem's units.
     pub inf_pr: f64,
     /// Scaled dual infeasibility ‖∇f + Jᵀλ + ζ‖∞ / s_d.
     pub inf_du: f64,
@@ -1178,8 +1182,8 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
     };
     let mut solver = Solver::new(pb, hessian, settings);
     solver.run(&mut scaled, x0, &mut result, start);
-    // Back to the problem's units (the log stays in scaled units, as
-    // IPOPT's does).
+    // Back to the problem's units (the log's objective and inf_pr are in
+    // them already, its dual infeasibility scaled, as IPOPT's are).
     let (sf, sc) = (scaled.sf, scaled.sc.clone());
     result.objective /= sf;
     for (l, s) in result.lambda.iter_mut().zip(&sc) {
@@ -1683,20 +1687,27 @@ impl<'s> Solver<'s> {
                 rec.max_multiplier = v;
             }
             let ms = measures(&self.pb, &p, &lambda, &zeta);
-            rec.objective = p.f;
-            rec.inf_pr = inf_pr;
+            // The constraints and the objective in the problem's units, as
+            // IPOPT logs them (its `inf_pr` and `objective` are unscaled,
+            // its `inf_du` scaled).
+            let inf_units = worst_row.map_or(0.0, |(_, v)| v);
+            let f_units = p.f * self.pb.objective_unscale;
+            rec.objective = f_units;
+            rec.inf_pr = inf_units;
             rec.inf_du = ms.inf_du;
             rec.complementarity = ms.compl;
             result.dual_infeasibility = ms.inf_du;
             result.iterations = iter;
+            // Moco's optim_constraint_tolerance is IPOPT's constr_viol_tol:
+            // the largest violation in the problem's units. (The rows'
+            // scale factors are at most 1, so the scaled violation is
+            // within it too.)
             let solved = iter > 0
-                && inf_pr <= st.optim_constraint_tolerance
+                && inf_units <= st.optim_constraint_tolerance
                 && ms.inf_du <= st.optim_convergence_tolerance
                 && ms.compl <= st.optim_convergence_tolerance;
             // The paper's criterion and the best iterate judge the
-            // constraints and the objective in the problem's units.
-            let inf_units = worst_row.map_or(0.0, |(_, v)| v);
-            let f_units = p.f * self.pb.objective_unscale;
+            // constraints and the objective in the problem's units too.
             // Only a change over a whole step counts: a step the line
             // search cut short changes the objective little wherever it
             // is (the reduced jump with a smoother activation switch was
@@ -1708,7 +1719,7 @@ impl<'s> Solver<'s> {
                 && ms.inf_du <= st.paper_criterion_dual_infeasibility
                 && (f_units - last_f).abs() < 1e-6 * (1.0 + f_units.abs());
             let acceptable = iter > 0
-                && inf_pr <= st.acceptable_constraint_tolerance
+                && inf_units <= st.acceptable_constraint_tolerance
                 && ms.inf_du <= st.acceptable_convergence_tolerance
                 && ms.compl <= st.acceptable_convergence_tolerance;
             acceptable_count = if acceptable { acceptable_count + 1 } else { 0 };
@@ -1779,6 +1790,8 @@ impl<'s> Solver<'s> {
                 );
                 return;
             }
+            // The stall test reads the solver's scaled violation and
+            // objective, the units its thresholds were chosen in.
             progress.push((inf_pr, p.f));
             let stall = stalled(&progress, st.stall_iterations, st.stall_violation);
             let interrupted = st
@@ -2219,7 +2232,7 @@ impl<'s> Solver<'s> {
                 self.log(&rec, start, result);
                 // No decrease possible along d.
                 let (status, msg) = if dnorm <= 1e-12 * scale_x
-                    && inf_pr <= st.acceptable_constraint_tolerance
+                    && inf_units <= st.acceptable_constraint_tolerance
                 {
                     (
                         SqpStatus::Acceptable,
@@ -2230,10 +2243,12 @@ impl<'s> Solver<'s> {
                         SqpStatus::Acceptable,
                         "no further progress; acceptable level met".to_string(),
                     )
-                } else if inf_pr > st.optim_constraint_tolerance {
+                } else if inf_units > st.optim_constraint_tolerance {
                     (
                         SqpStatus::RestorationFailed,
-                        format!("line search failed at an infeasible point (violation {inf_pr:e})"),
+                        format!(
+                            "line search failed at an infeasible point (violation {inf_units:e})"
+                        ),
                     )
                 } else {
                     (
