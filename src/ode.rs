@@ -553,8 +553,6 @@ pub struct Outputs<'a, S> {
     pub ligament_torque: &'a mut [S],
 }
 
-/// Check that muscle `j` (left) mirrors muscle `i` (right) in the symmetric
-/// system: equal parameters and equal path lengths at several poses.
 /// Every muscle path has a positive finite length at the coordinates'
 /// default values and at each of the model's poses, so that a path point or
 /// spline value far off (1e300 is finite) is named here rather than met as
@@ -609,6 +607,8 @@ fn check_path_lengths(
     Ok(())
 }
 
+/// Check that muscle `j` (left) mirrors muscle `i` (right) in the symmetric
+/// system: equal parameters and equal path lengths at several poses.
 fn check_mirror(
     model: &Model,
     system: &SystemSpec,

@@ -40,13 +40,15 @@ pub enum SquatFailure {
     Failed(String),
 }
 
-/// The squat of a model file's `poses.squat` cannot be held: the file and
-/// why. (The reason may lie in other fields: the bodies, the contact
-/// spheres, the ligaments.)
+/// The squat of a model file's pose (`poses.squat`) cannot be held: the
+/// file, the pose and why. (The reason may lie in other fields: the bodies,
+/// the contact spheres, the ligaments.)
 #[derive(Debug, thiserror::Error)]
-#[error("{file}: poses.squat: static squat: {why}")]
+#[error("{file}: {pose}: static squat: {why}")]
 pub struct SquatError {
     pub file: String,
+    /// `poses.<name>` when the pose is one of the model's, else "pose".
+    pub pose: String,
     pub why: SquatFailure,
 }
 
@@ -118,6 +120,12 @@ pub fn static_squat(
 ) -> Result<StaticSquat, SquatError> {
     squat_of(eq, laws, pose).map_err(|why| SquatError {
         file: eq.model.file.display().to_string(),
+        pose: eq
+            .model
+            .poses
+            .iter()
+            .find(|(_, q)| q.as_slice() == pose)
+            .map_or("pose".into(), |(name, _)| format!("poses.{name}")),
         why,
     })
 }

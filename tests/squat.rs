@@ -86,3 +86,31 @@ fn static_squat_holds_in_both_backends() {
     eprintln!("Simbody pelvis shift after 0.2 s {shift:.3e} m");
     assert!(shift < 1e-3, "Simbody: pelvis moved {shift} m in 0.2 s");
 }
+
+/// A squat that cannot stand is named by the file and the pose it came
+/// from: the feet lifted off the ground (every contact sphere raised by
+/// 0.5 m) leave no pelvis height and ankle angle that balance the body; a
+/// pose not among the model's is called "pose".
+#[test]
+fn a_squat_that_cannot_stand_names_file_and_pose() {
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    for s in v["forces"]["contact"]["spheres"].as_array_mut().unwrap() {
+        let y = s["location"][1].as_f64().unwrap();
+        s["location"][1] = (y + 0.5).into();
+    }
+    let model = Model::from_json_str(&v.to_string(), "raised.json").unwrap();
+    let eq = StateEquation::new(&model, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+    let laws = OpenSimLaws::new(&model).unwrap();
+    let e = static_squat(&eq, &laws, &model.poses["squat"])
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("raised.json: poses.squat: static squat: "),
+        "{e}"
+    );
+    let mut other = model.poses["squat"].clone();
+    other[0] += 1e-3;
+    let e = static_squat(&eq, &laws, &other).unwrap_err().to_string();
+    assert!(e.starts_with("raised.json: pose: static squat: "), "{e}");
+}
