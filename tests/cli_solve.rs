@@ -766,3 +766,57 @@ fn ctrl_c_stops_a_solve_and_writes_its_results() {
     );
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The forward check is the reader's guard against a predicted jump that
+/// does not hold for the model. A solve stopped after one iteration from a
+/// guess whose excitations were set to the minimum (its states kept: a
+/// jump the muscles cannot make) predicts a jump its forward check misses
+/// by far more than 1 cm: the JSON says `forward_check_agrees` false, and
+/// the table warns in words.
+#[test]
+fn a_forward_check_that_misses_is_flagged_and_warned_of() {
+    let (_, out, _) = small_solve_in_fresh_dirs("weak_src", &["--max-iterations", "3"]);
+    let text = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let end = lines.iter().position(|l| l == "endheader").unwrap();
+    let labels: Vec<String> = lines[end + 1].split('\t').map(String::from).collect();
+    // Excitations are the columns named /forceset/<muscle> alone.
+    let excitation: Vec<usize> = (0..labels.len())
+        .filter(|&k| {
+            labels[k]
+                .strip_prefix("/forceset/")
+                .is_some_and(|m| !m.contains('/'))
+        })
+        .collect();
+    assert_eq!(excitation.len(), 24);
+    for l in lines.iter_mut().skip(end + 2).filter(|l| !l.trim().is_empty()) {
+        let mut f: Vec<String> = l.split('\t').map(String::from).collect();
+        for &k in &excitation {
+            f[k] = "0.01".into();
+        }
+        *l = f.join("\t");
+    }
+    let guess = out.join("weak_guess.sto");
+    std::fs::write(&guess, lines.join("\n")).unwrap();
+    let out2 = fresh_dir("weak_out");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["solve", "--num-mesh-intervals", "4", "--max-iterations", "1"])
+        .arg("--guess")
+        .arg(&guess)
+        .arg("--out")
+        .arg(&out2)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("jump_summary.json")).unwrap())
+            .unwrap();
+    let d = v["forward_check_difference_m"].as_f64().unwrap();
+    assert!(d.abs() > 0.01, "forward check within 1 cm ({d} m): the case does not test the warning");
+    assert_eq!(v["forward_check_agrees"].as_bool(), Some(false), "{v}");
+    assert!(
+        stdout.contains("warning: the forward check misses the prediction by more than 1 cm"),
+        "{stdout}"
+    );
+}
