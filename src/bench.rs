@@ -334,11 +334,7 @@ pub fn integrators(model: &Model, cases: &[(&str, f64)]) -> Result<Vec<Integrato
     use crate::simulate::*;
     use std::sync::Arc;
     let (laws, eq) = crate::ode::StateEquation::opensim(model, true).map_err(|e| e.to_string())?;
-    let pose = model
-        .poses
-        .get("squat")
-        .cloned()
-        .ok_or("the model has no squat pose")?;
+    let pose = model.squat_pose().map_err(|e| e.to_string())?;
     let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| e.to_string())?;
     let ext = extensor_moments(&eq, &pose);
     let exc = StudyExcitation::BangBang(BangBang {

@@ -609,10 +609,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Squat { model, full } => {
             let m = leap::model::Model::from_file(&model)?;
             let (laws, eq) = leap::ode::StateEquation::opensim(&m, !full)?;
-            let pose =
-                m.poses.get("squat").cloned().ok_or_else(|| {
-                    anyhow::anyhow!("{}: poses: no 'squat' pose", model.display())
-                })?;
+            let pose = m.squat_pose()?;
             let sq = leap::squat::static_squat(&eq, &laws, &pose)?;
             let state: serde_json::Map<String, serde_json::Value> = eq
                 .state_names()
@@ -822,12 +819,7 @@ fn simulate(
     let choice = st.check(&origin)?;
     let m = leap::model::Model::from_file(&model_path)?;
     let (laws, eq) = leap::ode::StateEquation::opensim(&m, true)?;
-    let pose = m.poses.get("squat").cloned().ok_or_else(|| {
-        anyhow::anyhow!(
-            "{}: poses: the model has no 'squat' pose to start from",
-            model_path.display()
-        )
-    })?;
+    let pose = m.squat_pose()?;
     let squat = leap::squat::static_squat(&eq, &laws, &pose)?;
     let names: Vec<&str> = eq
         .muscles

@@ -1116,6 +1116,19 @@ impl Model {
         Ok(model)
     }
 
+    /// The `squat` pose a jump starts from (model coordinate values), or an
+    /// error naming the file and `poses`.
+    pub fn squat_pose(&self) -> Result<Vec<f64>, ModelError> {
+        self.poses
+            .get("squat")
+            .cloned()
+            .ok_or_else(|| ModelError::Invalid {
+                file: self.file.clone(),
+                path: "poses".into(),
+                reason: "the model has no 'squat' pose to start from".into(),
+            })
+    }
+
     /// Index of the named coordinate.
     pub fn coordinate_index(&self, name: &str) -> Option<usize> {
         self.coordinates.iter().position(|c| c.name == name)

@@ -180,14 +180,17 @@ pub enum OcpError {
     Invalid(String),
     #[error("bang-bang jump: {0}")]
     Simulation(String),
-    /// The fixed start, the static squat, lies outside the problem's bounds.
-    #[error("{file}: poses.squat: the static squat violates the bounds of {name}: {value} not in [{lower}, {upper}]")]
+    /// The fixed start, the static squat, lies outside the problem's bounds:
+    /// `bound` says whose (a coordinate's range in the model file, or one
+    /// of the problem's options).
+    #[error("{file}: poses.squat: the static squat violates the bounds of {name}: {value} not in [{lower}, {upper}] ({bound})")]
     StartOutOfBounds {
         file: String,
         name: String,
         value: f64,
         lower: f64,
         upper: f64,
+        bound: String,
     },
 }
 
@@ -239,13 +242,7 @@ impl JumpOcp {
             }
         }
         let eq = StateEquation::new(model, true, options.smoothing)?;
-        let pose = model.poses.get("squat").cloned().ok_or_else(|| {
-            OcpError::Model(ModelError::Invalid {
-                file: model.file.clone(),
-                path: "poses".into(),
-                reason: "the model has no 'squat' pose to start from".into(),
-            })
-        })?;
+        let pose = model.squat_pose()?;
         let squat = static_squat(&eq, &laws, &pose)?;
         Self::from_parts(eq, laws, squat, options)
     }
@@ -330,12 +327,25 @@ impl JumpOcp {
         let names = eq.state_names();
         for i in 0..nx {
             if !(lo[i] <= squat.x[i] && squat.x[i] <= hi[i]) {
+                let bound = if i < n {
+                    format!(
+                        "the range of coordinates[{}] in the model file",
+                        eq.system.coordinates[i]
+                    )
+                } else if i < 2 * n {
+                    "the problem's speed_bound".into()
+                } else if i < 2 * n + nm {
+                    "the problem's fiber_length_bounds times the optimal fibre length, above Thelen's minimum fibre length by min_fiber_length_margin".into()
+                } else {
+                    format!("activations lie in [{MIN_ACTIVATION}, 1]")
+                };
                 return Err(OcpError::StartOutOfBounds {
                     file: eq.model.file.display().to_string(),
                     name: names[i].clone(),
                     value: squat.x[i],
                     lower: lo[i],
                     upper: hi[i],
+                    bound,
                 });
             }
         }
@@ -349,6 +359,7 @@ impl JumpOcp {
                     value: v,
                     lower: ulo[k],
                     upper: uhi[k],
+                    bound: "excitations lie between the muscle's minimum and 1".into(),
                 });
             }
         }

@@ -47,7 +47,8 @@ pub enum SquatFailure {
 #[error("{file}: {pose}: static squat: {why}")]
 pub struct SquatError {
     pub file: String,
-    /// `poses.<name>` when the pose is one of the model's, else "pose".
+    /// `poses.<name>` when the pose is one of the model's (`poses.squat`
+    /// first), else "the given pose".
     pub pose: String,
     pub why: SquatFailure,
 }
@@ -120,12 +121,16 @@ pub fn static_squat(
 ) -> Result<StaticSquat, SquatError> {
     squat_of(eq, laws, pose).map_err(|why| SquatError {
         file: eq.model.file.display().to_string(),
-        pose: eq
-            .model
-            .poses
-            .iter()
-            .find(|(_, q)| q.as_slice() == pose)
-            .map_or("pose".into(), |(name, _)| format!("poses.{name}")),
+        // The squat pose if it is that one, else another of the model's.
+        pose: std::iter::once("squat")
+            .chain(eq.model.poses.keys().map(String::as_str))
+            .find(|name| {
+                eq.model
+                    .poses
+                    .get(*name)
+                    .is_some_and(|q| q.as_slice() == pose)
+            })
+            .map_or("the given pose".into(), |name| format!("poses.{name}")),
         why,
     })
 }

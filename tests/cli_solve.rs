@@ -789,7 +789,11 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
         })
         .collect();
     assert_eq!(excitation.len(), 24);
-    for l in lines.iter_mut().skip(end + 2).filter(|l| !l.trim().is_empty()) {
+    for l in lines
+        .iter_mut()
+        .skip(end + 2)
+        .filter(|l| !l.trim().is_empty())
+    {
         let mut f: Vec<String> = l.split('\t').map(String::from).collect();
         for &k in &excitation {
             f[k] = "0.01".into();
@@ -801,7 +805,13 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
     let out2 = fresh_dir("weak_out");
     let o = Command::cargo_bin("leap")
         .unwrap()
-        .args(["solve", "--num-mesh-intervals", "4", "--max-iterations", "1"])
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "1",
+        ])
         .arg("--guess")
         .arg(&guess)
         .arg("--out")
@@ -813,7 +823,10 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
         serde_json::from_str(&std::fs::read_to_string(out2.join("jump_summary.json")).unwrap())
             .unwrap();
     let d = v["forward_check_difference_m"].as_f64().unwrap();
-    assert!(d.abs() > 0.01, "forward check within 1 cm ({d} m): the case does not test the warning");
+    assert!(
+        d.abs() > 0.01,
+        "forward check within 1 cm ({d} m): the case does not test the warning"
+    );
     assert_eq!(v["forward_check_agrees"].as_bool(), Some(false), "{v}");
     assert!(
         stdout.contains("warning: the forward check misses the prediction by more than 1 cm"),

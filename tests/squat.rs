@@ -90,7 +90,7 @@ fn static_squat_holds_in_both_backends() {
 /// A squat that cannot stand is named by the file and the pose it came
 /// from: the feet lifted off the ground (every contact sphere raised by
 /// 0.5 m) leave no pelvis height and ankle angle that balance the body; a
-/// pose not among the model's is called "pose".
+/// pose not among the model's is called "the given pose".
 #[test]
 fn a_squat_that_cannot_stand_names_file_and_pose() {
     let mut v: serde_json::Value =
@@ -112,5 +112,8 @@ fn a_squat_that_cannot_stand_names_file_and_pose() {
     let mut other = model.poses["squat"].clone();
     other[0] += 1e-3;
     let e = static_squat(&eq, &laws, &other).unwrap_err().to_string();
-    assert!(e.starts_with("raised.json: pose: static squat: "), "{e}");
+    assert!(
+        e.starts_with("raised.json: the given pose: static squat: "),
+        "{e}"
+    );
 }

@@ -410,7 +410,8 @@ fn settings_errors_name_what_is_wrong() {
     .unwrap_err()
     .to_string();
     assert!(
-        e.contains("the static squat violates the bounds of /forceset/"),
+        e.contains("the static squat violates the bounds of /forceset/")
+            && e.contains("(the problem's fiber_length_bounds"),
         "{e}"
     );
     let e = with(OcpOptions {
