@@ -180,18 +180,22 @@ pub enum OcpError {
     Invalid(String),
     #[error("bang-bang jump: {0}")]
     Simulation(String),
-    /// The fixed start, the static squat, lies outside the problem's bounds:
-    /// `bound` says whose (a coordinate's range in the model file, or one
-    /// of the problem's options).
-    #[error("{file}: poses.squat: the static squat violates the bounds of {name}: {value} not in [{lower}, {upper}] ({bound})")]
-    StartOutOfBounds {
-        file: String,
-        name: String,
-        value: f64,
-        lower: f64,
-        upper: f64,
-        bound: String,
-    },
+    /// The fixed start, the static squat, lies outside the problem's bounds.
+    #[error(transparent)]
+    StartOutOfBounds(Box<StartOutOfBounds>),
+}
+
+/// The static squat outside the problem's bounds: `bound` says whose (a
+/// coordinate's range in the model file, or one of the problem's options).
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: poses.squat: the static squat violates the bounds of {name}: {value} not in [{lower}, {upper}] ({bound})")]
+pub struct StartOutOfBounds {
+    pub file: String,
+    pub name: String,
+    pub value: f64,
+    pub lower: f64,
+    pub upper: f64,
+    pub bound: String,
 }
 
 /// The jump problem: the state equation, its laws, the fixed start, bounds.
@@ -339,28 +343,28 @@ impl JumpOcp {
                 } else {
                     format!("activations lie in [{MIN_ACTIVATION}, 1]")
                 };
-                return Err(OcpError::StartOutOfBounds {
+                return Err(OcpError::StartOutOfBounds(Box::new(StartOutOfBounds {
                     file: eq.model.file.display().to_string(),
                     name: names[i].clone(),
                     value: squat.x[i],
                     lower: lo[i],
                     upper: hi[i],
                     bound,
-                });
+                })));
             }
         }
         let cnames = eq.control_names();
         for k in 0..nm {
             let v = squat.excitation[k];
             if !(ulo[k] <= v && v <= uhi[k]) {
-                return Err(OcpError::StartOutOfBounds {
+                return Err(OcpError::StartOutOfBounds(Box::new(StartOutOfBounds {
                     file: eq.model.file.display().to_string(),
                     name: cnames[k].clone(),
                     value: v,
                     lower: ulo[k],
                     upper: uhi[k],
                     bound: "excitations lie between the muscle's minimum and 1".into(),
-                });
+                })));
             }
         }
         let standing_com_height = crate::simulate::standing_com_height(&eq);

@@ -72,14 +72,20 @@ pub enum OdeError {
     NotFinite { state: String, value: f64 },
     /// A muscle path without a positive finite length at one of the
     /// model's poses.
-    #[error("{file}: forces.muscles[{index}].path: muscle '{muscle}' has length {length:e} m at {pose}: a path needs a positive finite length (a path point or spline value far off?)")]
-    PathLength {
-        file: String,
-        index: usize,
-        muscle: String,
-        pose: String,
-        length: f64,
-    },
+    #[error(transparent)]
+    PathLength(Box<PathLengthError>),
+}
+
+/// A muscle path without a positive finite length at one of the model's
+/// poses: the file, the muscle (its index in `forces.muscles`), the pose.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: forces.muscles[{index}].path: muscle '{muscle}' has length {length:e} m at {pose}: a path needs a positive finite length (a path point or spline value far off?)")]
+pub struct PathLengthError {
+    pub file: String,
+    pub index: usize,
+    pub muscle: String,
+    pub pose: String,
+    pub length: f64,
 }
 
 /// The state equation of a model's full or symmetric system.
@@ -588,7 +594,7 @@ fn check_path_lengths(
                 .chain(with_each_on.map(|(j, l)| (Some(j), l)))
                 .find(|&(_, l)| !(l.is_finite() && l > 0.0));
             if let Some((j, length)) = bad {
-                return Err(OdeError::PathLength {
+                return Err(OdeError::PathLength(Box::new(PathLengthError {
                     file: model.file.display().to_string(),
                     index,
                     muscle: m.spec.name.clone(),
@@ -600,7 +606,7 @@ fn check_path_lengths(
                         ),
                     },
                     length,
-                });
+                })));
             }
         }
     }
@@ -664,8 +670,9 @@ fn check_mirror(
             .path
             .calc::<f64, _, GeneralizedForces<f64>>(&view, sm, None)
             .length;
-        // (Written to fail on NaN too.)
-        if !((li - lj).abs() <= 1e-12 * li.abs().max(1.0)) {
+        // (Fails on NaN too.)
+        let mirrored = (li - lj).abs() <= 1e-12 * li.abs().max(1.0);
+        if !mirrored {
             return Err(OdeError::Symmetry(format!(
                 "{}: forces.muscles[{j}].path: muscle '{}' is not the mirror image of '{}' (forces.muscles[{i}]): path lengths {lj} m and {li} m at the same symmetric pose",
                 model.file.display(),

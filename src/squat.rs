@@ -50,7 +50,7 @@ pub struct SquatError {
     /// `poses.<name>` when the pose is one of the model's (`poses.squat`
     /// first), else "the given pose".
     pub pose: String,
-    pub why: SquatFailure,
+    pub why: Box<SquatFailure>,
 }
 
 struct Setup<'a> {
@@ -131,7 +131,7 @@ pub fn static_squat(
                     .is_some_and(|q| q.as_slice() == pose)
             })
             .map_or("the given pose".into(), |name| format!("poses.{name}")),
-        why,
+        why: Box::new(why),
     })
 }
 
