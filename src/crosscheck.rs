@@ -407,25 +407,7 @@ fn state_equation_error(
         }
         // Fibre lengths within ±0.5 % of muscle-tendon equilibrium at the
         // state's activation, so that every law sees a physical tendon.
-        let lmt: Vec<f64> = {
-            use crate::multibody::{GeneralizedForces, ModelView};
-            let mut w = eq.multibody.workspace::<f64>();
-            eq.multibody.set_state(&mut w, &x[..n], &x[n..2 * n]);
-            let view = ModelView {
-                mb: &eq.multibody,
-                ws: &w,
-                q_of: &eq.system.q_of_model_coordinate,
-            };
-            eq.muscles
-                .iter()
-                .map(|&m| {
-                    model.muscles[m]
-                        .path
-                        .calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None)
-                        .length
-                })
-                .collect()
-        };
+        let lmt = eq.path_lengths(&x[..n]);
         for k in 0..nm {
             let a = rng.random_range(0.01..=1.0);
             let lm = laws.muscles[eq.muscles[k]].equilibrium_fiber_length(a, lmt[k]);

@@ -1153,7 +1153,7 @@ impl Model {
 
 impl MuscleSpec {
     /// The muscle's parameters by their model-file names.
-    fn parameters(&self) -> [(&'static str, f64); 13] {
+    pub(crate) fn parameters(&self) -> [(&'static str, f64); 13] {
         [
             ("max_isometric_force", self.max_isometric_force),
             ("optimal_fiber_length", self.optimal_fiber_length),

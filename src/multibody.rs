@@ -697,6 +697,19 @@ pub struct ModelView<'a, S: Scalar> {
 }
 
 impl<'a, S: Scalar> ModelView<'a, S> {
+    /// The view of `mb` at (q, u) in `ws` (whose state it sets), the model
+    /// coordinates at the system's `q_of`.
+    pub fn at(
+        mb: &'a Multibody,
+        ws: &'a mut Workspace<S>,
+        q_of: &'a [usize],
+        q: &[S],
+        u: &[S],
+    ) -> Self {
+        mb.set_state(ws, q, u);
+        ModelView { mb, ws, q_of }
+    }
+
     #[inline]
     fn frame(&self, body: usize, loc: [S; 3]) -> (usize, [S; 3]) {
         let (ci, off) = self.mb.frame_of_model_body(body);

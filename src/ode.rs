@@ -303,6 +303,24 @@ impl StateEquation {
         }
     }
 
+    /// The carried muscles' path lengths at q (m; at rest, lengths depend
+    /// on q alone).
+    pub fn path_lengths(&self, q: &[f64]) -> Vec<f64> {
+        let mut ws = self.multibody.workspace::<f64>();
+        let rest = vec![0.0; self.nq()];
+        let q_of = &self.system.q_of_model_coordinate;
+        let view = ModelView::at(&self.multibody, &mut ws, q_of, q, &rest);
+        self.muscles
+            .iter()
+            .map(|&m| {
+                self.model.muscles[m]
+                    .path
+                    .calc::<f64, _, GeneralizedForces<f64>>(&view, self.smoothing, None)
+                    .length
+            })
+            .collect()
+    }
+
     /// The carried muscles' path lengths, lengthening speeds and unit-
     /// tension generalised forces at (q, q̇), into `out` (see [`GivenPaths`];
     /// `out.unit` holds n values per muscle).
@@ -569,18 +587,14 @@ fn check_path_lengths(
     mb: &Multibody,
     smoothing: PathSmoothing,
 ) -> Result<(), OdeError> {
-    let n = system.nq();
+    let rest = vec![0.0; system.nq()];
     let mut ws = mb.workspace::<f64>();
     let defaults: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
     let poses = std::iter::once(("the coordinates' default values".to_string(), &defaults))
         .chain(model.poses.iter().map(|(k, v)| (format!("poses.{k}"), v)));
     for (pose, model_q) in poses {
-        mb.set_state(&mut ws, &system.q_from_model(model_q), &vec![0.0; n]);
-        let view = ModelView {
-            mb,
-            ws: &ws,
-            q_of: &system.q_of_model_coordinate,
-        };
+        let q = system.q_from_model(model_q);
+        let view = ModelView::at(mb, &mut ws, &system.q_of_model_coordinate, &q, &rest);
         for (index, m) in model.muscles.iter().enumerate() {
             let length = m
                 .path
@@ -623,27 +637,10 @@ fn check_mirror(
     j: usize,
 ) -> Result<(), OdeError> {
     let (a, b) = (&model.muscles[i].spec, &model.muscles[j].spec);
-    let params = |m: &crate::model::MuscleSpec| {
-        [
-            m.max_isometric_force,
-            m.optimal_fiber_length,
-            m.tendon_slack_length,
-            m.pennation_angle_at_optimal,
-            m.max_contraction_velocity,
-            m.activation_time_constant,
-            m.deactivation_time_constant,
-            m.FmaxTendonStrain,
-            m.FmaxMuscleStrain,
-            m.KshapeActive,
-            m.KshapePassive,
-            m.Af,
-            m.Flen,
-        ]
-    };
-    if params(a) != params(b) {
+    if a.parameters() != b.parameters() {
         return Err(OdeError::Symmetry(format!("{}: forces.muscles[{j}]: muscle '{}' has parameters different from '{}' (forces.muscles[{i}]); the symmetric system needs mirror images", model.file.display(), b.name, a.name)));
     }
-    let n = system.nq();
+    let rest = vec![0.0; system.nq()];
     let mut ws = mb.workspace::<f64>();
     for k in 0..4 {
         let q: Vec<f64> = system
@@ -655,12 +652,7 @@ fn check_mirror(
                 lo + s * (hi - lo).min(3.0)
             })
             .collect();
-        mb.set_state(&mut ws, &q, &vec![0.0; n]);
-        let view = ModelView {
-            mb,
-            ws: &ws,
-            q_of: &system.q_of_model_coordinate,
-        };
+        let view = ModelView::at(mb, &mut ws, &system.q_of_model_coordinate, &q, &rest);
         let sm = PathSmoothing::Smooth { delta: 0.02 };
         let li = model.muscles[i]
             .path

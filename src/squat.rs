@@ -61,27 +61,6 @@ struct Setup<'a> {
 }
 
 impl Setup<'_> {
-    /// Muscle-tendon lengths of the carried muscles at q.
-    fn mtu_lengths(&self, q: &[f64]) -> Vec<f64> {
-        let eq = self.eq;
-        let mut ws = eq.multibody.workspace::<f64>();
-        eq.multibody.set_state(&mut ws, q, &vec![0.0; self.n]);
-        let view = ModelView {
-            mb: &eq.multibody,
-            ws: &ws,
-            q_of: &eq.system.q_of_model_coordinate,
-        };
-        eq.muscles
-            .iter()
-            .map(|&m| {
-                eq.model.muscles[m]
-                    .path
-                    .calc::<f64, _, GeneralizedForces<f64>>(&view, eq.smoothing, None)
-                    .length
-            })
-            .collect()
-    }
-
     /// The state at q, q̇ = 0, activations a, fibres in equilibrium.
     fn state(&self, q: &[f64], a: &[f64], lmt: &[f64]) -> Vec<f64> {
         let (n, nm) = (self.n, self.nm);
@@ -172,7 +151,7 @@ fn squat_of(
     let weight = model.total_mass() * model.gravity[1].abs();
     // 2. Ground support: Newton on (pelvis_ty, ankle) for the base residuals.
     let base = |q: &[f64]| -> Result<[f64; 2], SquatFailure> {
-        let lmt = s.mtu_lengths(q);
+        let lmt = eq.path_lengths(q);
         let x = s.state(q, &a_min, &lmt);
         let (r, _, _) = s.residual(&x, &a_min)?;
         Ok([r[i_ty] / weight, r[i_tilt] / weight])
@@ -222,7 +201,7 @@ fn squat_of(
     }
     set(&mut q, ty, ank);
     // 3. Static optimisation.
-    let lmt = s.mtu_lengths(&q);
+    let lmt = eq.path_lengths(&q);
     let joints: Vec<usize> = (0..n)
         .filter(|&i| {
             let name = &model.coordinates[eq.system.coordinates[i]].name;

@@ -40,20 +40,22 @@ fn values(v: &Value, place: String, out: &mut Vec<(String, Value)>) {
     }
 }
 
+/// The JSON pointer (RFC 6901, serde_json's `Value::pointer`) of a place
+/// as `values` writes it (`.forces.muscles[3].path`) or an error names it
+/// (`symmetry[2][1]`): `/forces/muscles/3/path`. The model's keys hold no
+/// `/` or `~`.
+fn pointer(place: &str) -> String {
+    place
+        .trim_start_matches('.')
+        .split(['.', '['])
+        .filter(|s| !s.is_empty())
+        .map(|s| format!("/{}", s.trim_end_matches(']')))
+        .collect()
+}
+
 /// The value at `place` (as `values` writes it) of `root`.
 fn at<'a>(root: &'a mut Value, place: &str) -> &'a mut Value {
-    let mut v = root;
-    for part in place.split('.').skip(1) {
-        let (key, rest) = part.split_once('[').unwrap_or((part, ""));
-        if !key.is_empty() {
-            v = &mut v[key];
-        }
-        for idx in rest.split('[').filter(|s| !s.is_empty()) {
-            let i: usize = idx.trim_end_matches(']').parse().unwrap();
-            v = &mut v[i];
-        }
-    }
-    v
+    root.pointer_mut(&pointer(place)).unwrap()
 }
 
 /// Each value of the model changed in each way it must not be: a number
@@ -138,29 +140,7 @@ enum Outcome {
 /// Whether `path` (`forces.muscles[17].path`, `symmetry[2][1]`,
 /// `(document)`) names a value of `doc`.
 fn resolves(doc: &Value, path: &str) -> bool {
-    if path == "(document)" {
-        return true;
-    }
-    let mut v = doc;
-    for part in path.split('.') {
-        let (key, rest) = part.split_once('[').unwrap_or((part, ""));
-        let Some(next) = v.get(key) else {
-            return false;
-        };
-        v = next;
-        for idx in rest.split('[').filter(|s| !s.is_empty()) {
-            let Some(next) = idx
-                .trim_end_matches(']')
-                .parse::<usize>()
-                .ok()
-                .and_then(|i| v.get(i))
-            else {
-                return false;
-            };
-            v = next;
-        }
-    }
-    true
+    path == "(document)" || doc.pointer(&pointer(path)).is_some()
 }
 
 /// The field path an error names after the file (`<file>: <path>: why`):
