@@ -613,6 +613,57 @@ fn paper_criterion_stops_only_where_the_multipliers_balance_the_gradient() {
     }
 }
 
+/// min −1e-8·x over 0 ≤ x ≤ 1000 from x = 0: a slope so gentle that
+/// every step the step bound holds (Δ = 10, 40, 160, 640; no curvature,
+/// so the QP's own step is far longer) changes f by less than 1e-6. The
+/// paper's criterion must not read that as convergence: the solve goes on
+/// to the bound, x = 1000.
+struct GentleSlope;
+impl AdProblem for GentleSlope {
+    fn name(&self) -> String {
+        "gentle slope".into()
+    }
+    fn num_variables(&self) -> usize {
+        1
+    }
+    fn num_constraints(&self) -> usize {
+        0
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l[0] = 0.0;
+        u[0] = 1000.0;
+    }
+    fn constraint_bounds(&self, _l: &mut [f64], _u: &mut [f64]) {}
+    fn initial_point(&self, x: &mut [f64]) {
+        x[0] = 0.0;
+    }
+    fn eval<D: Scalar>(&self, x: &[D], _c: &mut [D]) -> D {
+        x[0] * -1e-8
+    }
+}
+
+#[test]
+fn paper_criterion_ignores_steps_the_step_bound_cut_short() {
+    let settings = SqpSettings {
+        hessian: HessianMode::ExactConvexified,
+        eigenvalue_floor: 1e-14,
+        scale_variables_using_bounds: false,
+        paper_criterion: true,
+        ..Default::default()
+    };
+    let r = solve(&mut AdNlp::new(GentleSlope), &settings);
+    assert!(r.status.success(), "{}", r.message);
+    // The first steps reached the bound.
+    let first = &r.history[0];
+    assert!(
+        first.step_norm >= 0.999 * first.step_bound,
+        "step {} bound {}",
+        first.step_norm,
+        first.step_bound
+    );
+    assert!((r.x[0] - 1000.0).abs() < 1e-3, "x = {} ({})", r.x[0], r.message);
+}
+
 /// The stall test ends a solve whose violation no longer falls: on
 /// `infeasible_asymptotic` (exp(−x1) = −1: the violation 1 + exp(−x1)
 /// creeps towards 1 from the second iteration on) a three-iteration window
