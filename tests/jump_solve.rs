@@ -227,7 +227,7 @@ fn full_jump_by_hermite_simpson_is_solved_and_agrees() {
 /// jump as high as collocation predicts within 1 cm (the forward check's
 /// tolerance).
 #[test]
-#[ignore = "the full shooting solve takes about 2 minutes on 2 cores; scripts/full_shooting.sh"]
+#[ignore = "the full shooting solve takes about 3 minutes on 2 cores; scripts/full_shooting.sh"]
 fn full_jump_by_shooting_agrees_with_collocation() {
     let collocation = solve("models/jump_collocation.json", "full_collocation");
     let shooting = solve_with(
