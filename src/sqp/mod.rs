@@ -1721,9 +1721,9 @@ impl<'s> Solver<'s> {
             // search or the step bound cut short changes the objective
             // little wherever it is (the reduced jump with a smoother
             // activation switch was called solved after α = 0.03, at a
-            // 2 cm fall; the 20-interval jump after the ratio test had
-            // halved the bound three times, 2.8e-3 below the J it reaches
-            // on full steps).
+            // 2 cm fall; the 20-interval jump on a step the ratio test had
+            // cut to half the step before, 2.8e-3 m below the J it reaches
+            // when such steps do not count).
             let paper = st.paper_criterion
                 && iter > 0
                 && last_full_step
