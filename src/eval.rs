@@ -58,11 +58,11 @@ pub struct EvalInputError {
     pub reason: String,
 }
 
+/// Evaluation inputs: one (x, u) pair per evaluation.
+pub type Inputs = Vec<(Vec<f64>, Vec<f64>)>;
+
 /// Read evaluations (x, u) from a JSON or CSV file.
-pub fn read_inputs(
-    eq: &StateEquation,
-    path: &Path,
-) -> Result<Vec<(Vec<f64>, Vec<f64>)>, EvalInputError> {
+pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputError> {
     let file = path.display().to_string();
     let err = |place: String, reason: String| EvalInputError {
         file: file.clone(),

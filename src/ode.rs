@@ -680,8 +680,11 @@ fn check_mirror(
 /// function of time (controls file, bang-bang pattern).
 pub enum Excitation {
     Constant(Vec<f64>),
-    OfTime(Box<dyn Fn(f64, &mut [f64]) + Send>),
+    OfTime(ExcitationOfTime),
 }
+
+/// Excitations as a function of time: fills the slice at time t.
+pub type ExcitationOfTime = Box<dyn Fn(f64, &mut [f64]) + Send>;
 
 /// The same state equation evaluated by Simbody: q and q̇ in Simbody's
 /// multibody system, fibre lengths and activations as Simbody auxiliary (z)

@@ -392,7 +392,7 @@ impl AdProblem for Amplified {
     }
     fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
         let f = self.0.eval(x, c);
-        c.iter_mut().for_each(|v| *v = *v * 1e3);
+        c.iter_mut().for_each(|v| *v *= 1e3);
         f
     }
 }
@@ -661,7 +661,12 @@ fn paper_criterion_ignores_steps_the_step_bound_cut_short() {
         first.step_norm,
         first.step_bound
     );
-    assert!((r.x[0] - 1000.0).abs() < 1e-3, "x = {} ({})", r.x[0], r.message);
+    assert!(
+        (r.x[0] - 1000.0).abs() < 1e-3,
+        "x = {} ({})",
+        r.x[0],
+        r.message
+    );
 }
 
 /// The stall test ends a solve whose violation no longer falls: on

@@ -204,10 +204,10 @@ fn wrong_lengths_are_errors() {
     let mut w = eq.workspace::<f64>();
     let mut xd = vec![0.0; 62];
     assert!(eq
-        .rhs(&laws, &mut w, &vec![0.0; 61], &vec![0.0; 24], &mut xd)
+        .rhs(&laws, &mut w, &[0.0; 61], &[0.0; 24], &mut xd)
         .is_err());
     assert!(eq
-        .rhs(&laws, &mut w, &vec![0.0; 62], &vec![0.0; 23], &mut xd)
+        .rhs(&laws, &mut w, &[0.0; 62], &[0.0; 23], &mut xd)
         .is_err());
 }
 
@@ -236,8 +236,8 @@ fn simbody_state_equation_matches_rust_native() {
                 }
                 x[eq.system.q_of_model_coordinate[model.coordinate_index("pelvis_ty").unwrap()]] -=
                     0.01;
-                for i in 2 * n..nx {
-                    x[i] = 0.1 + 0.003 * i as f64;
+                for (i, xi) in x.iter_mut().enumerate().skip(2 * n) {
+                    *xi = 0.1 + 0.003 * i as f64;
                 }
                 (x, (0..eq.nm()).map(|m| 0.3 + 0.02 * m as f64).collect())
             };

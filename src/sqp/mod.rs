@@ -1446,6 +1446,7 @@ impl<'s> Solver<'s> {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn solve_qp(
         &mut self,
         elastic: bool,
@@ -2116,7 +2117,7 @@ impl<'s> Solver<'s> {
                     // steps, Fletcher & Leyffer 2002). On the jump, 100
                     // beat both 10 (stuck near J = 1.248) and no limit
                     // (violation up to 10, then stalled in elastic mode).
-                    if !(th < theta_max)
+                    if th.partial_cmp(&theta_max) != Some(std::cmp::Ordering::Less)
                         || !f.is_finite()
                         || th > st.max_violation_growth * theta0.max(theta_min)
                     {
