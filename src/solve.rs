@@ -175,6 +175,12 @@ pub struct SolveReport {
     /// Largest violation of the constraints (defects, no countermovement,
     /// lift-off) in their units.
     pub max_constraint_violation: f64,
+    /// Scaled dual infeasibility at the returned iterate (IPOPT's inf_du,
+    /// the history's last `inf_du`): at an optimum at most
+    /// `optim_convergence_tolerance`. The paper's rule stops where the
+    /// objective no longer moves, which need not be an optimum (the
+    /// default jump stops at 2.2e-3).
+    pub dual_infeasibility: f64,
     /// The forward check's jump height (Simbody), its difference from the
     /// predicted one (forward − predicted), and the Rust-native one.
     pub forward_jump_height_m: Option<f64>,
@@ -754,6 +760,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         peak_vertical_grf_bw: q.peak_grf.0,
         peak_vertical_grf_nodes_bw: q.peak_grf.1,
         max_constraint_violation: q.violation,
+        dual_infeasibility: r.dual_infeasibility,
         forward_jump_height_m: None,
         forward_check_difference_m: None,
         forward_check_agrees: None,

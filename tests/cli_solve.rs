@@ -125,7 +125,7 @@ fn refused(args: &[&str]) -> String {
 }
 
 /// The keys the `--json` object must have.
-const KEYS: [&str; 13] = [
+const KEYS: [&str; 14] = [
     "status",
     "iterations",
     "wall_time_s",
@@ -135,6 +135,7 @@ const KEYS: [&str; 13] = [
     "peak_vertical_grf_bw",
     "peak_vertical_grf_nodes_bw",
     "max_constraint_violation",
+    "dual_infeasibility",
     "forward_jump_height_m",
     "forward_check_difference_m",
     "objective",
@@ -298,8 +299,19 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     // History: a header and one row per iteration (plus the start).
     let hist = std::fs::read_to_string(out.join("jump_history.csv")).unwrap();
     let mut lines = hist.lines();
-    assert!(lines.next().unwrap().starts_with("iter,objective,inf_pr"));
-    assert!(lines.count() >= 1);
+    let header = lines.next().unwrap();
+    assert!(header.starts_with("iter,objective,inf_pr,inf_du"));
+    let rows: Vec<&str> = lines.collect();
+    assert!(!rows.is_empty());
+    // The summary's dual infeasibility is that of a recorded iterate (the
+    // last, or the best one at the iteration limit).
+    let inf_du = v["dual_infeasibility"].as_f64().unwrap();
+    assert!(inf_du.is_finite() && inf_du >= 0.0, "{v}");
+    assert!(
+        rows.iter()
+            .any(|r| r.split(',').nth(3).unwrap().parse::<f64>().unwrap() == inf_du),
+        "dual infeasibility {inf_du} is no record's"
+    );
 
     // The forward trajectory parses with the states' names.
     let fw = StoTable::read(&out.join("jump_forward_states.sto")).unwrap();
