@@ -176,7 +176,7 @@ pub struct SolveReport {
     /// lift-off) in their units.
     pub max_constraint_violation: f64,
     /// Scaled dual infeasibility at the returned iterate (IPOPT's inf_du,
-    /// the history's last `inf_du`): at an optimum at most
+    /// as the history records it for that iterate): at an optimum at most
     /// `optim_convergence_tolerance`. The paper's rule stops where the
     /// objective no longer moves, which need not be an optimum (the
     /// default jump stops at 2.2e-3).

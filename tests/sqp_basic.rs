@@ -613,11 +613,11 @@ fn paper_criterion_stops_only_where_the_multipliers_balance_the_gradient() {
     }
 }
 
-/// min −1e-8·x over 0 ≤ x ≤ 1000 from x = 0: a slope so gentle that
-/// every step the step bound holds (Δ = 10, 40, 160, 640; no curvature,
-/// so the QP's own step is far longer) changes f by less than 1e-6. The
-/// paper's criterion must not read that as convergence: the solve goes on
-/// to the bound, x = 1000.
+/// min −1e-8·x over 0 ≤ x ≤ 1000 from x = 0: a slope so gentle that the
+/// first steps, which the step bound holds (Δ = 10, then 40; without
+/// curvature the QP's own step is far longer), change f by less than
+/// 1e-6 (1 + |f|). The paper's criterion must not read that as
+/// convergence: the solve goes on to the bound, x = 1000.
 struct GentleSlope;
 impl AdProblem for GentleSlope {
     fn name(&self) -> String {
