@@ -1669,6 +1669,9 @@ impl<'s> Solver<'s> {
             if let Err(e) = eval_derivatives(nlp, &mut p) {
                 let dt = t.elapsed().as_secs_f64();
                 time.derivatives_s += dt;
+                // Not measured at this iterate (the last value is the
+                // previous iterate's).
+                result.dual_infeasibility = f64::NAN;
                 finish(
                     result,
                     SqpStatus::EvaluationError,
@@ -1938,6 +1941,9 @@ impl<'s> Solver<'s> {
                     }
                     delta = (delta.min(10.0 * last_step) / 4.0).max(1e-6 * scale_x);
                     prev = None;
+                    // The retry starts from the same point: Δf = 0 there
+                    // says nothing of convergence.
+                    last_full_step = false;
                     continue;
                 }
                 finish(
@@ -2238,7 +2244,18 @@ impl<'s> Solver<'s> {
             rec.alpha = alpha;
             // A full step that the step bound cut short proves no more
             // than one the line search cut: the QP's own step was longer.
-            last_full_step = alpha == 1.0 && accepted.is_some() && !bound_hit;
+            // (After a second-order correction, the step taken is the
+            // correction QP's.)
+            let held = match &accepted {
+                Some((x, _, _)) if soc_used => {
+                    x.iter()
+                        .zip(&p.x)
+                        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
+                        >= 0.999 * delta
+                }
+                _ => bound_hit,
+            };
+            last_full_step = alpha == 1.0 && accepted.is_some() && !held;
             rec.merit = phi0;
             if soc_used {
                 rec.qp_mode = "soc".into();
