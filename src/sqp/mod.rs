@@ -2244,18 +2244,16 @@ impl<'s> Solver<'s> {
             rec.alpha = alpha;
             // A full step that the step bound cut short proves no more
             // than one the line search cut: the QP's own step was longer.
-            // (After a second-order correction, the step taken is the
-            // correction QP's.)
-            let held = match &accepted {
-                Some((x, _, _)) if soc_used => {
-                    x.iter()
-                        .zip(&p.x)
-                        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()))
-                        >= 0.999 * delta
-                }
-                _ => bound_hit,
+            // The step taken is d, or after a second-order correction the
+            // correction QP's.
+            let taken = match &accepted {
+                Some((x, _, _)) if soc_used => x
+                    .iter()
+                    .zip(&p.x)
+                    .fold(0.0f64, |m, (a, b)| m.max((a - b).abs())),
+                _ => dnorm,
             };
-            last_full_step = alpha == 1.0 && accepted.is_some() && !held;
+            last_full_step = alpha == 1.0 && accepted.is_some() && taken < 0.999 * delta;
             rec.merit = phi0;
             if soc_used {
                 rec.qp_mode = "soc".into();
