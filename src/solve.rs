@@ -36,7 +36,8 @@ use crate::simulate::{
 };
 use crate::sqp::{HessianMode, SqpResult, SqpStatus};
 use crate::study::{
-    backend_name, fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method, SolveConfig,
+    backend_name, fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method,
+    ProblemSettings, SolveConfig,
 };
 use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
 use serde::Serialize;
@@ -207,6 +208,11 @@ pub struct SolveReport {
     /// "simbody" ([`crate::transcription::Backend`]).
     pub backend: &'static str,
     pub hessian: HessianMode,
+    /// The problem solved (the study's `problem`): bounds on t_f (s), the
+    /// rows of eq. 4, and whether Ẏ_C ≥ 0 held at every node.
+    pub time_final_bounds: [f64; 2],
+    pub no_countermovement_nodes: usize,
+    pub no_com_descent: bool,
     pub variables: usize,
     pub constraints: usize,
     pub time_split: crate::sqp::TimeSplit,
@@ -255,14 +261,20 @@ pub fn moco_status(s: SqpStatus) -> &'static str {
 /// schemes that evaluate the dynamics at the nodes get Thelen's fibre clamp
 /// spread over a band.
 pub fn collocation_ocp_options(t: &crate::transcription::TranscriptionOptions) -> OcpOptions {
-    let defaults = OcpOptions::default();
+    collocation_problem_options(t, &ProblemSettings::default())
+}
+
+/// [`collocation_ocp_options`] for a study's `problem` settings.
+pub fn collocation_problem_options(
+    t: &crate::transcription::TranscriptionOptions,
+    problem: &ProblemSettings,
+) -> OcpOptions {
     OcpOptions {
-        no_countermovement_nodes: defaults.no_countermovement_nodes.min(t.num_mesh_intervals),
         fiber_clamp_smoothing: t
             .scheme
             .evaluates_dynamics_at_nodes()
             .then_some(FIBER_CLAMP_BAND),
-        ..defaults
+        ..problem.ocp_options(t.num_mesh_intervals)
     }
 }
 
@@ -287,7 +299,7 @@ pub fn run(
         return run_shooting(config, &model, verbose, progress);
     }
     let big_n = config.transcription.num_mesh_intervals;
-    let options = collocation_ocp_options(&config.transcription);
+    let options = collocation_problem_options(&config.transcription, &config.problem);
     progress("static squat and jump problem");
     let ocp = Arc::new(JumpOcp::new(&model, options)?);
     progress(&format!(
@@ -381,11 +393,7 @@ fn run_shooting(
 ) -> Result<SolveReport, SolveError> {
     let dir = &config.output_directory;
     let big_n = config.transcription.num_mesh_intervals;
-    let defaults = OcpOptions::default();
-    let options = OcpOptions {
-        no_countermovement_nodes: defaults.no_countermovement_nodes.min(big_n),
-        ..defaults
-    };
+    let options = config.problem.ocp_options(big_n);
     progress("static squat and jump problem");
     let ocp = Arc::new(JumpOcp::new(model, options)?);
     let opts = ShootingOptions {
@@ -774,6 +782,9 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         fiber_dynamics: q.mesh.2,
         backend: q.backend,
         hessian: r.hessian,
+        time_final_bounds: ocp.options.final_time_bounds,
+        no_countermovement_nodes: ocp.options.no_countermovement_nodes,
+        no_com_descent: ocp.options.no_com_descent,
         variables: q.size.0,
         constraints: q.size.1,
         time_split: r.time,
@@ -1050,6 +1061,23 @@ impl SolveReport {
                 format!(": {}", self.message)
             }
         );
+        let paper = crate::study::ProblemSettings::default().ocp_options(self.num_mesh_intervals);
+        if self.time_final_bounds != paper.final_time_bounds
+            || self.no_countermovement_nodes != paper.no_countermovement_nodes
+            || self.no_com_descent != paper.no_com_descent
+        {
+            s.push_str(&format!(
+                "  problem (the study's): t_f in [{}, {}] s, {} no-countermovement rows (eq. 4), {}\n",
+                self.time_final_bounds[0],
+                self.time_final_bounds[1],
+                self.no_countermovement_nodes,
+                if self.no_com_descent {
+                    "centre of mass never descending at the nodes"
+                } else {
+                    "no bound on the centre of mass's descent"
+                }
+            ));
+        }
         s.push_str(&format!("  leap's times are wall times of the SQP; the paper's are its {} solve's CPU time (MATLAB fmincon) and its predictions over its solves; the experiment's mean (range)\n", match self.method {
             Method::Collocation => "collocation",
             Method::Shooting => "shooting",

@@ -130,6 +130,10 @@ pub struct SolveStudy {
     pub shooting: ShootingSpec,
     #[serde(default)]
     pub mesh: MeshSpec,
+    /// The jump problem's own settings (bounds on t_f, the
+    /// no-countermovement rows), for either method.
+    #[serde(default)]
+    pub problem: ProblemSpec,
     /// "bang-bang" (default: the bang-bang jump's excitations integrated on
     /// the mesh by the transcription's own scheme, t_f the continuous jump's
     /// lift-off time), "bang-bang-resampled" (the continuous bang-bang jump
@@ -188,6 +192,91 @@ pub struct MeshSpec {
     /// inverted force–velocity curve, the paper's form).
     #[serde(default)]
     pub fiber_dynamics: Option<String>,
+}
+
+/// The jump problem's settings ([`crate::ocp::OcpOptions`]); absent
+/// fields keep the paper's problem.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProblemSpec {
+    /// Bounds [t_min, t_max] on the final time t_f, the lift-off, in
+    /// seconds (Moco's `MocoPhase` property `time_final_bounds`; default
+    /// [0.1, 1.0]). The guess's t_f is moved into them.
+    #[serde(default, alias = "final_time_bounds")]
+    pub time_final_bounds: Option<Vec<f64>>,
+    /// How many of eq. 4's no-countermovement rows Ÿ_C(t_n) ≤ Ÿ_C(t_{n+1})
+    /// to state, from the first node (default 7, the paper's; at most the
+    /// number of mesh intervals; 0 states none).
+    #[serde(default)]
+    pub no_countermovement_nodes: Option<i64>,
+    /// Ẏ_C ≥ 0 at every node: the centre of mass never moves down
+    /// (default true; false leaves eq. 4 alone, the paper's problem as
+    /// printed; [`crate::ocp::OcpOptions::no_com_descent`]).
+    #[serde(default)]
+    pub no_com_descent: Option<bool>,
+}
+
+/// The jump problem's settings, resolved.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProblemSettings {
+    pub final_time_bounds: [f64; 2],
+    /// None: the paper's 7, or every interval on a coarser mesh.
+    pub no_countermovement_nodes: Option<usize>,
+    pub no_com_descent: bool,
+}
+
+impl Default for ProblemSettings {
+    fn default() -> Self {
+        let d = crate::ocp::OcpOptions::default();
+        ProblemSettings {
+            final_time_bounds: d.final_time_bounds,
+            no_countermovement_nodes: None,
+            no_com_descent: d.no_com_descent,
+        }
+    }
+}
+
+impl ProblemSettings {
+    /// The problem's options on a mesh of `num_intervals` intervals
+    /// (`solve`'s collocation adds its scheme's fibre clamp).
+    pub fn ocp_options(&self, num_intervals: usize) -> crate::ocp::OcpOptions {
+        let d = crate::ocp::OcpOptions::default();
+        crate::ocp::OcpOptions {
+            final_time_bounds: self.final_time_bounds,
+            no_countermovement_nodes: self
+                .no_countermovement_nodes
+                .unwrap_or(d.no_countermovement_nodes.min(num_intervals)),
+            no_com_descent: self.no_com_descent,
+            ..d
+        }
+    }
+
+    /// Whether the rows of eq. 4 fit the mesh; the reason if not.
+    fn check_mesh(&self, num_intervals: usize) -> Result<(), String> {
+        match self.no_countermovement_nodes {
+            Some(n) if n > num_intervals => Err(format!(
+                "{n} rows need {n} mesh intervals, the mesh has {num_intervals} (eq. 4 compares the accelerations of consecutive nodes)"
+            )),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// Final-time bounds as a study file gives them.
+fn parse_time_bounds(b: &[f64]) -> Result<[f64; 2], String> {
+    let [t0, t1] = b else {
+        return Err(format!(
+            "need two values [t_min, t_max] in seconds, got {}",
+            b.len()
+        ));
+    };
+    let (t0, t1) = (*t0, *t1);
+    if !(t0.is_finite() && t1.is_finite() && t0 > 0.0 && t0 <= t1) {
+        return Err(format!(
+            "need 0 < t_min ≤ t_max (seconds, finite), got [{t0}, {t1}]"
+        ));
+    }
+    Ok([t0, t1])
 }
 
 /// Settings of direct shooting.
@@ -298,6 +387,8 @@ pub struct SolveConfig {
     /// Method "shooting"'s settings (its intervals are the mesh's).
     pub shooting: crate::shooting::ShootingOptions,
     pub guess: GuessChoice,
+    /// The jump problem's settings (`problem` in the study).
+    pub problem: ProblemSettings,
     pub settings: SqpSettings,
     pub output_directory: PathBuf,
     /// None: skipped.
@@ -508,6 +599,23 @@ impl SolveStudy {
             Some(g) => parse_guess(g, rel(g)).map_err(|r| err("guess", r))?,
         };
 
+        let mut problem = ProblemSettings::default();
+        let p = &self.problem;
+        if let Some(b) = &p.time_final_bounds {
+            problem.final_time_bounds =
+                parse_time_bounds(b).map_err(|r| err("problem.time_final_bounds", r))?;
+        }
+        if let Some(n) = p.no_countermovement_nodes {
+            problem.no_countermovement_nodes = check_count(n, 0, ", 0 states none")
+                .map_err(|r| err("problem.no_countermovement_nodes", r))?;
+        }
+        problem
+            .check_mesh(transcription.num_mesh_intervals)
+            .map_err(|r| err("problem.no_countermovement_nodes", r))?;
+        if let Some(d) = p.no_com_descent {
+            problem.no_com_descent = d;
+        }
+
         // The jump's variables range from centimetres (fibre lengths) to
         // tens of rad/s (speeds): the SQP works in variables scaled by
         // their bounds (Moco's scale_variables_using_bounds).
@@ -644,6 +752,7 @@ impl SolveStudy {
             transcription,
             shooting,
             guess,
+            problem,
             settings,
             output_directory,
             forward_check,
@@ -724,6 +833,14 @@ impl SolveConfig {
         if let Some(n) = o.num_mesh_intervals {
             self.transcription.num_mesh_intervals =
                 check_mesh_intervals(n).map_err(|r| err("--num-mesh-intervals", r))?;
+            self.problem
+                .check_mesh(self.transcription.num_mesh_intervals)
+                .map_err(|r| {
+                    err(
+                        "--num-mesh-intervals",
+                        format!("the study's problem.no_countermovement_nodes: {r}"),
+                    )
+                })?;
         }
         if let Some(n) = o.max_iterations {
             if let Some(n) = check_max_iterations(n).map_err(|r| err("--max-iterations", r))? {
@@ -1386,5 +1503,61 @@ mod tests {
         })
         .unwrap();
         assert!(c.ignored.iter().any(|f| f == "backend"), "{:?}", c.ignored);
+    }
+
+    #[test]
+    fn problem_settings_reach_the_ocp_and_bad_ones_name_the_field() {
+        // Absent: the paper's problem, as before the section existed.
+        let c = SolveConfig::builtin().unwrap();
+        assert_eq!(c.problem.ocp_options(28), crate::ocp::OcpOptions::default());
+        assert_eq!(c.problem.ocp_options(4).no_countermovement_nodes, 4);
+        let c = resolved(
+            r#"{"problem": {"time_final_bounds": [0.2, 0.39], "no_countermovement_nodes": 12, "no_com_descent": false}}"#,
+        );
+        let o = c.problem.ocp_options(28);
+        assert_eq!(o.final_time_bounds, [0.2, 0.39]);
+        assert_eq!(o.no_countermovement_nodes, 12);
+        assert!(!o.no_com_descent);
+        // Moco's property name and leap's own both read.
+        let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.3]}}"#);
+        assert_eq!(c.problem.final_time_bounds, [0.3, 0.3]);
+        for (json, want) in [
+            (
+                r#"{"problem": {"time_final_bounds": [0.4, 0.2]}}"#,
+                "0 < t_min ≤ t_max",
+            ),
+            (
+                r#"{"problem": {"time_final_bounds": [0, 0.5]}}"#,
+                "0 < t_min ≤ t_max",
+            ),
+            (r#"{"problem": {"time_final_bounds": [0.3]}}"#, "got 1"),
+            (r#"{"problem": {"no_countermovement_nodes": -3}}"#, "got -3"),
+        ] {
+            let (f, r) = field_error(json);
+            assert!(f.starts_with("problem."), "{json}: {f}");
+            assert!(r.contains(want), "{json}: {r}");
+        }
+        let (f, r) = field_error(
+            r#"{"mesh": {"num_mesh_intervals": 8}, "problem": {"no_countermovement_nodes": 9}}"#,
+        );
+        assert_eq!(f, "problem.no_countermovement_nodes");
+        assert!(r.contains("the mesh has 8"), "{r}");
+        let e = SolveStudy::from_json_str(r#"{"problem": {"tf_max": 1}}"#, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("tf_max"), "{e}");
+        // A coarser mesh on the command line is checked against the rows.
+        let mut c = resolved(r#"{"problem": {"no_countermovement_nodes": 7}}"#);
+        let e = override_error(
+            &mut c,
+            Overrides {
+                num_mesh_intervals: Some(6),
+                ..Default::default()
+            },
+        );
+        assert!(
+            e.contains("--num-mesh-intervals") && e.contains("no_countermovement_nodes"),
+            "{e}"
+        );
     }
 }

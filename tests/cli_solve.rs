@@ -452,6 +452,14 @@ fn example_study_parses() {
     assert_eq!(c.transcription.num_mesh_intervals, 28);
     assert_eq!(c.model, Path::new("models/jumper.json"));
     assert_eq!(c.method, leap::study::Method::Collocation);
+    // Written out, the problem section is the built-in study's.
+    assert_eq!(
+        c.problem.ocp_options(28),
+        leap::study::SolveConfig::builtin()
+            .unwrap()
+            .problem
+            .ocp_options(28)
+    );
     let p = Path::new("models/jump_shooting.json");
     let c = leap::study::SolveStudy::from_file(p)
         .unwrap()
@@ -577,6 +585,18 @@ fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
             "expected a JSON object, got an array",
         ),
         (
+            "problem_tf",
+            r#"{"model": "MODEL", "problem": {"time_final_bounds": [0.5, 0.2]}}"#,
+            "problem.time_final_bounds",
+            "need 0 < t_min ≤ t_max (seconds, finite), got [0.5, 0.2]",
+        ),
+        (
+            "problem_rows",
+            r#"{"model": "MODEL", "mesh": {"num_mesh_intervals": 4}, "problem": {"no_countermovement_nodes": 5}}"#,
+            "problem.no_countermovement_nodes",
+            "5 rows need 5 mesh intervals, the mesh has 4",
+        ),
+        (
             "mesh_huge",
             r#"{"model": "MODEL", "mesh": {"num_mesh_intervals": 100000}}"#,
             "mesh.num_mesh_intervals",
@@ -597,6 +617,64 @@ fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
         );
         assert!(!out.exists(), "{tag}: {out:?} was created");
         std::fs::remove_dir_all(study.parent().unwrap()).ok();
+    }
+}
+
+/// The study's `problem` section reaches the problem either method
+/// solves: t_f stays within its bounds (the bang-bang guess lifts off at
+/// about 0.27 s, above the bound), and eq. 4's rows and the rows Ẏ_C ≥ 0
+/// (one per node) come and go with their settings.
+#[test]
+fn problem_settings_reach_both_methods() {
+    let solve = |tag: &str, method: &str, problem: &str| {
+        let study = study_file(
+            tag,
+            &format!(
+                r#"{{"model": "MODEL", "mesh": {{"num_mesh_intervals": 4}}, "problem": {problem}}}"#
+            ),
+        );
+        let out = study.parent().unwrap().join("out");
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["solve", study.to_str().unwrap(), "--method", method])
+            .args([
+                "--max-iterations",
+                "2",
+                "--no-forward-check",
+                "--json",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{tag}: {err}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        std::fs::remove_dir_all(study.parent().unwrap()).ok();
+        v
+    };
+    for method in ["collocation", "shooting"] {
+        let paper = solve(&format!("problem_paper_{method}"), method, "{}");
+        assert_eq!(paper["time_final_bounds"], serde_json::json!([0.1, 1.0]));
+        assert_eq!(paper["no_countermovement_nodes"].as_u64(), Some(4));
+        assert_eq!(paper["no_com_descent"].as_bool(), Some(true));
+        let tf = paper["final_time_s"].as_f64().unwrap();
+        assert!(tf > 0.2, "{method}: t_f {tf} without the bound");
+
+        let bounded = solve(
+            &format!("problem_bounded_{method}"),
+            method,
+            r#"{"time_final_bounds": [0.1, 0.2], "no_countermovement_nodes": 1, "no_com_descent": false}"#,
+        );
+        let tf = bounded["final_time_s"].as_f64().unwrap();
+        assert!(tf <= 0.2 + 1e-12, "{method}: t_f {tf} above its bound 0.2");
+        assert_eq!(bounded["time_final_bounds"], serde_json::json!([0.1, 0.2]));
+        assert_eq!(bounded["no_countermovement_nodes"].as_u64(), Some(1));
+        assert_eq!(bounded["no_com_descent"].as_bool(), Some(false));
+        // 3 fewer rows of eq. 4 and no row Ẏ_C ≥ 0 at the 4 nodes.
+        let rows = |v: &serde_json::Value| v["constraints"].as_u64().unwrap();
+        assert_eq!(rows(&paper) - rows(&bounded), 3 + 4, "{method}");
+        assert_eq!(paper["variables"], bounded["variables"], "{method}");
     }
 }
 
