@@ -743,3 +743,81 @@ fn an_interrupt_stops_the_solve_at_its_next_iteration() {
     assert_eq!(r.x, x0);
     assert!(!r.status.success());
 }
+
+/// The Maratos example (Nocedal & Wright 2006, Example 15.4): min
+/// 2(x₁² + x₂² − 1) − x₁ on the unit circle, f* = −1 at (1, 0). From a
+/// point on the circle the full SQP step leaves it and raises both f and
+/// the violation, so the step is rejected and a second-order correction
+/// taken.
+struct Maratos;
+impl AdProblem for Maratos {
+    fn name(&self) -> String {
+        "maratos".into()
+    }
+    fn num_variables(&self) -> usize {
+        2
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(f64::NEG_INFINITY);
+        u.fill(f64::INFINITY);
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l[0] = 0.0;
+        u[0] = 0.0;
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        let t: f64 = 0.3;
+        x.copy_from_slice(&[t.cos(), t.sin()]);
+    }
+    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
+        let r = x[0] * x[0] + x[1] * x[1] - D::from(1.0);
+        c[0] = r;
+        r * 2.0 - x[0]
+    }
+}
+
+/// The history's step norm is the step taken: after a second-order
+/// correction the distance between the iterates, not the rejected QP
+/// step's length (checked against the iterates of the same solve stopped
+/// one iteration apart, in unscaled variables; `best_iterate_violation` 0
+/// returns the last iterate even where an earlier one, the start on the
+/// circle, was exactly feasible).
+#[test]
+fn step_norm_after_a_second_order_correction_is_the_step_taken() {
+    let settings = |max_iterations| SqpSettings {
+        hessian: HessianMode::ExactConvexified,
+        max_iterations,
+        nlp_scaling: false,
+        scale_variables_using_bounds: false,
+        best_iterate_violation: 0.0,
+        ..Default::default()
+    };
+    let full = solve(&mut AdNlp::new(Maratos), &settings(100));
+    assert_eq!(full.status, SqpStatus::Solved, "{}", full.message);
+    assert!((full.objective + 1.0).abs() < 1e-8, "{}", full.objective);
+    let soc: Vec<usize> = full
+        .history
+        .iter()
+        .filter(|r| r.qp_mode == "soc")
+        .map(|r| r.iter)
+        .collect();
+    assert!(!soc.is_empty(), "no second-order correction taken");
+    // Record k is iterate k and the step from it.
+    for &k in &soc {
+        let before = solve(&mut AdNlp::new(Maratos), &settings(k)).x;
+        let after = solve(&mut AdNlp::new(Maratos), &settings(k + 1)).x;
+        let moved = before
+            .iter()
+            .zip(&after)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let rec = full.history.iter().find(|r| r.iter == k).unwrap();
+        assert!(
+            (rec.step_norm - moved).abs() <= 1e-12 * moved.max(1.0),
+            "iteration {k}: step_norm {} but the iterate moved {moved}",
+            rec.step_norm
+        );
+    }
+}

@@ -371,7 +371,8 @@ pub struct IterationRecord {
     pub inf_du: f64,
     /// Scaled complementarity.
     pub complementarity: f64,
-    /// ‖d‖∞ of the accepted step.
+    /// ∞-norm of the step taken (scaled variables): α‖d‖∞, or after a
+    /// second-order correction the distance to the point it reached.
     pub step_norm: f64,
     /// The step bound Δ of the QP (|d_j| ≤ Δ).
     pub step_bound: f64,
@@ -1739,7 +1740,8 @@ impl<'s> Solver<'s> {
                 && ms.inf_du <= st.acceptable_convergence_tolerance
                 && ms.compl <= st.acceptable_convergence_tolerance;
             acceptable_count = if acceptable { acceptable_count + 1 } else { 0 };
-            if inf_units <= st.best_iterate_violation
+            if st.best_iterate_violation > 0.0
+                && inf_units <= st.best_iterate_violation
                 && best.as_ref().is_none_or(|b: &BestIterate| p.f < b.f)
             {
                 best = Some(BestIterate {
@@ -2239,20 +2241,20 @@ impl<'s> Solver<'s> {
             rec.line_search_s = t.elapsed().as_secs_f64() - soc_qp_s;
             time.line_search_s += rec.line_search_s;
             rec.ls_trials = trials;
-            rec.step_norm = dnorm * alpha;
-            last_step = rec.step_norm.max(1e-12 * scale_x);
-            rec.alpha = alpha;
-            // A full step that the step bound cut short proves no more
-            // than one the line search cut: the QP's own step was longer.
-            // The step taken is d, or after a second-order correction the
-            // correction QP's.
+            // The step taken: α·d, or after a second-order correction the
+            // correction QP's (the point it reached, not d).
             let taken = match &accepted {
                 Some((x, _, _)) if soc_used => x
                     .iter()
                     .zip(&p.x)
                     .fold(0.0f64, |m, (a, b)| m.max((a - b).abs())),
-                _ => dnorm,
+                _ => dnorm * alpha,
             };
+            rec.step_norm = taken;
+            last_step = taken.max(1e-12 * scale_x);
+            rec.alpha = alpha;
+            // A full step that the step bound cut short proves no more
+            // than one the line search cut: the QP's own step was longer.
             last_full_step = alpha == 1.0 && accepted.is_some() && taken < 0.999 * delta;
             rec.merit = phi0;
             if soc_used {
