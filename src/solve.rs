@@ -553,7 +553,7 @@ fn shooting_guess_from_file(sh: &Shooting, path: &Path) -> Result<Vec<f64>, Solv
         return Err(SolveError::Guess {
             file: path.into(),
             reason: format!(
-                "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the guess's last time is its t_f)"
+                "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)"
             ),
         });
     }
@@ -887,7 +887,7 @@ pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, Solv
     let [t_min, t_max] = tr.ocp.options.final_time_bounds;
     if !(t_min..=t_max).contains(&tf) {
         return Err(bad(format!(
-            "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the guess's last time is its t_f)"
+            "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)"
         )));
     }
     tr.guess_from_trajectory(&t.time, &states, &controls, tf)

@@ -260,7 +260,7 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         (
             "long",
             long,
-            format!("time: ends at {tf} s, outside the final time's bounds [0.1, 1] s (the guess's last time is its t_f)"),
+            format!("time: ends at {tf} s, outside the final time's bounds [0.1, 1] s (the study's problem.time_final_bounds; the guess's last time is its t_f)"),
         ),
         (
             "nan",
