@@ -131,6 +131,12 @@ enum Command {
         /// .sto file with every state and control column.
         #[arg(long)]
         guess: Option<String>,
+        /// Integrate the guess file's excitations on the mesh from the
+        /// squat (t_f the file's), as the bang-bang guess is, instead of
+        /// resampling its states: a guess from another mesh then meets the
+        /// defects from the start.
+        #[arg(long)]
+        integrate_guess: bool,
         /// midpoint-euler (default), trapezoidal, hermite-simpson or
         /// backward-euler (the last three with explicit fibre dynamics).
         #[arg(long)]
@@ -445,6 +451,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             num_mesh_intervals,
             max_iterations,
             guess,
+            integrate_guess,
             scheme,
             fiber_dynamics,
             hessian,
@@ -461,6 +468,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 num_mesh_intervals,
                 max_iterations,
                 guess,
+                integrate_guess,
                 scheme,
                 fiber_dynamics,
                 hessian,

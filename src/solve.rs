@@ -311,34 +311,51 @@ pub fn run(
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
+    // A guess's excitations integrated on the mesh, its states replaced.
+    let mut integrate = |tr: &mut Transcription,
+                         v: &mut Vec<f64>,
+                         progress: &mut dyn FnMut(&str)|
+     -> Result<(), SolveError> {
+        let started = std::time::Instant::now();
+        let m = tr
+            .integrate_on_mesh(v)
+            .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
+        progress(&format!(
+            "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
+            m.converged,
+            m.intervals,
+            crate::transcription::MESH_NEWTON_TOL,
+            started.elapsed().as_secs_f64(),
+            m.worst_defect,
+            m.worst_interval,
+            ocp.eq
+                .state_names()
+                .get(m.worst_state)
+                .map_or("?", |s| s.as_str())
+        ));
+        mesh_integration = Some(m);
+        Ok(())
+    };
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
             let (mut v, s) = tr.bang_bang_guess()?;
-            let started = std::time::Instant::now();
-            let m = tr
-                .integrate_on_mesh(&mut v)
-                .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
-            progress(&format!(
-                "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
-                m.converged,
-                m.intervals,
-                crate::transcription::MESH_NEWTON_TOL,
-                started.elapsed().as_secs_f64(),
-                m.worst_defect,
-                m.worst_interval,
-                ocp.eq
-                    .state_names()
-                    .get(m.worst_state)
-                    .map_or("?", |s| s.as_str())
-            ));
-            mesh_integration = Some(m);
+            integrate(&mut tr, &mut v, progress)?;
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang jump, resampled onto the mesh");
             let (v, s) = tr.bang_bang_guess()?;
             (v, "bang-bang-resampled".to_string(), Some(s.jump_height_m))
+        }
+        GuessChoice::File(p) if config.integrate_guess => {
+            progress(&format!(
+                "initial guess: {}, its excitations integrated on the mesh",
+                p.display()
+            ));
+            let mut v = guess_from_file(&tr, p)?;
+            integrate(&mut tr, &mut v, progress)?;
+            (v, p.display().to_string(), None)
         }
         GuessChoice::File(p) => {
             progress(&format!("initial guess: {}", p.display()));

@@ -143,6 +143,13 @@ pub struct SolveStudy {
     /// last time.
     #[serde(default, alias = "guess_file")]
     pub guess: Option<String>,
+    /// With a guess file: integrate its excitations on the mesh from the
+    /// squat, t_f its last time (as the bang-bang guess is), instead of
+    /// resampling its states (default false). A solution of another mesh
+    /// resampled violates the new mesh's defects by the difference of the
+    /// discretisations; integrated, it meets them from the start.
+    #[serde(default)]
+    pub integrate_guess: Option<bool>,
     #[serde(default)]
     pub tolerances: TolerancesSpec,
     /// "exact" (exact element Hessians with negative eigenvalues clipped,
@@ -366,6 +373,22 @@ fn parse_guess(g: &str, path: PathBuf) -> Result<GuessChoice, String> {
     }
 }
 
+/// Whether a guess's excitations can be integrated on the mesh on request:
+/// only a file's (the bang-bang guess always is, its resampled form never).
+fn check_integrate_guess(guess: &GuessChoice) -> Result<(), String> {
+    match guess {
+        GuessChoice::File(_) => Ok(()),
+        GuessChoice::BangBang => Err(
+            "applies to a guess file; the guess 'bang-bang' is integrated on the mesh already"
+                .into(),
+        ),
+        GuessChoice::BangBangResampled => Err(
+            "applies to a guess file; the guess 'bang-bang-resampled' is the bang-bang jump not integrated on the mesh ('bang-bang' is)"
+                .into(),
+        ),
+    }
+}
+
 /// The forward check, resolved.
 #[derive(Debug, Clone, Copy)]
 pub struct ForwardCheck {
@@ -387,6 +410,9 @@ pub struct SolveConfig {
     /// Method "shooting"'s settings (its intervals are the mesh's).
     pub shooting: crate::shooting::ShootingOptions,
     pub guess: GuessChoice,
+    /// A guess file's excitations integrated on the mesh
+    /// ([`SolveStudy::integrate_guess`]).
+    pub integrate_guess: bool,
     /// The jump problem's settings (`problem` in the study).
     pub problem: ProblemSettings,
     pub settings: SqpSettings,
@@ -419,6 +445,8 @@ pub struct Overrides {
     pub max_iterations: Option<i64>,
     /// "bang-bang" or a file.
     pub guess: Option<String>,
+    /// `--integrate-guess`.
+    pub integrate_guess: bool,
     pub scheme: Option<String>,
     pub fiber_dynamics: Option<String>,
     pub hessian: Option<String>,
@@ -539,6 +567,7 @@ impl SolveStudy {
                 "backend",
             ),
             (resampled, "guess"),
+            (self.integrate_guess == Some(true), "integrate_guess"),
             (
                 self.hessian.as_deref().is_some_and(|h| h != "bfgs"),
                 "hessian",
@@ -598,6 +627,10 @@ impl SolveStudy {
             None => GuessChoice::BangBang,
             Some(g) => parse_guess(g, rel(g)).map_err(|r| err("guess", r))?,
         };
+        let integrate_guess = self.integrate_guess.unwrap_or(false);
+        if integrate_guess {
+            check_integrate_guess(&guess).map_err(|r| err("integrate_guess", r))?;
+        }
 
         let mut problem = ProblemSettings::default();
         let p = &self.problem;
@@ -752,6 +785,7 @@ impl SolveStudy {
             transcription,
             shooting,
             guess,
+            integrate_guess,
             problem,
             settings,
             output_directory,
@@ -811,6 +845,7 @@ impl SolveConfig {
                     if self.guess == GuessChoice::BangBangResampled {
                         self.guess = GuessChoice::BangBang;
                     }
+                    self.integrate_guess = false;
                 }
             }
         }
@@ -824,6 +859,7 @@ impl SolveConfig {
                     "--backend",
                 ),
                 (resampled, "--guess"),
+                (o.integrate_guess, "--integrate-guess"),
             ] {
                 if given {
                     return Err(err(option, COLLOCATION_ONLY.into()));
@@ -882,6 +918,21 @@ impl SolveConfig {
         })?;
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
+        }
+        if o.integrate_guess {
+            self.integrate_guess = true;
+        }
+        if self.integrate_guess {
+            check_integrate_guess(&self.guess).map_err(|r| {
+                err(
+                    if o.integrate_guess {
+                        "--integrate-guess"
+                    } else {
+                        "--guess"
+                    },
+                    r,
+                )
+            })?;
         }
         if o.no_forward_check {
             self.forward_check = None;
@@ -1558,6 +1609,69 @@ mod tests {
         assert!(
             e.contains("--num-mesh-intervals") && e.contains("no_countermovement_nodes"),
             "{e}"
+        );
+    }
+
+    #[test]
+    fn integrate_guess_applies_to_guess_files_of_collocation_only() {
+        let file = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/data/controls/jump_optimal.sto"
+        );
+        let c = resolved(&format!(
+            r#"{{"guess": "{file}", "integrate_guess": true}}"#
+        ));
+        assert!(c.integrate_guess);
+        assert!(!resolved(&format!(r#"{{"guess": "{file}"}}"#)).integrate_guess);
+        for g in ["bang-bang", "bang-bang-resampled"] {
+            let (f, r) = field_error(&format!(r#"{{"guess": "{g}", "integrate_guess": true}}"#));
+            assert_eq!(f, "integrate_guess");
+            assert!(r.contains("applies to a guess file"), "{r}");
+        }
+        let (f, r) = field_error(r#"{"method": "shooting", "integrate_guess": true}"#);
+        assert_eq!(f, "integrate_guess");
+        assert!(r.contains("collocation"), "{r}");
+        // On the command line: a file needed, collocation only; a
+        // collocation study's setting is listed as ignored by shooting.
+        let mut c = SolveConfig::builtin().unwrap();
+        let e = override_error(
+            &mut c,
+            Overrides {
+                integrate_guess: true,
+                ..Default::default()
+            },
+        );
+        assert!(
+            e.contains("--integrate-guess") && e.contains("guess file"),
+            "{e}"
+        );
+        let mut c = SolveConfig::builtin().unwrap();
+        let e = override_error(
+            &mut c,
+            Overrides {
+                method: Some("shooting".into()),
+                guess: Some(file.into()),
+                integrate_guess: true,
+                ..Default::default()
+            },
+        );
+        assert!(
+            e.contains("--integrate-guess") && e.contains("collocation"),
+            "{e}"
+        );
+        let mut c = resolved(&format!(
+            r#"{{"guess": "{file}", "integrate_guess": true}}"#
+        ));
+        c.apply(&Overrides {
+            method: Some("shooting".into()),
+            ..Default::default()
+        })
+        .unwrap();
+        assert!(!c.integrate_guess);
+        assert!(
+            c.ignored.iter().any(|f| f == "integrate_guess"),
+            "{:?}",
+            c.ignored
         );
     }
 }

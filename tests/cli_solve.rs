@@ -678,6 +678,74 @@ fn problem_settings_reach_both_methods() {
     }
 }
 
+/// A solution of a 4-interval mesh as the guess of a 6-interval one:
+/// resampled, its states violate the new mesh's defects most (the largest
+/// violation of the first iterate is a defect row); with
+/// `--integrate-guess` its excitations are integrated on the new mesh,
+/// every interval's defects meet the mesh Newton tolerance (1e-10) and the
+/// largest violation lies elsewhere.
+#[test]
+fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
+    let dir = fresh_dir("integrate_guess");
+    let coarse = dir.join("coarse");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "3",
+        ])
+        .args(["--no-forward-check", "--json", "--out"])
+        .arg(&coarse)
+        .output()
+        .unwrap();
+    assert!(matches!(o.status.code(), Some(0 | 1)));
+    let guess = coarse.join("jump_solution.sto");
+    let first_row = |integrate: bool| {
+        let out = dir.join(format!("fine_{integrate}"));
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args([
+                "solve",
+                "--num-mesh-intervals",
+                "6",
+                "--max-iterations",
+                "1",
+            ])
+            .args(["--no-forward-check", "--json", "--guess"])
+            .arg(&guess)
+            .args(integrate.then_some("--integrate-guess"))
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let history = std::fs::read_to_string(out.join("jump_history.csv")).unwrap();
+        let mut lines = history.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let row: Vec<String> = lines.next().unwrap().split(',').map(String::from).collect();
+        let col = header
+            .iter()
+            .position(|h| *h == "max_violation_constraint")
+            .unwrap();
+        (v, row[col].clone())
+    };
+    let (resampled, worst) = first_row(false);
+    assert!(resampled["guess_mesh_integration"].is_null());
+    assert!(worst.starts_with("defect"), "resampled: {worst}");
+    let (integrated, worst) = first_row(true);
+    let m = &integrated["guess_mesh_integration"];
+    assert_eq!(m["intervals"].as_u64(), Some(6));
+    assert_eq!(m["converged"].as_u64(), Some(6), "{m}");
+    assert!(m["worst_defect"].as_f64().unwrap() <= 1e-10, "{m}");
+    assert!(!worst.starts_with("defect"), "integrated: {worst}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn num_mesh_intervals_beyond_the_maximum_is_refused_without_a_panic() {
     for args in [
