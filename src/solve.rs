@@ -353,7 +353,7 @@ pub fn run(
                 "initial guess: {}, its excitations integrated on the mesh",
                 p.display()
             ));
-            let mut v = guess_from_file(&tr, p)?;
+            let mut v = guess_from_excitations_file(&tr, p)?;
             integrate(&mut tr, &mut v, progress)?;
             (v, p.display().to_string(), None)
         }
@@ -879,6 +879,24 @@ pub fn solution_table(
 /// and strictly increasing over at least 2 rows, every value used finite,
 /// activations in [0, 1] and fibre lengths positive.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
+    guess_from_file_with(tr, path, true)
+}
+
+/// The guess of a file's excitations alone (a solution, or a controls file
+/// as `leap simulate` reads it), every node's states the squat's, for
+/// [`Transcription::integrate_on_mesh`] to replace; t_f its last time.
+pub fn guess_from_excitations_file(
+    tr: &Transcription,
+    path: &Path,
+) -> Result<Vec<f64>, SolveError> {
+    guess_from_file_with(tr, path, false)
+}
+
+fn guess_from_file_with(
+    tr: &Transcription,
+    path: &Path,
+    with_states: bool,
+) -> Result<Vec<f64>, SolveError> {
     let t = crate::io::read_states(&tr.ocp.eq, path)?;
     let bad = |reason: String| SolveError::Guess {
         file: path.into(),
@@ -891,8 +909,12 @@ pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, Solv
         )));
     }
     let eq = &tr.ocp.eq;
-    let missing = "missing (a guess needs every state and control column)";
-    let states = t.finite_columns(path, &eq.state_names(), missing)?;
+    let missing = "missing (a guess needs every state and control column; with integrate_guess the control columns alone)";
+    let states = if with_states {
+        t.finite_columns(path, &eq.state_names(), missing)?
+    } else {
+        vec![tr.ocp.x0().to_vec(); t.time.len()]
+    };
     // Excitations as a controls file reads them (finite, in [0, 1]).
     let muscles: Vec<&str> = eq
         .muscles

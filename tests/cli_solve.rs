@@ -683,7 +683,7 @@ fn problem_settings_reach_both_methods() {
 /// violation of the first iterate is a defect row); with
 /// `--integrate-guess` its excitations are integrated on the new mesh,
 /// every interval's defects meet the mesh Newton tolerance (1e-10) and the
-/// largest violation lies elsewhere.
+/// largest violation lies elsewhere. The same from a controls file.
 #[test]
 fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
     let dir = fresh_dir("integrate_guess");
@@ -702,20 +702,16 @@ fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
         .output()
         .unwrap();
     assert!(matches!(o.status.code(), Some(0 | 1)));
-    let guess = coarse.join("jump_solution.sto");
-    let first_row = |integrate: bool| {
+    let solution = coarse.join("jump_solution.sto");
+    let first_row = |guess: &Path, intervals: &str, integrate: bool| {
         let out = dir.join(format!("fine_{integrate}"));
+        let _ = std::fs::remove_dir_all(&out);
         let o = Command::cargo_bin("leap")
             .unwrap()
-            .args([
-                "solve",
-                "--num-mesh-intervals",
-                "6",
-                "--max-iterations",
-                "1",
-            ])
+            .args(["solve", "--num-mesh-intervals", intervals])
+            .args(["--max-iterations", "1"])
             .args(["--no-forward-check", "--json", "--guess"])
-            .arg(&guess)
+            .arg(guess)
             .args(integrate.then_some("--integrate-guess"))
             .arg("--out")
             .arg(&out)
@@ -734,15 +730,33 @@ fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
             .unwrap();
         (v, row[col].clone())
     };
-    let (resampled, worst) = first_row(false);
+    let (resampled, worst) = first_row(&solution, "6", false);
     assert!(resampled["guess_mesh_integration"].is_null());
     assert!(worst.starts_with("defect"), "resampled: {worst}");
-    let (integrated, worst) = first_row(true);
+    let (integrated, worst) = first_row(&solution, "6", true);
     let m = &integrated["guess_mesh_integration"];
     assert_eq!(m["intervals"].as_u64(), Some(6));
     assert_eq!(m["converged"].as_u64(), Some(6), "{m}");
     assert!(m["worst_defect"].as_f64().unwrap() <= 1e-10, "{m}");
     assert!(!worst.starts_with("defect"), "integrated: {worst}");
+    // Integrated, the excitations alone are read: also a controls file's
+    // (the default jump's optimal excitations, as OpenSim reads them),
+    // which without --integrate-guess lacks the states.
+    let controls = Path::new("tests/data/controls/jump_optimal.sto");
+    let (integrated, _) = first_row(controls, "28", true);
+    let m = &integrated["guess_mesh_integration"];
+    assert_eq!(m["intervals"].as_u64(), Some(28), "{m}");
+    let err = refused(&[
+        "solve",
+        "--guess",
+        controls.to_str().unwrap(),
+        "--out",
+        dir.join("refused").to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains("missing") && err.contains("integrate_guess"),
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
