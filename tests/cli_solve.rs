@@ -624,6 +624,29 @@ fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
 /// solves: t_f stays within its bounds (the bang-bang guess lifts off at
 /// about 0.27 s, above the bound), and eq. 4's rows and the rows Ẏ_C ≥ 0
 /// (one per node) come and go with their settings.
+/// `leap solve ARGS --no-forward-check --json --out OUT`, which must end
+/// solved or stopped (exit 0 or 1): its JSON.
+fn solve_json(args: &[&std::ffi::OsStr], out: &Path) -> serde_json::Value {
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("solve")
+        .args(args)
+        .args(["--no-forward-check", "--json", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{args:?}: {err}");
+    serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// Command-line words as `solve_json` takes them.
+fn args<'a>(a: &[&'a str]) -> Vec<&'a std::ffi::OsStr> {
+    a.iter()
+        .map(|s: &&'a str| std::ffi::OsStr::new(*s))
+        .collect()
+}
+
 #[test]
 fn problem_settings_reach_both_methods() {
     let solve = |tag: &str, method: &str, problem: &str| {
@@ -634,22 +657,16 @@ fn problem_settings_reach_both_methods() {
             ),
         );
         let out = study.parent().unwrap().join("out");
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .args(["solve", study.to_str().unwrap(), "--method", method])
-            .args([
-                "--max-iterations",
-                "2",
-                "--no-forward-check",
-                "--json",
-                "--out",
-            ])
-            .arg(&out)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(matches!(o.status.code(), Some(0 | 1)), "{tag}: {err}");
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let v = solve_json(
+            &[
+                study.as_os_str(),
+                "--method".as_ref(),
+                method.as_ref(),
+                "--max-iterations".as_ref(),
+                "2".as_ref(),
+            ],
+            &out,
+        );
         std::fs::remove_dir_all(study.parent().unwrap()).ok();
         v
     };
@@ -688,38 +705,20 @@ fn problem_settings_reach_both_methods() {
 fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
     let dir = fresh_dir("integrate_guess");
     let coarse = dir.join("coarse");
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args([
-            "solve",
-            "--num-mesh-intervals",
-            "4",
-            "--max-iterations",
-            "3",
-        ])
-        .args(["--no-forward-check", "--json", "--out"])
-        .arg(&coarse)
-        .output()
-        .unwrap();
-    assert!(matches!(o.status.code(), Some(0 | 1)));
+    solve_json(
+        &args(&["--num-mesh-intervals", "4", "--max-iterations", "3"]),
+        &coarse,
+    );
     let solution = coarse.join("jump_solution.sto");
     let first_row = |guess: &Path, intervals: &str, integrate: bool| {
         let out = dir.join(format!("fine_{integrate}"));
         let _ = std::fs::remove_dir_all(&out);
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .args(["solve", "--num-mesh-intervals", intervals])
-            .args(["--max-iterations", "1"])
-            .args(["--no-forward-check", "--json", "--guess"])
-            .arg(guess)
-            .args(integrate.then_some("--integrate-guess"))
-            .arg("--out")
-            .arg(&out)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(matches!(o.status.code(), Some(0 | 1)), "{err}");
-        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let mut a = args(&["--num-mesh-intervals", intervals, "--max-iterations", "1"]);
+        a.extend(["--guess".as_ref(), guess.as_os_str()]);
+        if integrate {
+            a.push("--integrate-guess".as_ref());
+        }
+        let v = solve_json(&a, &out);
         let history = std::fs::read_to_string(out.join("jump_history.csv")).unwrap();
         let mut lines = history.lines();
         let header: Vec<&str> = lines.next().unwrap().split(',').collect();
