@@ -128,13 +128,14 @@ enum Command {
         #[arg(long, allow_negative_numbers = true)]
         max_iterations: Option<i64>,
         /// "bang-bang" (integrated on the mesh), "bang-bang-resampled" or a
-        /// .sto file with every state and control column.
+        /// .sto file with every state and control column (the control
+        /// columns alone with --integrate-guess or method shooting).
         #[arg(long)]
         guess: Option<String>,
         /// Integrate the guess file's excitations on the mesh from the
         /// squat (t_f the file's), as the bang-bang guess is, instead of
         /// resampling its states: a guess from another mesh then meets the
-        /// defects from the start.
+        /// defects from the start (a guess file, collocation only).
         #[arg(long)]
         integrate_guess: bool,
         /// midpoint-euler (default), trapezoidal, hermite-simpson or

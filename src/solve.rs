@@ -209,7 +209,8 @@ pub struct SolveReport {
     pub backend: &'static str,
     pub hessian: HessianMode,
     /// The problem solved (the study's `problem`): bounds on t_f (s), the
-    /// rows of eq. 4, and whether Ẏ_C ≥ 0 held at every node.
+    /// number of eq. 4's rows, and whether the rows Ẏ_C ≥ 0 at every node
+    /// were imposed.
     pub time_final_bounds: [f64; 2],
     pub no_countermovement_nodes: usize,
     pub no_com_descent: bool,
@@ -354,7 +355,10 @@ pub fn run(
                 p.display()
             ));
             let mut v = guess_from_excitations_file(&tr, p)?;
-            integrate(&mut tr, &mut v, progress)?;
+            integrate(&mut tr, &mut v, progress).map_err(|e| SolveError::Guess {
+                file: p.clone(),
+                reason: format!("its excitations integrated on the mesh: {e}"),
+            })?;
             (v, p.display().to_string(), None)
         }
         GuessChoice::File(p) => {
@@ -909,7 +913,7 @@ fn guess_from_file_with(
         )));
     }
     let eq = &tr.ocp.eq;
-    let missing = "missing (a guess needs every state and control column; with integrate_guess the control columns alone)";
+    let missing = "missing (a guess needs every state and control column; with integrate_guess (--integrate-guess) the control columns alone)";
     let states = if with_states {
         t.finite_columns(path, &eq.state_names(), missing)?
     } else {

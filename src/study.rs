@@ -206,9 +206,10 @@ pub struct MeshSpec {
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct ProblemSpec {
-    /// Bounds [t_min, t_max] on the final time t_f, the lift-off, in
-    /// seconds (Moco's `MocoPhase` property `time_final_bounds`; default
-    /// [0.1, 1.0]). The guess's t_f is moved into them.
+    /// Bounds [t_min, t_max] on the final time t_f in seconds (Moco's
+    /// `MocoPhase` property `time_final_bounds`; default [0.1, 1.0]; one
+    /// value fixes t_f, as in Moco). The bang-bang guess's t_f is moved
+    /// into them; a guess file must end inside them.
     #[serde(default, alias = "final_time_bounds")]
     pub time_final_bounds: Option<Vec<f64>>,
     /// How many of eq. 4's no-countermovement rows Ÿ_C(t_n) ≤ Ÿ_C(t_{n+1})
@@ -271,13 +272,16 @@ impl ProblemSettings {
 
 /// Final-time bounds as a study file gives them.
 fn parse_time_bounds(b: &[f64]) -> Result<[f64; 2], String> {
-    let [t0, t1] = b else {
-        return Err(format!(
-            "need two values [t_min, t_max] in seconds, got {}",
-            b.len()
-        ));
+    let (t0, t1) = match b {
+        [t] => (*t, *t),
+        [t0, t1] => (*t0, *t1),
+        _ => {
+            return Err(format!(
+                "need [t_min, t_max] in seconds (or one value, a fixed t_f), got {} values",
+                b.len()
+            ))
+        }
     };
-    let (t0, t1) = (*t0, *t1);
     if !(t0.is_finite() && t1.is_finite() && t0 > 0.0 && t0 <= t1) {
         return Err(format!(
             "need 0 < t_min ≤ t_max (seconds, finite), got [{t0}, {t1}]"
@@ -918,21 +922,17 @@ impl SolveConfig {
         })?;
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
+            // A bang-bang guess on the command line replaces the study's
+            // file, and with it the file's integrate_guess.
+            if !matches!(self.guess, GuessChoice::File(_)) && !o.integrate_guess {
+                self.integrate_guess = false;
+            }
         }
         if o.integrate_guess {
             self.integrate_guess = true;
         }
         if self.integrate_guess {
-            check_integrate_guess(&self.guess).map_err(|r| {
-                err(
-                    if o.integrate_guess {
-                        "--integrate-guess"
-                    } else {
-                        "--guess"
-                    },
-                    r,
-                )
-            })?;
+            check_integrate_guess(&self.guess).map_err(|r| err("--integrate-guess", r))?;
         }
         if o.no_forward_check {
             self.forward_check = None;
@@ -1570,7 +1570,10 @@ mod tests {
         assert_eq!(o.no_countermovement_nodes, 12);
         assert!(!o.no_com_descent);
         // Moco's property name and leap's own both read.
-        let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.3]}}"#);
+        let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.35]}}"#);
+        assert_eq!(c.problem.final_time_bounds, [0.3, 0.35]);
+        // One value fixes t_f, as in Moco.
+        let c = resolved(r#"{"problem": {"time_final_bounds": [0.3]}}"#);
         assert_eq!(c.problem.final_time_bounds, [0.3, 0.3]);
         for (json, want) in [
             (
@@ -1581,7 +1584,10 @@ mod tests {
                 r#"{"problem": {"time_final_bounds": [0, 0.5]}}"#,
                 "0 < t_min ≤ t_max",
             ),
-            (r#"{"problem": {"time_final_bounds": [0.3]}}"#, "got 1"),
+            (
+                r#"{"problem": {"time_final_bounds": [0.3, 0.4, 0.5]}}"#,
+                "got 3 values",
+            ),
             (r#"{"problem": {"no_countermovement_nodes": -3}}"#, "got -3"),
         ] {
             let (f, r) = field_error(json);
@@ -1673,5 +1679,27 @@ mod tests {
             "{:?}",
             c.ignored
         );
+        // A bang-bang guess on the command line replaces the study's file
+        // and its integration; --integrate-guess with it is refused.
+        for g in ["bang-bang", "bang-bang-resampled"] {
+            let mut c = resolved(&format!(
+                r#"{{"guess": "{file}", "integrate_guess": true}}"#
+            ));
+            c.apply(&Overrides {
+                guess: Some(g.into()),
+                ..Default::default()
+            })
+            .unwrap();
+            assert!(!c.integrate_guess, "{g}");
+            let e = override_error(
+                &mut c,
+                Overrides {
+                    guess: Some(g.into()),
+                    integrate_guess: true,
+                    ..Default::default()
+                },
+            );
+            assert!(e.contains("--integrate-guess"), "{g}: {e}");
+        }
     }
 }

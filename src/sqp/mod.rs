@@ -2251,6 +2251,7 @@ impl<'s> Solver<'s> {
                 _ => dnorm * alpha,
             };
             rec.step_norm = taken;
+            // (A QP failure's retry bounds its step by this.)
             last_step = taken.max(1e-12 * scale_x);
             rec.alpha = alpha;
             // A full step that the step bound cut short proves no more
