@@ -312,36 +312,13 @@ pub fn run(
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
-    // A guess's excitations integrated on the mesh, its states replaced.
-    let mut integrate = |tr: &mut Transcription,
-                         v: &mut Vec<f64>,
-                         progress: &mut dyn FnMut(&str)|
-     -> Result<(), SolveError> {
-        let started = std::time::Instant::now();
-        let m = tr
-            .integrate_on_mesh(v)
-            .map_err(|e| crate::transcription::TranscriptionError::Guess(e.to_string()))?;
-        progress(&format!(
-            "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
-            m.converged,
-            m.intervals,
-            crate::transcription::MESH_NEWTON_TOL,
-            started.elapsed().as_secs_f64(),
-            m.worst_defect,
-            m.worst_interval,
-            ocp.eq
-                .state_names()
-                .get(m.worst_state)
-                .map_or("?", |s| s.as_str())
-        ));
-        mesh_integration = Some(m);
-        Ok(())
-    };
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
             let (mut v, s) = tr.bang_bang_guess()?;
-            integrate(&mut tr, &mut v, progress)?;
+            let m = integrate_guess_on_mesh(&mut tr, &mut v, progress)
+                .map_err(crate::transcription::TranscriptionError::Guess)?;
+            mesh_integration = Some(m);
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::BangBangResampled => {
@@ -355,10 +332,13 @@ pub fn run(
                 p.display()
             ));
             let mut v = guess_from_excitations_file(&tr, p)?;
-            integrate(&mut tr, &mut v, progress).map_err(|e| SolveError::Guess {
-                file: p.clone(),
-                reason: format!("its excitations integrated on the mesh: {e}"),
+            let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
+                SolveError::Guess {
+                    file: p.clone(),
+                    reason: format!("its excitations integrated on the mesh: {e}"),
+                }
             })?;
+            mesh_integration = Some(m);
             (v, p.display().to_string(), None)
         }
         GuessChoice::File(p) => {
@@ -403,6 +383,32 @@ pub fn run(
         (&mesh.time, &grf),
         progress,
     )
+}
+
+/// A guess's excitations integrated on the mesh, its states replaced
+/// ([`Transcription::integrate_on_mesh`]); one progress line on how it went.
+fn integrate_guess_on_mesh(
+    tr: &mut Transcription,
+    v: &mut [f64],
+    progress: &mut dyn FnMut(&str),
+) -> Result<crate::transcription::MeshIntegration, String> {
+    let started = std::time::Instant::now();
+    let m = tr.integrate_on_mesh(v).map_err(|e| e.to_string())?;
+    progress(&format!(
+        "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
+        m.converged,
+        m.intervals,
+        crate::transcription::MESH_NEWTON_TOL,
+        started.elapsed().as_secs_f64(),
+        m.worst_defect,
+        m.worst_interval,
+        tr.ocp
+            .eq
+            .state_names()
+            .get(m.worst_state)
+            .map_or("?", |s| s.as_str())
+    ));
+    Ok(m)
 }
 
 /// [`run`] for method "shooting" ([`crate::shooting`]).
