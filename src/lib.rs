@@ -18,6 +18,7 @@ pub mod hyperdual;
 pub mod integrator;
 pub mod io;
 pub mod laws;
+pub mod mesh_error;
 pub mod model;
 pub mod multibody;
 pub mod nlp;

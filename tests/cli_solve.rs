@@ -219,6 +219,25 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
         "leap simulate {hs}, forward check {hf}"
     );
 
+    // The mesh error: 4 intervals of about 75 ms are far too coarse for the
+    // jump (local errors of percents, the integrator's accuracy 1e-8); the
+    // largest is one of the intervals', named by a solution column.
+    let m = &v["mesh_error"];
+    let intervals = m["intervals"].as_array().unwrap();
+    assert_eq!(intervals.len(), 4, "{m}");
+    let errors: Vec<f64> = intervals
+        .iter()
+        .map(|i| i["relative_error"].as_f64().unwrap())
+        .collect();
+    let worst = m["largest_relative_error"].as_f64().unwrap();
+    assert_eq!(errors.iter().copied().fold(0.0, f64::max), worst);
+    assert!(worst > 1e-3, "{m}");
+    let k = m["worst_interval"].as_u64().unwrap() as usize;
+    assert_eq!(errors[k - 1], worst);
+    let sol = StoTable::read(&out.join("jump_solution.sto")).unwrap();
+    let state = intervals[k - 1]["state"].as_str().unwrap();
+    assert!(sol.labels.iter().any(|l| l == state), "{state}");
+
     assert!(files_in(&cwd).is_empty(), "{:?}", files_in(&cwd));
     let expected = [
         "jump_forward_controls.sto",
@@ -829,6 +848,13 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     );
     let d = v["forward_check_difference_m"].as_f64().unwrap();
     assert!(d.abs() < 0.01, "forward check {d} m from the prediction");
+    // Shooting's nodes are its integrator's (Dormand–Prince at 1e-8, the
+    // excitations linear between the nodes): the mesh error check, which
+    // restarts that integrator at every node, finds them at its accuracy.
+    let m = &v["mesh_error"];
+    assert_eq!(m["intervals"].as_array().map(Vec::len), Some(8), "{m}");
+    let worst = m["largest_relative_error"].as_f64().unwrap();
+    assert!(worst < 1e-6, "shooting's mesh error {worst}");
     assert_eq!(
         v["ignored_study_settings"],
         serde_json::json!(["mesh.scheme", "hessian"]),
