@@ -52,6 +52,13 @@ const FORWARD_FLIGHT_TIME: f64 = 1.0;
 /// (1 cm, the tolerance of Porsa et al.'s comparison that the issue asks for).
 pub const FORWARD_CHECK_TOLERANCE_M: f64 = 0.01;
 
+/// The offset of [`ForwardCheckReport::excitation_sensitivity`]: 0.1% of
+/// the full excitation. The default jump's forward jump moves by less than
+/// a millimetre (about linearly: excitations at their bounds make the
+/// change first-order); the long push-off of the problem without the
+/// paper's rule moves by 20 cm.
+pub const EXCITATION_OFFSET: f64 = 0.001;
+
 /// The accuracy at which [`SolveReport::mesh_error`] integrates each mesh
 /// interval: far below the local errors of a collocation mesh (1e-3 and up
 /// on the jump's meshes), and at shooting's own 1e-8.
@@ -116,11 +123,32 @@ pub struct ForwardCheckReport {
     pub summary: Option<JumpSummary>,
     /// The Rust-native Dormand–Prince 5(4) jump at accuracy 1e-6.
     pub rust_summary: Option<JumpSummary>,
+    /// How much the forward jump depends on the excitations: the same
+    /// Dormand–Prince jump with every excitation raised and lowered by
+    /// [`EXCITATION_OFFSET`] (within [0, 1]). At a squat jump's optimum
+    /// both land within a millimetre of `rust_summary` (both a little lower);
+    /// an open-loop movement that needs feedback (a long push-off balancing
+    /// the body) lands far from it, and then no forward check reproduces
+    /// its prediction robustly.
+    pub excitation_sensitivity: Option<ExcitationSensitivity>,
     /// [`crate::analyze`] on Simbody's trajectory: what drove and limited
     /// its push-off (`leap analyze <name>_forward_states.sto` prints it).
     pub push_off: Option<crate::analyze::JumpAnalysis>,
     /// Why an integration failed.
     pub errors: Vec<String>,
+}
+
+/// [`ForwardCheckReport::excitation_sensitivity`].
+#[derive(Debug, Clone, Serialize)]
+pub struct ExcitationSensitivity {
+    /// The offset added to every excitation.
+    pub offset: f64,
+    /// The forward jump heights (m) with the excitations raised and
+    /// lowered (None where that integration failed).
+    pub jump_height_raised_m: Option<f64>,
+    pub jump_height_lowered_m: Option<f64>,
+    /// The larger of the two changes from the unperturbed jump (m).
+    pub largest_change_m: Option<f64>,
 }
 
 /// A shooting solve's derivative settings and evaluation counts.
@@ -978,6 +1006,7 @@ fn forward_check(
         accuracy: fc.accuracy,
         summary: None,
         rust_summary: None,
+        excitation_sensitivity: None,
         push_off: None,
         errors: Vec::new(),
     };
@@ -1039,17 +1068,49 @@ fn forward_check(
         },
         t_max,
     };
-    match simulate_rust(
-        &eq,
-        laws.as_ref(),
-        &controls,
-        ocp.x0(),
-        ocp.standing_com_height,
-        opts,
-    ) {
-        Ok((summary, _)) => report.rust_summary = Some(summary),
+    let rust_jump = |controls: &Controls| {
+        simulate_rust(
+            &eq,
+            laws.as_ref(),
+            controls,
+            ocp.x0(),
+            ocp.standing_com_height,
+            opts,
+        )
+        .map(|(summary, _)| summary)
+    };
+    match rust_jump(&controls) {
+        Ok(summary) => report.rust_summary = Some(summary),
         Err(f) => report.errors.push(format!("Dormand-Prince (Rust): {f}")),
     }
+    let mut perturbed = |sign: f64| {
+        let mut c = controls.clone();
+        for v in c.values.iter_mut().flatten() {
+            *v = (*v + sign * EXCITATION_OFFSET).clamp(0.0, 1.0);
+        }
+        match rust_jump(&c) {
+            Ok(s) => Some(s.jump_height_m),
+            Err(f) => {
+                report.errors.push(format!(
+                    "Dormand-Prince (Rust), excitations {:+}: {f}",
+                    sign * EXCITATION_OFFSET
+                ));
+                None
+            }
+        }
+    };
+    let (raised, lowered) = (perturbed(1.0), perturbed(-1.0));
+    let nominal = report.rust_summary.as_ref().map(|s| s.jump_height_m);
+    let largest_change_m = match (nominal, raised, lowered) {
+        (Some(h), Some(a), Some(b)) => Some((a - h).abs().max((b - h).abs())),
+        _ => None,
+    };
+    report.excitation_sensitivity = Some(ExcitationSensitivity {
+        offset: EXCITATION_OFFSET,
+        jump_height_raised_m: raised,
+        jump_height_lowered_m: lowered,
+        largest_change_m,
+    });
     Ok((report, files))
 }
 
@@ -1219,6 +1280,29 @@ impl SolveReport {
                     "  forward check (Dormand-Prince, Rust): jump height {:.2} cm\n",
                     100.0 * r.jump_height_m
                 ));
+                if let Some(e) = &fc.excitation_sensitivity {
+                    let cm = |h: Option<f64>| {
+                        h.map_or("failed".to_string(), |h| {
+                            format!("{:+.2} cm", 100.0 * (h - r.jump_height_m))
+                        })
+                    };
+                    s.push_str(&format!(
+                        "  open-loop sensitivity: every excitation {:+} changes that forward jump by {}, {:+} by {}{}\n",
+                        e.offset,
+                        cm(e.jump_height_raised_m),
+                        -e.offset,
+                        cm(e.jump_height_lowered_m),
+                        if e.largest_change_m.is_some_and(|d| d > FORWARD_CHECK_TOLERANCE_M) {
+                            format!(
+                                "; warning: {}% of excitation moves the jump by more than {:.0} cm: the open-loop movement is unstable (as a long push-off that balances the body), and its predicted height is no robust prediction",
+                                100.0 * e.offset,
+                                100.0 * FORWARD_CHECK_TOLERANCE_M
+                            )
+                        } else {
+                            String::new()
+                        }
+                    ));
+                }
             }
             if let Some(a) = &fc.push_off {
                 let fastest = a

@@ -219,6 +219,45 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
         "leap simulate {hs}, forward check {hf}"
     );
 
+    // The open-loop sensitivity is `leap simulate` (Dormand–Prince at
+    // 1e-6, as the forward check's second integration) of the solution's
+    // excitations raised by the offset, within [0, 1].
+    let e = &v["forward_check"]["excitation_sensitivity"];
+    let offset = e["offset"].as_f64().unwrap();
+    let mut raised = StoTable::read(&out.join("jump_solution.sto")).unwrap();
+    let excitation: Vec<bool> = raised
+        .labels
+        .iter()
+        .map(|l| l.starts_with("/forceset/") && l.matches('/').count() == 2)
+        .collect();
+    assert_eq!(excitation.iter().filter(|&&x| x).count(), 24);
+    for row in raised.rows.iter_mut() {
+        for (v, _) in row.iter_mut().zip(&excitation).filter(|(_, &x)| x) {
+            *v = (*v + offset).clamp(0.0, 1.0);
+        }
+    }
+    let raised_file = sim_out.join("raised.sto");
+    raised.write_sto(&raised_file).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["simulate", "--json", "--integrator", "DormandPrince"])
+        .args(["--accuracy", "1e-6", "--controls"])
+        .arg(&raised_file)
+        .arg("--out")
+        .arg(&sim_out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let hs = s["jump_height_m"].as_f64().unwrap();
+    let hr = e["jump_height_raised_m"].as_f64().unwrap();
+    assert!((hs - hr).abs() < 1e-6, "leap simulate {hs}, raised {hr}");
+    let nominal = v["forward_jump_height_rust_m"].as_f64().unwrap();
+    let hl = e["jump_height_lowered_m"].as_f64().unwrap();
+    let largest = e["largest_change_m"].as_f64().unwrap();
+    assert_eq!(largest, (hr - nominal).abs().max((hl - nominal).abs()));
+    assert!(hr != nominal && hl != nominal, "{e}");
+
     // The mesh error: 4 intervals of about 75 ms are far too coarse for the
     // jump (local errors of percents, the integrator's accuracy 1e-8); the
     // largest is one of the intervals', named by a solution column.
