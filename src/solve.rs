@@ -955,7 +955,14 @@ fn guess_from_file_with(
     path: &Path,
     with_states: bool,
 ) -> Result<Vec<f64>, SolveError> {
-    let t = crate::io::read_states(&tr.ocp.eq, path)?;
+    // Without states, the file's state columns are not read, nor checked.
+    let t = if with_states {
+        crate::io::read_states(&tr.ocp.eq, path)?
+    } else {
+        let t = StoTable::read(path)?;
+        t.check_time(path, 2)?;
+        t
+    };
     let bad = |reason: String| SolveError::Guess {
         file: path.into(),
         reason,
