@@ -821,3 +821,54 @@ fn step_norm_after_a_second_order_correction_is_the_step_taken() {
         );
     }
 }
+
+/// min (x − 2)² from x = 0, the objective not finite anywhere but at the
+/// start: every trial point of the line search fails.
+struct Cliff;
+impl AdProblem for Cliff {
+    fn name(&self) -> String {
+        "cliff".into()
+    }
+    fn num_variables(&self) -> usize {
+        1
+    }
+    fn num_constraints(&self) -> usize {
+        1
+    }
+    fn variable_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l.fill(f64::NEG_INFINITY);
+        u.fill(f64::INFINITY);
+    }
+    fn constraint_bounds(&self, l: &mut [f64], u: &mut [f64]) {
+        l[0] = -10.0;
+        u[0] = 10.0;
+    }
+    fn initial_point(&self, x: &mut [f64]) {
+        x[0] = 0.0;
+    }
+    fn eval<D: Scalar>(&self, x: &[D], c: &mut [D]) -> D {
+        c[0] = x[0];
+        let f = (x[0] - D::from(2.0)) * (x[0] - D::from(2.0));
+        if x[0].re() == 0.0 {
+            f
+        } else {
+            f * f64::NAN
+        }
+    }
+}
+
+/// A failed line search takes no step: its record's step norm is 0, and
+/// the solve returns the start.
+#[test]
+fn a_failed_line_search_records_no_step() {
+    let settings = SqpSettings {
+        hessian: HessianMode::ExactConvexified,
+        ..Default::default()
+    };
+    let r = solve(&mut AdNlp::new(Cliff), &settings);
+    assert_eq!(r.status, SqpStatus::LineSearchFailed, "{}", r.message);
+    assert_eq!(r.x, vec![0.0]);
+    let last = r.history.last().expect("a record of the failed iteration");
+    assert!(last.ls_trials > 1, "{last:?}");
+    assert_eq!(last.step_norm, 0.0, "{last:?}");
+}

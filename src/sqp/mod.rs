@@ -2242,13 +2242,15 @@ impl<'s> Solver<'s> {
             time.line_search_s += rec.line_search_s;
             rec.ls_trials = trials;
             // The step taken: α·d, or after a second-order correction the
-            // correction QP's (the point it reached, not d).
+            // correction QP's (the point it reached, not d); none when the
+            // line search failed.
             let taken = match &accepted {
                 Some((x, _, _)) if soc_used => x
                     .iter()
                     .zip(&p.x)
                     .fold(0.0f64, |m, (a, b)| m.max((a - b).abs())),
-                _ => dnorm * alpha,
+                Some(_) => dnorm * alpha,
+                None => 0.0,
             };
             rec.step_norm = taken;
             // (A QP failure's retry bounds its step by this.)
