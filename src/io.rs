@@ -195,6 +195,9 @@ impl StoTable {
         let mut table = StoTable::default();
         let mut lines = text.lines().enumerate();
         let mut found_end = false;
+        // The header line of each key, to name both lines of a key given
+        // twice with different values (which one holds is anyone's guess).
+        let mut key_line: BTreeMap<String, usize> = BTreeMap::new();
         for (i, raw) in lines.by_ref() {
             let line = raw.trim_end_matches('\r').trim();
             if line == "endheader" {
@@ -202,12 +205,22 @@ impl StoTable {
                 break;
             }
             if let Some((k, v)) = line.split_once('=') {
-                let k = k.trim();
+                let (k, v) = (k.trim(), v.trim());
                 if !matches!(
                     k,
                     "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns"
                 ) {
-                    table.metadata.insert(k.to_string(), v.trim().to_string());
+                    if let Some(old) = table.metadata.get(k).filter(|old| *old != v) {
+                        return Err(perr(
+                            i + 1,
+                            format!(
+                                "header key '{k}' given twice: '{old}' on line {}, '{v}' here",
+                                key_line.get(k).copied().unwrap_or(0)
+                            ),
+                        ));
+                    }
+                    key_line.insert(k.to_string(), i + 1);
+                    table.metadata.insert(k.to_string(), v.to_string());
                 }
             } else if i == 0 && !line.is_empty() {
                 table.name = Some(line.to_string());
@@ -585,6 +598,16 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
         }
     }
     Ok(t)
+}
+
+/// A number as a message shows it: as written for everyday magnitudes,
+/// in exponent form where `{}` would print hundreds of digits.
+pub fn readable(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// Why a muscle state named `label` (OpenSim's `/activation` or

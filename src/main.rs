@@ -826,6 +826,14 @@ fn simulate(
         .unwrap_or_else(|| "command line".into());
     let where_ = format!("{origin}: ");
     let choice = st.check(&origin)?;
+    let files = [
+        "jump_states.sto",
+        "jump_controls.sto",
+        "jump_grf.mot",
+        "jump_summary.json",
+    ];
+    leap::solve::check_result_files(&out_dir, &files.map(String::from))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
     let m = leap::model::Model::from_file(&model_path)?;
     let (laws, eq) = leap::ode::StateEquation::opensim(&m, true)?;
     let pose = m.squat_pose()?;

@@ -510,6 +510,27 @@ fn json_kind(v: &serde_json::Value) -> &'static str {
     }
 }
 
+/// Why a component's name cannot be used, if it cannot: it becomes a part
+/// of OpenSim paths (`/forceset/<muscle>/activation`) and .sto column
+/// labels, so it may not hold `\\ / * +` (OpenSim's `ComponentPath`
+/// refuses them) nor whitespace or control characters (which split a .sto
+/// file's tab-separated labels).
+fn name_problem(name: &str) -> Option<String> {
+    let shown: String = name.chars().take(80).collect();
+    if name.is_empty() {
+        Some("empty name".into())
+    } else if let Some(c) = name
+        .chars()
+        .find(|c| matches!(c, '\\' | '/' | '*' | '+') || c.is_whitespace() || c.is_control())
+    {
+        Some(format!(
+            "'{shown}' holds {c:?}: a name becomes part of OpenSim paths and .sto column labels, so it may not hold \\ / * +, whitespace or control characters"
+        ))
+    } else {
+        None
+    }
+}
+
 fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -552,7 +573,10 @@ impl Model {
         let mut bodies = Vec::with_capacity(spec.bodies.len());
         for (i, b) in spec.bodies.iter().enumerate() {
             let p = |f: &str| format!("bodies[{i}].{f}");
-            if b.name.is_empty() || b.name == "ground" {
+            if let Some(r) = name_problem(&b.name) {
+                return Err(err(p("name"), r));
+            }
+            if b.name == "ground" {
                 return Err(err(
                     p("name"),
                     format!("'{}' is not a valid body name", b.name),
@@ -600,8 +624,8 @@ impl Model {
         let mut coordinates = Vec::with_capacity(spec.coordinates.len());
         for (i, c) in spec.coordinates.iter().enumerate() {
             let p = |f: &str| format!("coordinates[{i}].{f}");
-            if c.name.is_empty() {
-                return Err(err(p("name"), "empty coordinate name".into()));
+            if let Some(r) = name_problem(&c.name) {
+                return Err(err(p("name"), r));
             }
             if coord_index.insert(c.name.clone(), i).is_some() {
                 return Err(err(
@@ -639,6 +663,9 @@ impl Model {
         for (j, js) in spec.joints.iter().enumerate() {
             let (name, parent, child, loc) = js.common();
             let p = |f: &str| format!("joints[{j}].{f}");
+            if let Some(r) = name_problem(name) {
+                return Err(err(p("name"), r));
+            }
             if joint_names.insert(name.to_string(), j).is_some() {
                 return Err(err(p("name"), format!("joint '{name}' is defined twice")));
             }
@@ -777,6 +804,9 @@ impl Model {
         let mut station_names = HashMap::new();
         for (i, s) in spec.stations.iter().enumerate() {
             let p = |f: &str| format!("stations[{i}].{f}");
+            if let Some(r) = name_problem(&s.name) {
+                return Err(err(p("name"), r));
+            }
             if station_names.insert(s.name.clone(), i).is_some() {
                 return Err(err(
                     p("name"),
@@ -860,10 +890,13 @@ impl Model {
         let mut muscle_names = HashMap::new();
         for (i, m) in spec.forces.muscles.iter().enumerate() {
             let p = |f: &str| format!("forces.muscles[{i}].{f}");
-            if m.name.is_empty() || muscle_names.insert(m.name.clone(), i).is_some() {
+            if let Some(r) = name_problem(&m.name) {
+                return Err(err(p("name"), r));
+            }
+            if muscle_names.insert(m.name.clone(), i).is_some() {
                 return Err(err(
                     p("name"),
-                    format!("muscle name '{}' is empty or defined twice", m.name),
+                    format!("muscle '{}' is defined twice", m.name),
                 ));
             }
             // Every parameter is positive but the pennation angle.
@@ -1017,8 +1050,8 @@ impl Model {
                 for (i, sp) in cs.spheres.iter().enumerate() {
                     let q = |f: &str| format!("forces.contact.spheres[{i}].{f}");
                     // Spheres are reported by name (`leap eval`).
-                    if sp.name.is_empty() {
-                        return Err(err(q("name"), "empty sphere name".into()));
+                    if let Some(r) = name_problem(&sp.name) {
+                        return Err(err(q("name"), r));
                     }
                     if let Some(first) = sphere_names.insert(sp.name.clone(), i) {
                         return Err(err(

@@ -851,6 +851,15 @@ impl SimulateStudy {
             reason,
         };
         let choice = parse_integrator(&self.integrator).map_err(|r| err("integrator", r))?;
+        for (field, path, what) in [
+            ("model", &self.model, "a model file"),
+            ("controls", &self.controls, "a controls file"),
+            ("out", &self.out, "a directory"),
+        ] {
+            if path.as_deref().is_some_and(|p| p.trim().is_empty()) {
+                return Err(err(field, format!("empty: name {what}")));
+            }
+        }
         if !(self.t_max.is_finite() && self.t_max > 0.0 && self.t_max <= MAX_T_MAX) {
             return Err(err(
                 "t_max",

@@ -113,6 +113,39 @@ pub fn check_results_dir(dir: &Path) -> Result<(), std::io::Error> {
     Ok(())
 }
 
+/// The files a solve named `name` writes into its results directory.
+pub fn result_files(name: &str) -> Vec<String> {
+    [
+        "_solution.sto",
+        "_grf.mot",
+        "_history.csv",
+        "_forward_states.sto",
+        "_forward_controls.sto",
+        "_forward_grf.mot",
+        "_summary.json",
+    ]
+    .iter()
+    .map(|s| format!("{name}{s}"))
+    .collect()
+}
+
+/// Whether a directory stands where one of `files` should be written in
+/// `dir` (an error naming it), found before anything is computed: a result
+/// file that cannot be written had lost the summary after a whole solve.
+pub fn check_result_files(dir: &Path, files: &[String]) -> Result<(), std::io::Error> {
+    check_results_dir(dir)?;
+    match files.iter().map(|f| dir.join(f)).find(|p| p.is_dir()) {
+        Some(p) => Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!(
+                "cannot write the result file {}: a directory of that name exists",
+                p.display()
+            ),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The forward check: the optimal excitations (linear between the nodes,
 /// held after t_f) integrated from the squat.
 #[derive(Debug, Clone, Serialize)]
@@ -332,10 +365,24 @@ pub fn run(
     let dir = &config.output_directory;
     // A file where the results directory should be is found before the
     // squat and the guess are computed, not after.
-    check_results_dir(dir).map_err(|e| SolveError::Io {
+    check_result_files(dir, &result_files(&config.name)).map_err(|e| SolveError::Io {
         file: dir.clone(),
         error: std::io::Error::new(e.kind(), format!("output_directory (--out): {e}")),
     })?;
+    if let Some(q) = config
+        .settings
+        .qp_dump_dir
+        .as_ref()
+        .filter(|q| q.exists() && !q.is_dir())
+    {
+        return Err(SolveError::Io {
+            file: q.clone(),
+            error: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                "--dump-qps: cannot create the QP directory: a file of that name exists",
+            ),
+        });
+    }
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
     if config.method == Method::Shooting {

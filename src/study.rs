@@ -208,7 +208,7 @@ pub struct MeshSpec {
 pub struct ProblemSpec {
     /// Bounds [t_min, t_max] on the final time t_f in seconds (Moco's
     /// `MocoPhase` property `time_final_bounds`; default [0.1, 1.0]; one
-    /// value fixes t_f, as in Moco). The bang-bang guess's t_f is moved
+    /// value fixes t_f, as in Moco; within [0.01, 10] s). The bang-bang guess's t_f is moved
     /// into them; a guess file must end inside them.
     #[serde(default, alias = "final_time_bounds")]
     pub time_final_bounds: Option<Vec<f64>>,
@@ -271,6 +271,10 @@ impl ProblemSettings {
 }
 
 /// Final-time bounds as a study file gives them.
+/// The shortest final time a study may allow (s): h = t_f/N must stay a
+/// time step the contact and muscle dynamics can be integrated over.
+const MIN_TIME_FINAL: f64 = 0.01;
+
 fn parse_time_bounds(b: &[f64]) -> Result<[f64; 2], String> {
     let (t0, t1) = match b {
         [t] => (*t, *t),
@@ -282,9 +286,12 @@ fn parse_time_bounds(b: &[f64]) -> Result<[f64; 2], String> {
             ))
         }
     };
-    if !(t0.is_finite() && t1.is_finite() && t0 > 0.0 && t0 <= t1) {
+    if !(t0 >= MIN_TIME_FINAL && t0 <= t1 && t1 <= crate::simulate::MAX_T_MAX) {
         return Err(format!(
-            "need 0 < t_min ≤ t_max (seconds, finite), got [{t0}, {t1}]"
+            "need {MIN_TIME_FINAL} ≤ t_min ≤ t_max ≤ {} (seconds: a push-off lasts tenths of a second), got [{}, {}]",
+            crate::simulate::MAX_T_MAX,
+            crate::io::readable(t0),
+            crate::io::readable(t1)
         ));
     }
     Ok([t0, t1])
@@ -956,14 +963,31 @@ pub fn default_model() -> Option<PathBuf> {
     src.is_file().then_some(src)
 }
 
+/// The longest study name: its files' names (`<name>_forward_controls.sto`,
+/// the longest suffix, 21 bytes) stay far below the 255 bytes of a file
+/// name.
+const MAX_NAME_LEN: usize = 100;
+
 fn check_name(name: &str) -> Result<(), String> {
     if name.is_empty()
         || !name
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.')
     {
+        let shown: String = name.chars().take(MAX_NAME_LEN).collect();
         return Err(format!(
-            "'{name}' must be a non-empty file prefix of letters, digits, '_', '-' or '.'"
+            "'{shown}' must be a non-empty file prefix of letters, digits, '_', '-' or '.'"
+        ));
+    }
+    if name.len() > MAX_NAME_LEN {
+        return Err(format!(
+            "{} characters; at most {MAX_NAME_LEN} (the prefix of the result files' names)",
+            name.len()
+        ));
+    }
+    if name.starts_with('.') {
+        return Err(format!(
+            "'{name}' starts with '.', which would hide the result files"
         ));
     }
     Ok(())
@@ -1298,6 +1322,26 @@ mod tests {
         assert!(r.contains("interior-point"), "{r}");
         let (f, _) = field_error(r#"{"name": "../x"}"#);
         assert_eq!(f, "name");
+        // Names whose files cannot be written (a 300-character prefix, past
+        // the 255 bytes of a file name, had failed after the solve) or
+        // would be hidden are refused before it.
+        let long = "n".repeat(300);
+        let (f, r) = field_error(&format!(r#"{{"name": "{long}"}}"#));
+        assert_eq!(
+            (f.as_str(), r.as_str()),
+            (
+                "name",
+                "300 characters; at most 100 (the prefix of the result files' names)"
+            )
+        );
+        assert!(
+            SolveStudy::from_json_str(&format!(r#"{{"name": "{}"}}"#, &long[..100]), "s.json")
+                .and_then(|s| s.resolve(None))
+                .is_ok()
+        );
+        let (f, r) = field_error(r#"{"name": "."}"#);
+        assert_eq!(f, "name");
+        assert!(r.contains("hide"), "{r}");
     }
 
     #[test]
@@ -1578,11 +1622,26 @@ mod tests {
         for (json, want) in [
             (
                 r#"{"problem": {"time_final_bounds": [0.4, 0.2]}}"#,
-                "0 < t_min ≤ t_max",
+                "t_min ≤ t_max",
             ),
             (
                 r#"{"problem": {"time_final_bounds": [0, 0.5]}}"#,
-                "0 < t_min ≤ t_max",
+                "0.01 ≤ t_min ≤ t_max ≤ 10",
+            ),
+            // Times no push-off takes: refused before the solve, not by it
+            // (1e300 s had failed after 20 s as an invalid problem, 100 s
+            // "predicted" 62 s of ground contact, 1e-300 s overflowed).
+            (
+                r#"{"problem": {"time_final_bounds": [1e300]}}"#,
+                "got [1e300, 1e300]",
+            ),
+            (
+                r#"{"problem": {"time_final_bounds": [0.2, 100]}}"#,
+                "t_max ≤ 10",
+            ),
+            (
+                r#"{"problem": {"time_final_bounds": [1e-300, 0.5]}}"#,
+                "0.01 ≤ t_min",
             ),
             (
                 r#"{"problem": {"time_final_bounds": [0.3, 0.4, 0.5]}}"#,

@@ -649,7 +649,7 @@ fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
             "problem_tf",
             r#"{"model": "MODEL", "problem": {"time_final_bounds": [0.5, 0.2]}}"#,
             "problem.time_final_bounds",
-            "need 0 < t_min ≤ t_max (seconds, finite), got [0.5, 0.2]",
+            "need 0.01 ≤ t_min ≤ t_max ≤ 10 (seconds: a push-off lasts tenths of a second), got [0.5, 0.2]",
         ),
         (
             "problem_rows",
@@ -1077,4 +1077,66 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
         stdout.contains("warning: the forward check misses the prediction by more than 1 cm"),
         "{stdout}"
     );
+}
+
+/// A result file that cannot be written is found before the solve: a
+/// directory where `jump_history.csv` should go had lost the summary and
+/// the forward check after the whole solve, and `--dump-qps` with a file
+/// named `qps` in `--out` had dumped nothing without a word. `leap
+/// simulate` checks its files the same way.
+#[test]
+fn unwritable_result_files_are_refused_before_the_solve() {
+    let out = fresh_dir("blocked");
+    std::fs::create_dir_all(out.join("jump_history.csv")).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["solve", "--num-mesh-intervals", "4", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot write the result file")
+            && err.contains("jump_history.csv: a directory of that name exists"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("SQP"),
+        "refused after the solve started: {err}"
+    );
+    assert_eq!(files_in(&out), ["jump_history.csv"]);
+
+    let out = fresh_dir("qps_file");
+    std::fs::write(out.join("qps"), "").unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["solve", "--num-mesh-intervals", "4", "--dump-qps", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--dump-qps: cannot create the QP directory"),
+        "{err}"
+    );
+    assert_eq!(files_in(&out), ["qps"]);
+
+    let out = fresh_dir("simulate_blocked");
+    std::fs::create_dir_all(out.join("jump_grf.mot")).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["simulate", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("jump_grf.mot: a directory of that name exists"),
+        "{err}"
+    );
+    assert_eq!(files_in(&out), ["jump_grf.mot"]);
+    let _ = std::fs::remove_dir_all(&out);
 }

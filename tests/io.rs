@@ -449,3 +449,27 @@ fn output_files_are_written_whole_or_not_at_all() {
     assert!(dir.join("sub.sto").is_dir());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A header key given twice with different values is refused, naming both
+/// lines: `inDegrees=no` then `inDegrees=yes` had let the last one win and
+/// `leap analyze` read radians as degrees (a −22 cm "jump"). The same value
+/// twice is harmless.
+#[test]
+fn a_header_key_given_twice_with_different_values_is_refused() {
+    let p = Path::new("twice.sto");
+    let body = "endheader\ntime\tq\n0\t0.1\n0.1\t0.2\n";
+    let e = StoTable::parse(&format!("states\ninDegrees=no\ninDegrees=yes\n{body}"), p)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "twice.sto: line 3: header key 'inDegrees' given twice: 'no' on line 2, 'yes' here"
+    );
+    let t = StoTable::parse(
+        &format!("states\ninDegrees=yes\ninDegrees = yes\n{body}"),
+        p,
+    )
+    .unwrap();
+    assert_eq!(t.metadata["inDegrees"], "yes");
+    assert_eq!(t.rows.len(), 2);
+}

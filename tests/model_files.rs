@@ -591,3 +591,42 @@ fn body_inertias_must_be_physical_and_finite_about_the_origin() {
     assert_eq!(e.field(), format!("bodies[{t}].mass_center"));
     assert!(e.to_string().contains("is not finite"), "{e}");
 }
+
+/// Names become OpenSim paths and .sto column labels: a muscle named
+/// "sol eus/\t_r" had been accepted, and `leap simulate` wrote a states
+/// file whose labels the tab split, which `leap analyze` then refused.
+#[test]
+fn names_that_break_paths_or_column_labels_are_refused() {
+    let v = jumper_json();
+    let soleus = muscle_index(&v, "soleus_r");
+    for (path, name) in [
+        (format!("forces.muscles[{soleus}].name"), "sol eus_r"),
+        (format!("forces.muscles[{soleus}].name"), "sol\teus_r"),
+        (format!("forces.muscles[{soleus}].name"), "soleus/_r"),
+        ("bodies[0].name".to_string(), "pel+vis"),
+        ("coordinates[0].name".to_string(), ""),
+        ("joints[0].name".to_string(), "ground*pelvis"),
+        ("stations[0].name".to_string(), "a\\b"),
+        ("forces.contact.spheres[0].name".to_string(), "heel\n"),
+    ] {
+        let mut m = v.clone();
+        let mut at = &mut m;
+        for part in path.split('.') {
+            at = match part.split_once('[') {
+                Some((key, idx)) => {
+                    &mut at[key][idx.trim_end_matches(']').parse::<usize>().unwrap()]
+                }
+                None => &mut at[part],
+            };
+        }
+        *at = serde_json::json!(name);
+        let e = refused(&m);
+        assert_eq!(e.field(), path, "{name:?}: {e}");
+        let want = if name.is_empty() {
+            "empty name".to_string()
+        } else {
+            "may not hold \\ / * +, whitespace or control characters".to_string()
+        };
+        assert!(e.to_string().contains(&want), "{name:?}: {e}");
+    }
+}
