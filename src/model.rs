@@ -516,19 +516,17 @@ fn json_kind(v: &serde_json::Value) -> &'static str {
 /// refuses them) nor whitespace or control characters (which split a .sto
 /// file's tab-separated labels).
 fn name_problem(name: &str) -> Option<String> {
-    let shown: String = name.chars().take(80).collect();
     if name.is_empty() {
-        Some("empty name".into())
-    } else if let Some(c) = name
-        .chars()
-        .find(|c| matches!(c, '\\' | '/' | '*' | '+') || c.is_whitespace() || c.is_control())
-    {
-        Some(format!(
-            "'{shown}' holds {c:?}: a name becomes part of OpenSim paths and .sto column labels, so it may not hold \\ / * +, whitespace or control characters"
-        ))
-    } else {
-        None
+        return Some("empty name".into());
     }
+    let shown: String = name.chars().take(80).collect();
+    name.chars()
+        .find(|c| matches!(c, '\\' | '/' | '*' | '+') || c.is_whitespace() || c.is_control())
+        .map(|c| {
+            format!(
+                "'{shown}' holds {c:?}: a name becomes part of OpenSim paths and .sto column labels, so it may not hold \\ / * +, whitespace or control characters"
+            )
+        })
 }
 
 fn finite3(v: &[f64; 3]) -> bool {
