@@ -1,5 +1,8 @@
-//! Local errors of a solution's mesh intervals: `cargo run --release
-//! --example mesh_error_probe -- SOLUTION.sto [MODEL]`.
+//! How far a solution's forward check is the mesh's and how far the
+//! model's: `cargo run --release --example mesh_error_probe -- SOLUTION.sto
+//! [MODEL]` integrates the solution's excitations from the squat under the
+//! optimizer's dynamics and under OpenSim's (the forward check's), and each
+//! mesh interval from its first node under both.
 use leap::io::StoTable;
 use std::path::Path;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -7,7 +10,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let sol = args.next().ok_or("solution file")?;
     let model_path = args.next().unwrap_or("models/jumper.json".into());
     let model = leap::model::Model::from_file(Path::new(&model_path))?;
-    let ocp = leap::ocp::JumpOcp::new(&model, Default::default())?;
+    // ACTIVATION_SMOOTHING=none: OpenSim's activation switch in the
+    // optimizer's dynamics too (the paths stay smoothed).
+    let activation_smoothing = match std::env::var("ACTIVATION_SMOOTHING").as_deref() {
+        Ok("none") => None,
+        Ok(b) => Some(b.parse()?),
+        Err(_) => leap::ocp::OcpOptions::default().activation_smoothing,
+    };
+    let ocp = leap::ocp::JumpOcp::new(
+        &model,
+        leap::ocp::OcpOptions {
+            activation_smoothing,
+            ..Default::default()
+        },
+    )?;
     let t = StoTable::read(Path::new(&sol))?;
     let names = ocp.eq.state_names();
     let cnames = ocp.eq.control_names();
@@ -28,7 +44,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok()
         .and_then(|v| v.parse().ok())
         .unwrap_or(1e-8);
-    let a = leap::mesh_error::mesh_error(&ocp.eq, &ocp.laws, &mesh, acc)?;
+    let a = leap::mesh_error::mesh_error(
+        &ocp.eq,
+        &ocp.laws,
+        &mesh,
+        leap::mesh_error::Excitations::Linear,
+        acc,
+    )?;
     let mut ws = oeq.workspace();
     let b = leap::mesh_error::local_errors(
         |x, u, dx| {
@@ -41,9 +63,40 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 .map_err(|e| e.to_string())
         },
         &mesh,
+        leap::mesh_error::Excitations::Linear,
         acc,
         &|j| names[j].clone(),
     )?;
+    // The whole jump from the squat under each dynamics (Dormand–Prince at
+    // 1e-8): does the forward check's model differ from the optimizer's?
+    let muscles: Vec<&str> = ocp
+        .eq
+        .muscles
+        .iter()
+        .map(|&m| ocp.eq.model.muscles[m].spec.name.as_str())
+        .collect();
+    let controls = leap::io::Controls::from_file(Path::new(&sol), &muscles)?;
+    let opts = leap::simulate::SimulateOptions {
+        integrator: leap::integrator::Dopri5Options {
+            accuracy: 1e-8,
+            ..Default::default()
+        },
+        t_max: t.time.last().copied().unwrap_or(1.0) + 1.0,
+    };
+    let h = |r: Result<(leap::simulate::JumpSummary, _), _>| match r {
+        Ok((s, _)) => format!("{:.2} cm", 100.0 * s.jump_height_m),
+        Err(e) => format!("failed: {e}"),
+    };
+    let (x0, standing) = (ocp.x0(), ocp.standing_com_height);
+    println!(
+        "forward jump (Dormand–Prince 1e-8): optimizer's dynamics {}, OpenSim's {}",
+        h(leap::simulate::simulate_rust(
+            &ocp.eq, &ocp.laws, &controls, x0, standing, opts
+        )),
+        h(leap::simulate::simulate_rust(
+            &oeq, &olaws, &controls, x0, standing, opts
+        ))
+    );
     println!("interval t0 t1 | optimizer's dynamics: rel err, state | OpenSim's: rel err, state");
     for (x, y) in a.intervals.iter().zip(&b.intervals) {
         println!(

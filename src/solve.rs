@@ -158,12 +158,20 @@ pub struct ForwardCheckReport {
     pub rust_summary: Option<JumpSummary>,
     /// How much the forward jump depends on the excitations: the same
     /// Dormand–Prince jump with every excitation raised and lowered by
-    /// [`EXCITATION_OFFSET`] (within [0, 1]). At a squat jump's optimum
-    /// both land within a millimetre of `rust_summary` (both a little lower);
-    /// an open-loop movement that needs feedback (a long push-off balancing
-    /// the body) lands far from it, and then no forward check reproduces
-    /// its prediction robustly.
+    /// [`EXCITATION_OFFSET`] (the simulation clamps them to [0.01, 1], as
+    /// OpenSim does, so excitations at either end do not move one way). At
+    /// a squat jump's optimum both land within a millimetre of
+    /// `rust_summary` (both a little lower); an open-loop movement that
+    /// needs feedback (a long push-off balancing the body) lands far from
+    /// it, and then small differences between the forward check's model and
+    /// the optimizer's decide what the forward check shows.
     pub excitation_sensitivity: Option<ExcitationSensitivity>,
+    /// The Dormand–Prince jump (1e-6) under the optimizer's own dynamics
+    /// (its smoothed activation switch, fibre clamp and paths) instead of
+    /// OpenSim's: its difference from the predicted height is the mesh's
+    /// discretisation error, its difference from `rust_summary` the
+    /// smoothing's.
+    pub optimizer_dynamics_jump_height_m: Option<f64>,
     /// [`crate::analyze`] on Simbody's trajectory: what drove and limited
     /// its push-off (`leap analyze <name>_forward_states.sto` prints it).
     pub push_off: Option<crate::analyze::JumpAnalysis>,
@@ -261,12 +269,14 @@ pub struct SolveReport {
     pub forward_check_agrees: Option<bool>,
     pub forward_jump_height_rust_m: Option<f64>,
     pub forward_check: Option<ForwardCheckReport>,
-    /// How well the mesh resolves the solution: each interval integrated
-    /// from its first node with the optimizer's own dynamics
-    /// (Dormand–Prince at [`MESH_ERROR_ACCURACY`]) against the next node,
-    /// per interval the largest state error relative to 1 + the state's
-    /// largest magnitude ([`crate::mesh_error`]). Where it is large the
-    /// mesh is too coarse for the movement. None if the check could not run
+    /// How well the mesh resolves the solution (collocation, with the
+    /// forward check): each interval integrated from its first node with
+    /// the optimizer's own dynamics (Dormand–Prince at
+    /// [`MESH_ERROR_ACCURACY`]) against the next node, per interval the
+    /// largest state error relative to 1 + the state's largest magnitude,
+    /// with that state's absolute error ([`crate::mesh_error`]). Where it is
+    /// large the mesh is too coarse for the movement. None for shooting,
+    /// without the forward check, or if the check could not run
     /// (`mesh_error_failure` says why).
     pub mesh_error: Option<crate::mesh_error::MeshError>,
     pub mesh_error_failure: Option<String>,
@@ -630,9 +640,20 @@ fn finish(
             error,
         })?;
     files.push(p);
-    match crate::mesh_error::mesh_error(&ocp.eq, &ocp.laws, mesh, MESH_ERROR_ACCURACY) {
-        Ok(m) => report.mesh_error = Some(m),
-        Err(e) => report.mesh_error_failure = Some(e),
+    // Shooting's nodes are its own integrator's: only a collocation mesh
+    // has a local error to measure.
+    if config.method == Method::Collocation && config.forward_check.is_some() {
+        let excitations = crate::mesh_error::Excitations::of(config.transcription.scheme);
+        match crate::mesh_error::mesh_error(
+            &ocp.eq,
+            &ocp.laws,
+            mesh,
+            excitations,
+            MESH_ERROR_ACCURACY,
+        ) {
+            Ok(m) => report.mesh_error = Some(m),
+            Err(e) => report.mesh_error_failure = Some(e),
+        }
     }
     if let Some(fc) = config.forward_check {
         progress("forward check: the optimal excitations integrated from the squat");
@@ -1061,6 +1082,7 @@ fn forward_check(
         summary: None,
         rust_summary: None,
         excitation_sensitivity: None,
+        optimizer_dynamics_jump_height_m: None,
         push_off: None,
         errors: Vec::new(),
     };
@@ -1133,6 +1155,19 @@ fn forward_check(
         )
         .map(|(summary, _)| summary)
     };
+    match simulate_rust(
+        &ocp.eq,
+        &ocp.laws,
+        &controls,
+        ocp.x0(),
+        ocp.standing_com_height,
+        opts,
+    ) {
+        Ok((s, _)) => report.optimizer_dynamics_jump_height_m = Some(s.jump_height_m),
+        Err(f) => report.errors.push(format!(
+            "Dormand-Prince (Rust), the optimizer's dynamics: {f}"
+        )),
+    }
     match rust_jump(&controls) {
         Ok(summary) => report.rust_summary = Some(summary),
         Err(f) => report.errors.push(format!("Dormand-Prince (Rust): {f}")),
@@ -1334,6 +1369,14 @@ impl SolveReport {
                     "  forward check (Dormand-Prince, Rust): jump height {:.2} cm\n",
                     100.0 * r.jump_height_m
                 ));
+                if let Some(h) = fc.optimizer_dynamics_jump_height_m {
+                    s.push_str(&format!(
+                        "  forward check under the optimizer's own (smoothed) dynamics: {:.2} cm, so {:+.2} cm of the difference is the mesh's, {:+.2} cm the smoothing's\n",
+                        100.0 * h,
+                        100.0 * (h - self.jump_height_m),
+                        100.0 * (r.jump_height_m - h)
+                    ));
+                }
                 if let Some(e) = &fc.excitation_sensitivity {
                     let cm = |h: Option<f64>| {
                         h.map_or("failed".to_string(), |h| {
@@ -1348,7 +1391,7 @@ impl SolveReport {
                         cm(e.jump_height_lowered_m),
                         if e.largest_change_m.is_some_and(|d| d > FORWARD_CHECK_TOLERANCE_M) {
                             format!(
-                                "; warning: {}% of excitation moves the jump by more than {:.0} cm: the open-loop movement is unstable (as a long push-off that balances the body), and its predicted height is no robust prediction",
+                                "; warning: {}% of excitation moves the jump by more than {:.0} cm: the movement is highly sensitive open loop (as a long push-off that balances the body), and its predicted height is no robust prediction",
                                 100.0 * e.offset,
                                 100.0 * FORWARD_CHECK_TOLERANCE_M
                             )
@@ -1396,7 +1439,7 @@ impl SolveReport {
             let failed = m.intervals.iter().filter(|i| i.failure.is_some()).count();
             if let (Some(w), Some(median)) = (worst, m.median_relative_error) {
                 s.push_str(&format!(
-                    "  mesh error (each interval integrated from its first node, Dormand–Prince at {:e}): median {:.1e}, largest {:.1e} in interval {} ({:.3}–{:.3} s, {}){}; relative to 1 + the state's largest magnitude; a finer mesh lowers it\n",
+                    "  mesh error (each interval integrated from its first node, Dormand–Prince at {:e}; relative to 1 + the state's largest magnitude): median {:.1e}, largest {:.1e} in interval {} ({:.3}–{:.3} s, {} off by {:.2e} in its units){}; a finer mesh lowers it\n",
                     m.accuracy,
                     median,
                     w.relative_error.unwrap_or(f64::NAN),
@@ -1404,6 +1447,7 @@ impl SolveReport {
                     w.t_start,
                     w.t_end,
                     w.state,
+                    w.absolute_error.unwrap_or(f64::NAN),
                     if failed > 0 {
                         format!("; {failed} intervals failed to integrate")
                     } else {

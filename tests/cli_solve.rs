@@ -887,13 +887,17 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     );
     let d = v["forward_check_difference_m"].as_f64().unwrap();
     assert!(d.abs() < 0.01, "forward check {d} m from the prediction");
-    // Shooting's nodes are its integrator's (Dormand–Prince at 1e-8, the
-    // excitations linear between the nodes): the mesh error check, which
-    // restarts that integrator at every node, finds them at its accuracy.
-    let m = &v["mesh_error"];
-    assert_eq!(m["intervals"].as_array().map(Vec::len), Some(8), "{m}");
-    let worst = m["largest_relative_error"].as_f64().unwrap();
-    assert!(worst < 1e-6, "shooting's mesh error {worst}");
+    // Shooting's nodes are its own integrator's: no mesh error. Its
+    // prediction is the optimizer's dynamics integrated (Dormand–Prince at
+    // 1e-8), so the forward check under those dynamics (at 1e-6) lands on
+    // it (measured 0.06 mm apart), where OpenSim's activation switch moves
+    // the forward check by 0.4 mm.
+    assert!(v["mesh_error"].is_null(), "{v}");
+    let own = v["forward_check"]["optimizer_dynamics_jump_height_m"]
+        .as_f64()
+        .unwrap();
+    let h = v["jump_height_m"].as_f64().unwrap();
+    assert!((own - h).abs() < 2e-4, "predicted {h}, optimizer's dynamics {own}");
     assert_eq!(
         v["ignored_study_settings"],
         serde_json::json!(["mesh.scheme", "hessian"]),

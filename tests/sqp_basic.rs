@@ -857,8 +857,8 @@ impl AdProblem for Cliff {
     }
 }
 
-/// A failed line search takes no step: its record's step norm is 0, and
-/// the solve returns the start.
+/// A failed line search takes no step: its record's step norm and step
+/// length α are 0, and the solve returns the start.
 #[test]
 fn a_failed_line_search_records_no_step() {
     let settings = SqpSettings {
@@ -870,5 +870,5 @@ fn a_failed_line_search_records_no_step() {
     assert_eq!(r.x, vec![0.0]);
     let last = r.history.last().expect("a record of the failed iteration");
     assert!(last.ls_trials > 1, "{last:?}");
-    assert_eq!(last.step_norm, 0.0, "{last:?}");
+    assert_eq!((last.step_norm, last.alpha), (0.0, 0.0), "{last:?}");
 }

@@ -379,6 +379,7 @@ pub struct IterationRecord {
     /// Actual over predicted ℓ1-merit reduction of a full step (NaN when
     /// not measured: shortened or corrected steps, or the test is off).
     pub model_ratio: f64,
+    /// The line search's step length (0 when it failed: no step taken).
     pub alpha: f64,
     pub ls_trials: usize,
     pub qp_iterations: u32,
@@ -2255,7 +2256,7 @@ impl<'s> Solver<'s> {
             rec.step_norm = taken;
             // (A QP failure's retry bounds its step by this.)
             last_step = taken.max(1e-12 * scale_x);
-            rec.alpha = alpha;
+            rec.alpha = if accepted.is_some() { alpha } else { 0.0 };
             // A full step that the step bound cut short proves no more
             // than one the line search cut: the QP's own step was longer.
             last_full_step = alpha == 1.0 && accepted.is_some() && taken < 0.999 * delta;
