@@ -533,6 +533,28 @@ fn finite3(v: &[f64; 3]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
 
+/// The largest body-frame coordinate of a location (m). A human model's
+/// points lie within a couple of metres of their body's origin; far beyond
+/// it the inertia about the origin, m·|c|², swamps the body's own in
+/// Simbody's arithmetic (a mass centre at 1e100 m reached Simbody and was
+/// refused there as an inertia breaking the triangle inequality).
+pub const MAX_LOCATION_M: f64 = 100.0;
+
+/// The heaviest body (kg): a segment of a human model weighs tens of
+/// kilograms (a body of 1e12 kg set the Rust-native and Simbody dynamics
+/// apart in their last digits).
+pub const MAX_BODY_MASS_KG: f64 = 1e4;
+
+/// Why a location (m, body frame) cannot be used, if it cannot.
+pub(crate) fn location_problem(v: &[f64; 3]) -> Option<String> {
+    (!v.iter().all(|x| x.is_finite() && x.abs() <= MAX_LOCATION_M)).then(|| {
+        format!(
+            "must be finite and within ±{MAX_LOCATION_M} m of the body's origin in each coordinate, got [{}]",
+            v.iter().map(|&x| crate::io::readable(x)).collect::<Vec<_>>().join(", ")
+        )
+    })
+}
+
 impl Model {
     /// Read and validate a model file.
     pub fn from_file(path: impl AsRef<Path>) -> Result<Self, ModelError> {
@@ -586,30 +608,24 @@ impl Model {
                     format!("body '{}' is defined twice", b.name),
                 ));
             }
-            if !(b.mass.is_finite() && b.mass > 0.0) {
+            if !(b.mass.is_finite() && b.mass > 0.0 && b.mass <= MAX_BODY_MASS_KG) {
                 return Err(err(
                     p("mass"),
-                    format!("mass must be positive and finite, got {}", b.mass),
+                    format!(
+                        "mass must be positive and at most {MAX_BODY_MASS_KG:e} kg, got {}",
+                        crate::io::readable(b.mass)
+                    ),
                 ));
             }
-            if !finite3(&b.mass_center) {
-                return Err(err(p("mass_center"), "must be finite".into()));
+            if let Some(r) = location_problem(&b.mass_center) {
+                return Err(err(p("mass_center"), r));
             }
             if let Some(reason) = inertia_problem(&b.inertia) {
                 return Err(err(p("inertia"), reason));
             }
             // Simbody and leap's multibody take the inertia about the body's
-            // origin, I + m·(|c|²·1 − c·cᵀ): it must be finite too.
-            let c2: f64 = b.mass_center.iter().map(|c| c * c).sum();
-            if !(b.mass * c2).is_finite() {
-                return Err(err(
-                    p("mass_center"),
-                    format!(
-                        "the inertia about the body's origin, mass · |mass_center|² = {:e} kg·m², is not finite",
-                        b.mass * c2
-                    ),
-                ));
-            }
+            // origin, I + m·(|c|²·1 − c·cᵀ): bounded by the bounds on m and
+            // c above (m·|c|² ≤ 3e8 kg·m²).
             bodies.push(Body {
                 name: b.name.clone(),
                 mass: b.mass,
@@ -695,8 +711,8 @@ impl Model {
                 ));
             }
             child_of[child_idx] = Some(j);
-            if !finite3(loc) {
-                return Err(err(p("location_in_parent"), "must be finite".into()));
+            if let Some(r) = location_problem(loc) {
+                return Err(err(p("location_in_parent"), r));
             }
             let mut use_coord = |field: String, cname: &str| -> Result<usize, ModelError> {
                 let ci = *coord_index
@@ -814,8 +830,8 @@ impl Model {
             let body = *body_index
                 .get(&s.body)
                 .ok_or_else(|| err(p("body"), format!("unknown body '{}'", s.body)))?;
-            if !finite3(&s.location) {
-                return Err(err(p("location"), "must be finite".into()));
+            if let Some(r) = location_problem(&s.location) {
+                return Err(err(p("location"), r));
             }
             stations.push(Station {
                 name: s.name.clone(),
@@ -1062,8 +1078,8 @@ impl Model {
                     }
                     let body = body_of(&sp.body)
                         .ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
-                    if !finite3(&sp.location) {
-                        return Err(err(q("location"), "must be finite".into()));
+                    if let Some(r) = location_problem(&sp.location) {
+                        return Err(err(q("location"), r));
                     }
                     if !(sp.radius.is_finite() && sp.radius > 0.0) {
                         return Err(err(

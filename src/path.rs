@@ -202,11 +202,10 @@ impl GeometryPath {
                     )
                 })
             };
-            let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
             let pp = match p {
                 PathPointSpec::Fixed { body, location } => {
-                    if !finite(location) {
-                        return Err((i, "location".into(), "must be finite".into()));
+                    if let Some(r) = crate::model::location_problem(location) {
+                        return Err((i, "location".into(), r));
                     }
                     PathPoint {
                         body: b(body)?,
@@ -220,8 +219,8 @@ impl GeometryPath {
                     coordinate,
                     range,
                 } => {
-                    if !finite(location) {
-                        return Err((i, "location".into(), "must be finite".into()));
+                    if let Some(r) = crate::model::location_problem(location) {
+                        return Err((i, "location".into(), r));
                     }
                     if !(range[0].is_finite() && range[1].is_finite() && range[0] < range[1]) {
                         return Err((

@@ -897,7 +897,10 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
         .as_f64()
         .unwrap();
     let h = v["jump_height_m"].as_f64().unwrap();
-    assert!((own - h).abs() < 2e-4, "predicted {h}, optimizer's dynamics {own}");
+    assert!(
+        (own - h).abs() < 2e-4,
+        "predicted {h}, optimizer's dynamics {own}"
+    );
     assert_eq!(
         v["ignored_study_settings"],
         serde_json::json!(["mesh.scheme", "hessian"]),

@@ -584,12 +584,12 @@ fn body_inertias_must_be_physical_and_finite_about_the_origin() {
         c * s * (yy - zz)
     ]);
     Model::from_json_str(&v.to_string(), "m.json").unwrap();
-    // m·|c|² overflows.
+    // m·|c|² would overflow: the mass centre lies far outside the body.
     let mut v = jumper_json();
     v["bodies"][t]["mass_center"] = serde_json::json!([0.0, 1e300, 0.0]);
     let e = refused(&v);
     assert_eq!(e.field(), format!("bodies[{t}].mass_center"));
-    assert!(e.to_string().contains("is not finite"), "{e}");
+    assert!(e.to_string().contains("within ±100 m"), "{e}");
 }
 
 /// Names become OpenSim paths and .sto column labels: a muscle named
@@ -629,4 +629,64 @@ fn names_that_break_paths_or_column_labels_are_refused() {
         };
         assert!(e.to_string().contains(&want), "{name:?}: {e}");
     }
+}
+
+/// Locations far beyond a human body and absurd masses are refused with
+/// the field named: a mass centre at 1e100 m had reached Simbody, which
+/// threw about the inertia's triangle inequality; a joint at 1e150 m and a
+/// conditional path point at 1e150 m failed later naming no field (or
+/// another muscle); a body of 1e12 kg set the two backends apart.
+#[test]
+fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
+    let v = jumper_json();
+    let soleus = muscle_index(&v, "med_gas_r");
+    let cases: [(&str, Box<dyn Fn(&mut serde_json::Value)>, &str); 5] = [
+        (
+            "bodies[1].mass_center",
+            Box::new(|m| m["bodies"][1]["mass_center"] = serde_json::json!([0.0, 1e100, 0.0])),
+            "within ±100 m of the body's origin in each coordinate, got [0, 1e100, 0]",
+        ),
+        (
+            "joints[1].location_in_parent",
+            Box::new(|m| {
+                m["joints"][1]["location_in_parent"] = serde_json::json!([0.0, -150.0, 0.0])
+            }),
+            "within ±100 m",
+        ),
+        (
+            "stations[0].location",
+            Box::new(|m| m["stations"][0]["location"] = serde_json::json!([1e150, 0.0, 0.0])),
+            "within ±100 m",
+        ),
+        (
+            "bodies[1].mass",
+            Box::new(|m| m["bodies"][1]["mass"] = serde_json::json!(1e12)),
+            "mass must be positive and at most 1e4 kg, got 1e12",
+        ),
+        (
+            "forces.contact.spheres[0].location",
+            Box::new(|m| {
+                m["forces"]["contact"]["spheres"][0]["location"] =
+                    serde_json::json!([0.0, 0.0, f64::MAX])
+            }),
+            "within ±100 m",
+        ),
+    ];
+    for (field, mutate, want) in cases {
+        let mut m = v.clone();
+        mutate(&mut m);
+        let e = refused(&m);
+        assert_eq!(e.field(), field, "{e}");
+        assert!(e.to_string().contains(want), "{field}: {e}");
+    }
+    // A path point: the muscle's path names it.
+    let mut m = v.clone();
+    m["forces"]["muscles"][soleus]["path"][0]["location"] = serde_json::json!([0.0, 1e150, 0.0]);
+    let e = refused(&m);
+    assert!(
+        e.field().starts_with(&format!("forces.muscles[{soleus}]")),
+        "{e}"
+    );
+    assert!(e.field().ends_with("location"), "{e}");
+    assert!(e.to_string().contains("within ±100 m"), "{e}");
 }
