@@ -906,10 +906,27 @@ fn simulate(
     };
     leap::solve::create_results_dir(&out_dir)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
+    let controls_range = match &exc {
+        StudyExcitation::Controls(c) => c.time.first().zip(c.time.last()).map(|(a, b)| (*a, *b)),
+        StudyExcitation::BangBang(_) => None,
+    };
     match result {
         Ok((summary, traj)) => {
             let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
             let mut v = serde_json::to_value(&summary)?;
+            if let Some((a, b)) = controls_range {
+                v["controls_time_range"] = serde_json::json!([a, b]);
+                // A controls file that stops well before the push-off ends
+                // (a solution's ends at its t_f, at about lift-off) leaves
+                // the jump to its held last row: say so.
+                let push_off = summary.liftoff_time_s.unwrap_or(summary.final_time_s);
+                if a > 0.0 || b < 0.9 * push_off {
+                    eprintln!(
+                        "warning: the controls file covers {a}–{b} s of a push-off to {push_off:.3} s{}: outside that range its first and last rows are held",
+                        if summary.liftoff_time_s.is_none() { " (no lift-off)" } else { "" }
+                    );
+                }
+            }
             v["files"] = serde_json::json!(files
                 .iter()
                 .map(|p| p.display().to_string())

@@ -350,3 +350,52 @@ fn a_study_without_a_model_uses_the_working_directorys_default() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A controls file that stops long before the push-off ends is used with
+/// its last row held, and `leap simulate` says so (a file of the first
+/// 0.02 s had "jumped" −8.6 cm without a word); the JSON gives the file's
+/// time range. A solution's excitations, which end at its t_f, about at
+/// lift-off, raise no warning.
+#[test]
+fn a_controls_file_that_stops_early_is_warned_of() {
+    use leap::io::StoTable;
+    let out = tmp("short_controls");
+    let full = std::path::Path::new("tests/data/controls/jump_optimal.sto");
+    let mut t = StoTable::read(full).unwrap();
+    let keep = t.time.iter().take_while(|&&x| x <= 0.05).count();
+    t.time.truncate(keep);
+    t.rows.truncate(keep);
+    let short = out.join("short.sto");
+    t.write_sto(&short).unwrap();
+    let last = *t.time.last().unwrap();
+    for (file, warned) in [(short.as_path(), true), (full, false)] {
+        let o = leap()
+            .args([
+                "simulate",
+                "--json",
+                "--integrator",
+                "DormandPrince",
+                "--controls",
+            ])
+            .arg(file)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        assert_eq!(
+            err.contains("warning: the controls file covers"),
+            warned,
+            "{file:?}: {err}"
+        );
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let range = v["controls_time_range"].as_array().unwrap();
+        assert_eq!(range[0].as_f64(), Some(0.0));
+        if warned {
+            assert_eq!(range[1].as_f64(), Some(last));
+            assert!(err.contains(&format!("covers 0–{last} s")), "{err}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
