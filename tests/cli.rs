@@ -459,3 +459,43 @@ fn a_closed_or_full_standard_output_is_an_error_not_a_panic() {
         );
     }
 }
+
+/// `leap analyze` warns when the file breaks Newton's second law (impulse
+/// against momentum change): times scaled by 1e3 had printed an impulse
+/// a thousand times the momentum change without a word. A simulated jump's
+/// states agree.
+#[test]
+fn analyze_warns_when_impulse_and_momentum_disagree() {
+    let dir = std::env::temp_dir().join(format!("leap-cli-newton-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["simulate", "--integrator", "DormandPrince", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let states = dir.join("jump_states.sto");
+    let mut slow = leap::io::StoTable::read(&states).unwrap();
+    for t in &mut slow.time {
+        *t *= 1e3;
+    }
+    let slow_file = dir.join("slow.sto");
+    slow.write_sto(&slow_file).unwrap();
+    for (file, warned) in [(&states, false), (&slow_file, true)] {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .arg("analyze")
+            .arg(file)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(
+            text.contains("warning: the impulse and the momentum change differ"),
+            warned,
+            "{file:?}: {text}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
