@@ -1093,16 +1093,29 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
 /// simulate` checks its files the same way.
 #[test]
 fn unwritable_result_files_are_refused_before_the_solve() {
-    let out = fresh_dir("blocked");
-    std::fs::create_dir_all(out.join("jump_history.csv")).unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["solve", "--num-mesh-intervals", "4", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    // `leap <args> --out <fresh dir>` with `block` made in that directory
+    // first: exit 2, nothing else written; its stderr.
+    let refused = |tag: &str, args: &[&str], block: &dyn Fn(&Path)| {
+        let out = fresh_dir(tag);
+        block(&out);
+        let before = files_in(&out);
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(args)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert_eq!(files_in(&out), before, "{err}");
+        let _ = std::fs::remove_dir_all(&out);
+        err
+    };
+    let solve = ["solve", "--num-mesh-intervals", "4"];
+    let err = refused("blocked", &solve, &|d| {
+        std::fs::create_dir_all(d.join("jump_history.csv")).unwrap()
+    });
     assert!(
         err.contains("cannot write the result file")
             && err.contains("jump_history.csv: a directory of that name exists"),
@@ -1112,38 +1125,18 @@ fn unwritable_result_files_are_refused_before_the_solve() {
         !err.contains("SQP"),
         "refused after the solve started: {err}"
     );
-    assert_eq!(files_in(&out), ["jump_history.csv"]);
-
-    let out = fresh_dir("qps_file");
-    std::fs::write(out.join("qps"), "").unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["solve", "--num-mesh-intervals", "4", "--dump-qps", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused("qps_file", &[&solve[..], &["--dump-qps"]].concat(), &|d| {
+        std::fs::write(d.join("qps"), "").unwrap()
+    });
     assert!(
         err.contains("--dump-qps: cannot create the QP directory"),
         "{err}"
     );
-    assert_eq!(files_in(&out), ["qps"]);
-
-    let out = fresh_dir("simulate_blocked");
-    std::fs::create_dir_all(out.join("jump_grf.mot")).unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["simulate", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    let err = refused("simulate_blocked", &["simulate"], &|d| {
+        std::fs::create_dir_all(d.join("jump_grf.mot")).unwrap()
+    });
     assert!(
         err.contains("jump_grf.mot: a directory of that name exists"),
         "{err}"
     );
-    assert_eq!(files_in(&out), ["jump_grf.mot"]);
-    let _ = std::fs::remove_dir_all(&out);
 }
