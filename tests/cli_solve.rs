@@ -203,17 +203,23 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     // differ in the last digits, and the steps adapt): within 1e-6 m, where
     // the optimizer's smoothed paths put the default solve's 1.6e-4 m off.
     let sim_out = fresh_dir("forward_as_simulate");
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["simulate", "--json", "--controls"])
-        .arg(out.join("jump_solution.sto"))
-        .arg("--out")
-        .arg(&sim_out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let hs = s["jump_height_m"].as_f64().unwrap();
+    // `leap simulate --json <args> --controls <file>`: its jump height.
+    let simulated = |args: &[&str], controls: &Path| {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["simulate", "--json"])
+            .args(args)
+            .arg("--controls")
+            .arg(controls)
+            .arg("--out")
+            .arg(&sim_out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        s["jump_height_m"].as_f64().unwrap()
+    };
+    let hs = simulated(&[], &out.join("jump_solution.sto"));
     assert!(
         (hs - hf).abs() < 1e-6,
         "leap simulate {hs}, forward check {hf}"
@@ -238,18 +244,10 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     }
     let raised_file = sim_out.join("raised.sto");
     raised.write_sto(&raised_file).unwrap();
-    let o = Command::cargo_bin("leap")
-        .unwrap()
-        .args(["simulate", "--json", "--integrator", "DormandPrince"])
-        .args(["--accuracy", "1e-6", "--controls"])
-        .arg(&raised_file)
-        .arg("--out")
-        .arg(&sim_out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    let hs = s["jump_height_m"].as_f64().unwrap();
+    let hs = simulated(
+        &["--integrator", "DormandPrince", "--accuracy", "1e-6"],
+        &raised_file,
+    );
     let hr = e["jump_height_raised_m"].as_f64().unwrap();
     assert!((hs - hr).abs() < 1e-6, "leap simulate {hs}, raised {hr}");
     let nominal = v["forward_jump_height_rust_m"].as_f64().unwrap();
