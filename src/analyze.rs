@@ -271,12 +271,24 @@ pub fn analyze(
 }
 
 impl JumpAnalysis {
-    /// |impulse − momentum change| / max(|impulse|, |momentum change|),
-    /// None where both vanish: 0 for a file that obeys Newton's second law.
-    pub fn newton_mismatch(&self) -> Option<f64> {
+    /// |impulse − momentum change| / max(|impulse|, |momentum change|,
+    /// 1 N·s): 0 for a file that obeys Newton's second law (a window over
+    /// the standing squat, both near 0, stays near 0).
+    pub fn newton_mismatch(&self) -> f64 {
         let (a, b) = (self.vertical_impulse_ns, self.com_momentum_change_ns);
-        let scale = a.abs().max(b.abs());
-        (scale > 0.0).then(|| (a - b).abs() / scale)
+        (a - b).abs() / a.abs().max(b.abs()).max(1.0)
+    }
+
+    /// The warning `leap analyze` gives when the file breaks Newton's
+    /// second law by more than [`NEWTON_MISMATCH_WARNING`].
+    pub fn newton_warning(&self) -> Option<String> {
+        let r = self.newton_mismatch();
+        (r > NEWTON_MISMATCH_WARNING).then(|| {
+            format!(
+                "warning: the impulse and the momentum change differ by {:.0}% (Newton's second law equates them): the file's speeds are not its positions' rates, or its rows lie too far apart to integrate the ground force; read this analysis with care",
+                100.0 * r
+            )
+        })
     }
 
     /// The report as text: the muscle table and the energy budget.
@@ -323,15 +335,6 @@ impl JumpAnalysis {
             "vertical impulse ∫(Fy − mg) dt {:.2} N·s, COM momentum change {:.2} N·s\n",
             self.vertical_impulse_ns, self.com_momentum_change_ns
         ));
-        if let Some(r) = self
-            .newton_mismatch()
-            .filter(|&r| r > NEWTON_MISMATCH_WARNING)
-        {
-            s.push_str(&format!(
-                "warning: the impulse and the momentum change differ by {:.0}% (Newton's second law equates them): the file's speeds are not its positions' rates, or its rows lie too far apart to integrate the ground force; read this analysis with care\n",
-                100.0 * r
-            ));
-        }
         s.push_str("work of the muscles on both sides; W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt\n");
         s
     }

@@ -496,9 +496,14 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let a = leap::analyze::analyze(&eq, &laws, &time, &xs, window)
                 .with_context(|| format!("{}", states.display()))?;
             if json {
-                outln!("{}", serde_json::to_string_pretty(&a)?);
+                let mut v = serde_json::to_value(&a)?;
+                v["newton_mismatch"] = serde_json::json!(a.newton_mismatch());
+                outln!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 out!("{}", a.to_text());
+            }
+            if let Some(w) = a.newton_warning() {
+                eprintln!("{w}");
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -916,15 +921,16 @@ fn simulate(
             let mut v = serde_json::to_value(&summary)?;
             if let Some((a, b)) = controls_range {
                 v["controls_time_range"] = serde_json::json!([a, b]);
-                // A controls file that stops well before the push-off ends
-                // (a solution's ends at its t_f, at about lift-off) leaves
-                // the jump to its held last row: say so.
-                let push_off = summary.liftoff_time_s.unwrap_or(summary.final_time_s);
-                if a > 0.0 || b < 0.9 * push_off {
-                    eprintln!(
-                        "warning: the controls file covers {a}–{b} s of a push-off to {push_off:.3} s{}: outside that range its first and last rows are held",
-                        if summary.liftoff_time_s.is_none() { " (no lift-off)" } else { "" }
-                    );
+                // A controls file that stops well before lift-off (a
+                // solution's ends at its t_f, at about lift-off) leaves the
+                // jump to its held last row: say so. Without a lift-off the
+                // warning below speaks.
+                if let Some(push_off) = summary.liftoff_time_s {
+                    if a > 0.0 || b < 0.9 * push_off {
+                        eprintln!(
+                            "warning: the controls file covers {a:.3}–{b:.3} s of a push-off to {push_off:.3} s: outside that range its first and last rows are held"
+                        );
+                    }
                 }
             }
             v["files"] = serde_json::json!(files

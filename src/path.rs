@@ -246,6 +246,22 @@ impl GeometryPath {
                     z_location,
                 } => {
                     let s = |d: &SplineData, f: &str| {
+                        // Its values are a location's coordinates: bounded
+                        // as a fixed point's are.
+                        if let Some(&y) =
+                            d.y.iter()
+                                .find(|y| !(y.abs() <= crate::model::MAX_LOCATION_M))
+                        {
+                            return Err((
+                                i,
+                                f.to_string(),
+                                format!(
+                                    "values must be finite and within ±{} m of the body's origin, got {}",
+                                    crate::model::MAX_LOCATION_M,
+                                    crate::io::readable(y)
+                                ),
+                            ));
+                        }
                         SimmSpline::new(d).map_err(|e| (i, f.to_string(), e.to_string()))
                     };
                     PathPoint {

@@ -270,11 +270,11 @@ impl ProblemSettings {
     }
 }
 
-/// Final-time bounds as a study file gives them.
 /// The shortest final time a study may allow (s): h = t_f/N must stay a
 /// time step the contact and muscle dynamics can be integrated over.
 const MIN_TIME_FINAL: f64 = 0.01;
 
+/// Final-time bounds as a study file gives them.
 fn parse_time_bounds(b: &[f64]) -> Result<[f64; 2], String> {
     let (t0, t1) = match b {
         [t] => (*t, *t),

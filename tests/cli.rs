@@ -483,19 +483,27 @@ fn analyze_warns_when_impulse_and_momentum_disagree() {
     let slow_file = dir.join("slow.sto");
     slow.write_sto(&slow_file).unwrap();
     for (file, warned) in [(&states, false), (&slow_file, true)] {
-        let o = Command::cargo_bin("leap")
-            .unwrap()
-            .arg("analyze")
-            .arg(file)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        let text = String::from_utf8_lossy(&o.stdout);
-        assert_eq!(
-            text.contains("warning: the impulse and the momentum change differ"),
-            warned,
-            "{file:?}: {text}"
-        );
+        for json in [false, true] {
+            let o = Command::cargo_bin("leap")
+                .unwrap()
+                .arg("analyze")
+                .arg(file)
+                .args(json.then_some("--json"))
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(o.status.success(), "{err}");
+            assert_eq!(
+                err.contains("warning: the impulse and the momentum change differ"),
+                warned,
+                "{file:?}: {err}"
+            );
+            if json {
+                let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+                let r = v["newton_mismatch"].as_f64().unwrap();
+                assert_eq!(r > 0.25, warned, "{r}");
+            }
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

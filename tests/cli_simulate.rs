@@ -394,7 +394,7 @@ fn a_controls_file_that_stops_early_is_warned_of() {
         assert_eq!(range[0].as_f64(), Some(0.0));
         if warned {
             assert_eq!(range[1].as_f64(), Some(last));
-            assert!(err.contains(&format!("covers 0–{last} s")), "{err}");
+            assert!(err.contains(&format!("covers 0.000–{last:.3} s")), "{err}");
         }
     }
     let _ = std::fs::remove_dir_all(&out);

@@ -639,7 +639,7 @@ fn names_that_break_paths_or_column_labels_are_refused() {
 #[test]
 fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
     let v = jumper_json();
-    let soleus = muscle_index(&v, "med_gas_r");
+    let med_gas = muscle_index(&v, "med_gas_r");
     let far = "within ±100 m of the body's origin in each coordinate";
     for (field, pointer, value, want) in [
         (
@@ -679,14 +679,28 @@ fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
         assert_eq!(e.field(), field, "{e}");
         assert!(e.to_string().contains(&want), "{field}: {e}");
     }
-    // A path point: the muscle's path names it.
+    // A path point, fixed or moving: the muscle's path names it.
     let mut m = v.clone();
-    m["forces"]["muscles"][soleus]["path"][0]["location"] = serde_json::json!([0.0, 1e150, 0.0]);
+    m["forces"]["muscles"][med_gas]["path"][0]["location"] = serde_json::json!([0.0, 1e150, 0.0]);
     let e = refused(&m);
-    assert!(
-        e.field().starts_with(&format!("forces.muscles[{soleus}]")),
+    assert_eq!(
+        e.field(),
+        format!("forces.muscles[{med_gas}].path[0].location"),
         "{e}"
     );
-    assert!(e.field().ends_with("location"), "{e}");
     assert!(e.to_string().contains("within ±100 m"), "{e}");
+    let rect_fem = muscle_index(&v, "rect_fem_r");
+    let mut m = v.clone();
+    m["forces"]["muscles"][rect_fem]["path"][2]["y_location"]["y"][1] = serde_json::json!(1e150);
+    let e = refused(&m);
+    assert_eq!(
+        e.field(),
+        format!("forces.muscles[{rect_fem}].path[2].y_location"),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("within ±100 m of the body's origin, got 1e150"),
+        "{e}"
+    );
 }
