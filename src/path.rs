@@ -250,7 +250,7 @@ impl GeometryPath {
                         // as a fixed point's are.
                         if let Some(&y) =
                             d.y.iter()
-                                .find(|y| !(y.abs() <= crate::model::MAX_LOCATION_M))
+                                .find(|y| y.is_nan() || y.abs() > crate::model::MAX_LOCATION_M)
                         {
                             return Err((
                                 i,
