@@ -831,13 +831,9 @@ fn simulate(
         .unwrap_or_else(|| "command line".into());
     let where_ = format!("{origin}: ");
     let choice = st.check(&origin)?;
-    let files = [
-        "jump_states.sto",
-        "jump_controls.sto",
-        "jump_grf.mot",
-        "jump_summary.json",
-    ];
-    leap::solve::check_result_files(&out_dir, &files.map(String::from))
+    let mut files = leap::simulate::trajectory_files("jump").to_vec();
+    files.push("jump_summary.json".into());
+    leap::solve::check_result_files(&out_dir, &files)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
     let m = leap::model::Model::from_file(&model_path)?;
     let (laws, eq) = leap::ode::StateEquation::opensim(&m, true)?;

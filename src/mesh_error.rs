@@ -68,14 +68,8 @@ impl MeshError {
             .iter()
             .filter_map(|e| e.relative_error.map(|r| (r, e.interval)))
             .max_by(|a, b| a.0.total_cmp(&b.0));
-        let mut e: Vec<f64> = intervals.iter().filter_map(|e| e.relative_error).collect();
-        e.sort_by(f64::total_cmp);
-        let m = e.len() / 2;
-        let median = match e.len() {
-            0 => None,
-            n if n % 2 == 1 => Some(e[m]),
-            _ => Some(0.5 * (e[m - 1] + e[m])),
-        };
+        let e: Vec<f64> = intervals.iter().filter_map(|e| e.relative_error).collect();
+        let median = (!e.is_empty()).then(|| crate::sqp::median(e));
         MeshError {
             accuracy,
             largest_relative_error: worst.map(|w| w.0),

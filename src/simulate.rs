@@ -377,6 +377,12 @@ pub fn simulate_rust<L: ForceLaws<f64>, E: ExcitationSource>(
     Ok((summary, traj))
 }
 
+/// The files [`write_trajectory`] writes for `name`: states, controls,
+/// ground forces.
+pub fn trajectory_files(name: &str) -> [String; 3] {
+    ["_states.sto", "_controls.sto", "_grf.mot"].map(|s| format!("{name}{s}"))
+}
+
 /// Write states and controls (.sto, OpenSim 4 names) and ground reaction
 /// forces (.mot) of a trajectory into `dir` with file prefix `name`.
 pub fn write_trajectory(
@@ -399,11 +405,7 @@ pub fn write_trajectory(
     controls.time = traj.time.clone();
     controls.rows = traj.controls.clone();
     let grf = grf_table(&format!("{name}_grf"), &traj.time, &traj.grf);
-    let paths = [
-        dir.join(format!("{name}_states.sto")),
-        dir.join(format!("{name}_controls.sto")),
-        dir.join(format!("{name}_grf.mot")),
-    ];
+    let paths = trajectory_files(name).map(|f| dir.join(f));
     states.write_sto(&paths[0])?;
     controls.write_sto(&paths[1])?;
     grf.write_mot(&paths[2])?;

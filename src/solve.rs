@@ -115,18 +115,14 @@ pub fn check_results_dir(dir: &Path) -> Result<(), std::io::Error> {
 
 /// The files a solve named `name` writes into its results directory.
 pub fn result_files(name: &str) -> Vec<String> {
-    [
-        "_solution.sto",
-        "_grf.mot",
-        "_history.csv",
-        "_forward_states.sto",
-        "_forward_controls.sto",
-        "_forward_grf.mot",
-        "_summary.json",
-    ]
-    .iter()
-    .map(|s| format!("{name}{s}"))
-    .collect()
+    let mut files: Vec<String> = ["_solution.sto", "_grf.mot", "_history.csv", "_summary.json"]
+        .iter()
+        .map(|s| format!("{name}{s}"))
+        .collect();
+    files.extend(crate::simulate::trajectory_files(&format!(
+        "{name}_forward"
+    )));
+    files
 }
 
 /// Whether a directory stands where one of `files` should be written in
