@@ -16,8 +16,8 @@ forward model, not only for its parts.
 
 CONTROLS.sto defaults to tests/data/controls/jump_optimal.sto, the excitations
 at the 29 nodes of leap's default solve (`leap solve`; `/forceset/<muscle>_r`
-columns, linear between nodes, held after the last node; each left muscle
-takes its right partner's excitation). The initial state is leap's static
+columns, linear between nodes, held after the last node; a left muscle
+without its own column takes its right partner's excitation). The initial state is leap's static
 squat, read from `leap simulate --controls CONTROLS.sto` (row 0 of its
 states file), since OpenSim has no squat solver; the script checks it is at
 rest in OpenSim too (coordinate accelerations, and OpenSim's own muscle
@@ -77,10 +77,13 @@ def main():
     ctrl = osim.PrescribedController()
     ctrl.setName("leap_excitations")
     muscles = model.getMuscles()
+    in_file = {label.split("/")[-1] for label in clabels[1:]}
     for k, label in enumerate(clabels[1:], start=1):
         name = label.split("/")[-1]
+        # A left muscle takes its own column where the file has one (leap's
+        # files have both legs), else its right partner's.
         for side in (name, mirror(name)):
-            if side is None:
+            if side is None or (side != name and side in in_file):
                 continue
             f = osim.PiecewiseLinearFunction()
             for row in crows:

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Golden reference values for leap's force laws, computed by OpenSim 4.6,
-and a check that leap's output files load in OpenSim.
+"""Golden reference values for leap's force laws, computed by OpenSim 4.6.
+(Whether OpenSim reads leap's output files: scripts/opensim_reads_leap_files.py.)
 
 Writes tests/data/opensim_forces.json with
 - Thelen2003Muscle tendon force, fibre velocity, force-velocity multiplier,
@@ -13,16 +13,9 @@ Writes tests/data/opensim_forces.json with
   penetrations, velocities and spins, for two parameter sets;
 - the jumper's passive joint torques as ExpressionBasedCoordinateForces.
 
-With --check-results DIR it also loads DIR/jump_states.sto,
-DIR/jump_controls.sto (TimeSeriesTable and Storage) and DIR/jump_grf.mot
-(Storage), as written by `leap simulate --out DIR`, and records what loaded
-in tests/data/opensim_load_check.json (exit 1 if any file fails).
-
     python3 -m venv .venv && .venv/bin/pip install opensim==4.6
-    cargo run --release -- simulate --out /tmp/leap-results
-    .venv/bin/python scripts/reference_opensim.py --check-results /tmp/leap-results
+    .venv/bin/python scripts/reference_opensim.py
 """
-import argparse
 import itertools
 import json
 import math
@@ -227,47 +220,12 @@ def ligaments():
     return out
 
 
-def check_results(d):
-    d = pathlib.Path(d)
-    record = {"opensim_version": osim.GetVersionAndDate(), "files": {}}
-    ok = True
-    for name in ("jump_states.sto", "jump_controls.sto", "jump_grf.mot"):
-        p = d / name
-        entry = {}
-        try:
-            st = osim.Storage(str(p))
-            entry["Storage_rows"] = st.getSize()
-            entry["Storage_columns"] = st.getColumnLabels().getSize()
-            if name.endswith(".sto"):
-                t = osim.TimeSeriesTable(str(p))
-                entry["TimeSeriesTable_rows"] = t.getNumRows()
-                entry["TimeSeriesTable_columns"] = t.getNumColumns()
-                entry["first_labels"] = [t.getColumnLabel(i) for i in range(min(3, t.getNumColumns()))]
-            entry["loaded"] = True
-        except Exception as e:  # noqa: BLE001 - report any OpenSim failure
-            entry["loaded"] = False
-            entry["error"] = str(e)
-            ok = False
-        record["files"][name] = entry
-    (ROOT / "tests" / "data" / "opensim_load_check.json").write_text(json.dumps(record, indent=1) + "\n")
-    print(json.dumps(record, indent=1))
-    return ok
-
-
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("--check-results", help="a results directory written by leap simulate")
-    ap.add_argument("--skip-reference", action="store_true")
-    args = ap.parse_args()
-    if not args.skip_reference:
-        out = {"opensim_version": osim.GetVersionAndDate(), "thelen": muscles(), "degroote": degroote(), "contact": contacts(), "ligaments": ligaments()}
-        path = ROOT / "tests" / "data" / "opensim_forces.json"
-        path.write_text(json.dumps(out) + "\n")
-        print(f"wrote {path}")
-    if args.check_results:
-        return 0 if check_results(args.check_results) else 1
+    out = {"opensim_version": osim.GetVersionAndDate(), "thelen": muscles(), "degroote": degroote(), "contact": contacts(), "ligaments": ligaments()}
+    path = ROOT / "tests" / "data" / "opensim_forces.json"
+    path.write_text(json.dumps(out) + "\n")
+    print(f"wrote {path}")
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -405,6 +405,49 @@ impl StoTable {
     }
 }
 
+impl StoTable {
+    /// Refuse a table in which a column differs from the column it copies,
+    /// where the table has both: `pairs` gives (copy, original) labels, a
+    /// left leg's column and its right partner's, which the symmetric
+    /// system carries as one. They agree within 1e-6 relative (leap
+    /// writes both from one value); a row whose original is not finite is
+    /// left to the reader of the original to refuse.
+    pub fn check_copied_columns<'a>(
+        &self,
+        path: &Path,
+        pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
+    ) -> Result<(), StoError> {
+        let col = |l: &str| self.labels.iter().position(|x| x == l);
+        for (copy, original) in pairs {
+            let (Some(c), Some(o)) = (col(copy), col(original)) else {
+                continue;
+            };
+            if c == o {
+                continue;
+            }
+            for (r, row) in self.rows.iter().enumerate() {
+                let (vc, vo) = (row[c], row[o]);
+                // A non-finite original is the reader's to name.
+                let agree = (vc - vo).abs() <= 1e-6 * (1.0 + vo.abs());
+                if vo.is_finite() && !agree {
+                    return Err(StoError::Column {
+                        file: path.into(),
+                        column: copy.into(),
+                        reason: format!(
+                            "row {} (t = {}): {} differs from {original} ({}): the symmetric model gives both legs one value; give both columns the same values, or leave this one out",
+                            r + 1,
+                            self.time[r],
+                            readable(vc),
+                            readable(vo)
+                        ),
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 /// The first label that repeats one before it: (its first index, its
 /// index). By a hash map, not a scan of the labels before each: a storage
 /// file of 400,000 columns took over a minute that way.
@@ -562,21 +605,25 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// Read a storage file with states of `eq`'s system (a solution, a forward
 /// simulation's states) in radians: with `inDegrees=yes` the value and
 /// speed columns of its rotational coordinates are converted from degrees
-/// (deg/s); other columns are left as they are. Time must be finite and
-/// strictly increasing over at least 2 rows; activations in [0, 1] and fibre
-/// lengths positive.
+/// (deg/s), the left leg's too; other columns are left as they are. Time
+/// must be finite and strictly increasing over at least 2 rows;
+/// activations in [0, 1] and fibre lengths positive; a left leg's column,
+/// where the symmetric system carries it by its right partner's, equal to
+/// that one ([`StoTable::check_copied_columns`]).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
+    let columns = eq.model_state_columns();
     if t.in_degrees(path)? {
-        let names = eq.state_names();
         let nq = eq.nq();
-        for q in rotational_coordinates(eq) {
-            for name in [&names[q], &names[nq + q]] {
-                if let Some(k) = t.labels.iter().position(|l| l == name) {
-                    for row in &mut t.rows {
-                        row[k] = row[k].to_radians();
-                    }
+        let rotational = rotational_coordinates(eq);
+        for (name, i) in &columns {
+            if *i >= 2 * nq || !rotational.contains(&(i % nq)) {
+                continue;
+            }
+            if let Some(k) = t.labels.iter().position(|l| l == name) {
+                for row in &mut t.rows {
+                    row[k] = row[k].to_radians();
                 }
             }
         }
@@ -597,6 +644,13 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
+    let names = eq.state_names();
+    t.check_copied_columns(
+        path,
+        columns
+            .iter()
+            .map(|(l, i)| (l.as_str(), names[*i].as_str())),
+    )?;
     Ok(t)
 }
 
@@ -657,7 +711,9 @@ impl Controls {
     /// solution file. A muscle's column may be named `/forceset/<m>` (Moco),
     /// `<m>` or `<m>.excitation` (OpenSim 3 controls). Every muscle must
     /// have a column; values must be finite and in [0, 1]; time must
-    /// increase strictly.
+    /// increase strictly. A column of a left muscle `<stem>_l` not among
+    /// `muscles`, whose right partner `<stem>_r` is (the symmetric system
+    /// carries both by the right one), must equal the right one's.
     pub fn from_file(path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
         let t = StoTable::read(path)?;
         Self::from_table(&t, path, muscles)
@@ -697,6 +753,26 @@ impl Controls {
             }
             cols.push(k);
         }
+        // A left muscle's column, where its right partner's excitation is
+        // read for both, must agree with it.
+        let mut pairs = Vec::new();
+        for (m, &k) in muscles.iter().zip(&cols) {
+            let Some(stem) = m.strip_suffix("_r") else {
+                continue;
+            };
+            let left = format!("{stem}_l");
+            if muscles.contains(&left.as_str()) {
+                continue;
+            }
+            for copy in [
+                format!("/forceset/{left}"),
+                left.clone(),
+                format!("{left}.excitation"),
+            ] {
+                pairs.push((copy, t.labels[k].clone()));
+            }
+        }
+        t.check_copied_columns(path, pairs.iter().map(|(c, o)| (c.as_str(), o.as_str())))?;
         let values = t
             .rows
             .iter()

@@ -232,39 +232,37 @@ impl StateEquation {
         2 * self.nq() + 2 * self.nm()
     }
 
+    /// OpenSim's path of model coordinate `c`'s state `what` (`value`,
+    /// `speed`): `/jointset/<joint>/<coordinate>/<what>`.
+    fn coordinate_path(&self, c: usize, what: &str) -> String {
+        let name = &self.model.coordinates[c].name;
+        let joint = self.model.joints.iter().find(|j| match &j.kind {
+            crate::model::JointKind::Planar { coordinates } => coordinates.contains(&c),
+            crate::model::JointKind::Pin { coordinate }
+            | crate::model::JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
+            crate::model::JointKind::Weld => false,
+        });
+        format!(
+            "/jointset/{}/{name}/{what}",
+            joint.map(|j| j.name.as_str()).unwrap_or("?")
+        )
+    }
+
     /// OpenSim 4 state names, in x's order.
     pub fn state_names(&self) -> Vec<String> {
         let mut out = Vec::with_capacity(self.nx());
-        let coord_path = |c: usize, what: &str| {
-            let name = &self.model.coordinates[c].name;
-            let joint = self.model.joints.iter().find(|j| match &j.kind {
-                crate::model::JointKind::Planar { coordinates } => coordinates.contains(&c),
-                crate::model::JointKind::Pin { coordinate }
-                | crate::model::JointKind::TranslatingHinge { coordinate, .. } => *coordinate == c,
-                crate::model::JointKind::Weld => false,
-            });
-            format!(
-                "/jointset/{}/{name}/{what}",
-                joint.map(|j| j.name.as_str()).unwrap_or("?")
-            )
-        };
-        for &c in &self.system.coordinates {
-            out.push(coord_path(c, "value"));
+        for what in ["value", "speed"] {
+            for &c in &self.system.coordinates {
+                out.push(self.coordinate_path(c, what));
+            }
         }
-        for &c in &self.system.coordinates {
-            out.push(coord_path(c, "speed"));
-        }
-        for &m in &self.muscles {
-            out.push(format!(
-                "/forceset/{}/fiber_length",
-                self.model.muscles[m].spec.name
-            ));
-        }
-        for &m in &self.muscles {
-            out.push(format!(
-                "/forceset/{}/activation",
-                self.model.muscles[m].spec.name
-            ));
+        for what in ["fiber_length", "activation"] {
+            for &m in &self.muscles {
+                out.push(format!(
+                    "/forceset/{}/{what}",
+                    self.model.muscles[m].spec.name
+                ));
+            }
         }
         out
     }
@@ -274,6 +272,66 @@ impl StateEquation {
         self.muscles
             .iter()
             .map(|&m| format!("/forceset/{}", self.model.muscles[m].spec.name))
+            .collect()
+    }
+
+    /// The carried muscle (an index into `muscles`) whose states and
+    /// excitation model muscle `i` has: itself, or for a left muscle of
+    /// the symmetric system its right partner.
+    fn carrier_of_muscle(&self, i: usize) -> Option<usize> {
+        if let Some(k) = self.muscles.iter().position(|&m| m == i) {
+            return Some(k);
+        }
+        let right = format!("{}_r", self.model.muscles[i].spec.name.strip_suffix("_l")?);
+        self.muscles
+            .iter()
+            .position(|&m| self.model.muscles[m].spec.name == right)
+    }
+
+    /// Every state of the whole model, both legs, as OpenSim names them on
+    /// the model file (`models/jumper.osim`), each with the index in x that
+    /// holds its value: in the symmetric system a left coordinate or muscle
+    /// takes its right partner's. Coordinate values and speeds, then fibre
+    /// lengths and activations, each in the model's order; for the full
+    /// system these are [`Self::state_names`] in x's order. The files leap
+    /// writes carry these columns, so that OpenSim and Moco find every
+    /// state of the model in them: the system's columns alone would leave
+    /// the left leg at its default pose.
+    pub fn model_state_columns(&self) -> Vec<(String, usize)> {
+        let (nq, nm) = (self.nq(), self.nm());
+        let nc = self.model.coordinates.len();
+        let mut out = Vec::new();
+        for (what, offset) in [("value", 0), ("speed", nq)] {
+            for c in 0..nc {
+                let q = self.system.q_of_model_coordinate[c];
+                out.push((self.coordinate_path(c, what), offset + q));
+            }
+        }
+        for (what, offset) in [("fiber_length", 2 * nq), ("activation", 2 * nq + nm)] {
+            for (i, m) in self.model.muscles.iter().enumerate() {
+                if let Some(k) = self.carrier_of_muscle(i) {
+                    out.push((format!("/forceset/{}/{what}", m.spec.name), offset + k));
+                }
+            }
+        }
+        out
+    }
+
+    /// Every excitation of the whole model (Moco: `/forceset/<muscle>`),
+    /// both legs, each with the index in u that holds it: in the
+    /// symmetric system a left muscle takes its right partner's. For the
+    /// full system these are [`Self::control_names`] in u's order.
+    pub fn model_control_columns(&self) -> Vec<(String, usize)> {
+        self.model
+            .muscles
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| {
+                Some((
+                    format!("/forceset/{}", m.spec.name),
+                    self.carrier_of_muscle(i)?,
+                ))
+            })
             .collect()
     }
 

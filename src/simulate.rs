@@ -383,8 +383,10 @@ pub fn trajectory_files(name: &str) -> [String; 3] {
     ["_states.sto", "_controls.sto", "_grf.mot"].map(|s| format!("{name}{s}"))
 }
 
-/// Write states and controls (.sto, OpenSim 4 names) and ground reaction
-/// forces (.mot) of a trajectory into `dir` with file prefix `name`.
+/// Write states and controls (.sto, OpenSim 4 names, every state and
+/// excitation of the whole model: both legs, see
+/// [`StateEquation::model_state_columns`]) and ground reaction forces
+/// (.mot) of a trajectory into `dir` with file prefix `name`.
 pub fn write_trajectory(
     eq: &StateEquation,
     traj: &Trajectory,
@@ -396,20 +398,33 @@ pub fn write_trajectory(
         ..Default::default()
     };
     states.metadata.insert("inDegrees".into(), "no".into());
-    states.labels = eq.state_names();
+    (states.labels, states.rows) = model_columns(&eq.model_state_columns(), &traj.states);
     states.time = traj.time.clone();
-    states.rows = traj.states.clone();
     let mut controls = StoTable::default();
     controls.metadata.insert("inDegrees".into(), "no".into());
-    controls.labels = eq.control_names();
+    (controls.labels, controls.rows) = model_columns(&eq.model_control_columns(), &traj.controls);
     controls.time = traj.time.clone();
-    controls.rows = traj.controls.clone();
     let grf = grf_table(&format!("{name}_grf"), &traj.time, &traj.grf);
     let paths = trajectory_files(name).map(|f| dir.join(f));
     states.write_sto(&paths[0])?;
     controls.write_sto(&paths[1])?;
     grf.write_mot(&paths[2])?;
     Ok(paths.to_vec())
+}
+
+/// The labels and rows of a table of the whole model's `columns` (as
+/// [`StateEquation::model_state_columns`] gives them) from the system's
+/// `rows`.
+pub fn model_columns(
+    columns: &[(String, usize)],
+    rows: &[Vec<f64>],
+) -> (Vec<String>, Vec<Vec<f64>>) {
+    let labels = columns.iter().map(|(l, _)| l.clone()).collect();
+    let rows = rows
+        .iter()
+        .map(|r| columns.iter().map(|&(_, k)| r[k]).collect())
+        .collect();
+    (labels, rows)
 }
 
 /// Ground reaction forces per foot as an OpenSim ExternalLoads table

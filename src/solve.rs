@@ -957,7 +957,9 @@ pub fn node_grf(ocp: &JumpOcp, mesh: &MeshTrajectory) -> Vec<[f64; 12]> {
 }
 
 /// The solution as a Moco solution table: time, states, then excitations,
-/// with `MocoSolution`'s metadata.
+/// with `MocoSolution`'s metadata; every state and excitation of the whole
+/// model, both legs ([`crate::ode::StateEquation::model_state_columns`]),
+/// so that Moco reads it on the model file.
 pub fn solution_table(
     ocp: &JumpOcp,
     mesh: &MeshTrajectory,
@@ -967,8 +969,10 @@ pub fn solution_table(
     let mut t = StoTable::default();
     let md = &mut t.metadata;
     md.insert("inDegrees".into(), "no".into());
-    md.insert("num_states".into(), ocp.nx().to_string());
-    md.insert("num_controls".into(), ocp.nu().to_string());
+    let state_columns = ocp.eq.model_state_columns();
+    let control_columns = ocp.eq.model_control_columns();
+    md.insert("num_states".into(), state_columns.len().to_string());
+    md.insert("num_controls".into(), control_columns.len().to_string());
     for k in [
         "num_multipliers",
         "num_derivatives",
@@ -982,14 +986,19 @@ pub fn solution_table(
     md.insert("solver_duration".into(), format!("{:.6}", r.time.total_s));
     md.insert("status".into(), moco_status(r.status).into());
     md.insert("success".into(), r.status.success().to_string());
-    t.labels = ocp.eq.state_names();
-    t.labels.extend(ocp.eq.control_names());
+    let (mut labels, states) = crate::simulate::model_columns(&state_columns, &mesh.states);
+    let (control_labels, controls) =
+        crate::simulate::model_columns(&control_columns, &mesh.controls);
+    labels.extend(control_labels);
+    t.labels = labels;
     t.time = mesh.time.clone();
-    t.rows = mesh
-        .states
-        .iter()
-        .zip(&mesh.controls)
-        .map(|(x, u)| x.iter().chain(u).copied().collect())
+    t.rows = states
+        .into_iter()
+        .zip(controls)
+        .map(|(mut x, u)| {
+            x.extend(u);
+            x
+        })
         .collect();
     t
 }

@@ -102,7 +102,7 @@ fn bang_bang_jump_leaves_the_ground_and_writes_opensim_files() {
 #[test]
 fn bad_simulate_input_gets_clear_errors() {
     let out = tmp("bad");
-    let cases: [(&[&str], &str); 5] = [
+    let cases: [(&[&str], &str); 6] = [
         (&["--integrator", "Verlet"], "unknown integrator 'Verlet'"),
         (
             &[
@@ -120,6 +120,11 @@ fn bad_simulate_input_gets_clear_errors() {
             "not strictly increasing",
         ),
         (&["--accuracy=-1"], "accuracy: must be positive"),
+        // The left soleus's own column, not its right partner's values.
+        (
+            &["--controls", "tests/data/controls/jumper_asymmetric.sto"],
+            "jumper_asymmetric.sto: column '/forceset/soleus_l': row 1 (t = 0): 0.5 differs from /forceset/soleus_r",
+        ),
     ];
     for (args, want) in cases {
         let o = leap()

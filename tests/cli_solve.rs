@@ -236,7 +236,8 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
         .iter()
         .map(|l| l.starts_with("/forceset/") && l.matches('/').count() == 2)
         .collect();
-    assert_eq!(excitation.iter().filter(|&&x| x).count(), 24);
+    // Both legs' columns: 24 muscles per leg.
+    assert_eq!(excitation.iter().filter(|&&x| x).count(), 48);
     for row in raised.rows.iter_mut() {
         for (v, _) in row.iter_mut().zip(&excitation).filter(|(_, &x)| x) {
             *v = (*v + offset).clamp(0.0, 1.0);
@@ -303,14 +304,19 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     assert_eq!(sol.time.len(), 5);
     assert_eq!(sol.time[0], 0.0);
     assert!((sol.time[4] - tf).abs() < 1e-12 * tf.max(1.0));
-    assert_eq!(sol.labels.len(), 62 + 24);
+    // Every state and excitation of the model, both legs: 10 coordinates,
+    // 48 muscles.
+    assert_eq!(sol.labels.len(), 2 * 10 + 2 * 48 + 48);
     for l in [
         "/jointset/ground_pelvis/pelvis_ty/value",
         "/jointset/knee_r/knee_angle_r/value",
         "/jointset/knee_r/knee_angle_r/speed",
+        "/jointset/knee_l/knee_angle_l/value",
         "/forceset/soleus_r/fiber_length",
         "/forceset/soleus_r/activation",
+        "/forceset/soleus_l/activation",
         "/forceset/soleus_r",
+        "/forceset/soleus_l",
     ] {
         assert!(sol.labels.iter().any(|x| x == l), "no column {l}");
     }
@@ -325,8 +331,8 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     ] {
         assert!(sol.metadata.contains_key(k), "no header key {k}");
     }
-    assert_eq!(sol.metadata["num_states"], "62");
-    assert_eq!(sol.metadata["num_controls"], "24");
+    assert_eq!(sol.metadata["num_states"], "116");
+    assert_eq!(sol.metadata["num_controls"], "48");
     assert_eq!(
         sol.metadata["success"],
         v["success"].as_bool().unwrap().to_string()
@@ -374,7 +380,7 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
 
     // The forward trajectory parses with the states' names.
     let fw = StoTable::read(&out.join("jump_forward_states.sto")).unwrap();
-    assert_eq!(fw.labels, sol.labels[..62].to_vec());
+    assert_eq!(fw.labels, sol.labels[..116].to_vec());
 
     // That solution is a guess for another mesh (resampled).
     let out2 = fresh_dir("out2");
@@ -1038,7 +1044,8 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
                 .is_some_and(|m| !m.contains('/'))
         })
         .collect();
-    assert_eq!(excitation.len(), 24);
+    // Both legs' columns: 24 muscles per leg.
+    assert_eq!(excitation.len(), 48);
     for l in lines
         .iter_mut()
         .skip(end + 2)

@@ -23,8 +23,33 @@ fn jumper_ocp() -> &'static Arc<leap::ocp::JumpOcp> {
 }
 
 /// States and excitations of `eq` in SI units and radians: the squat `x0`
-/// moved a little in each of 4 rows 0.05 s apart.
+/// moved a little in each of 4 rows 0.05 s apart, in the columns leap
+/// writes (every state and excitation of the model, both legs).
 fn states_table(eq: &StateEquation, x0: &[f64]) -> StoTable {
+    let system = system_states_table(eq, x0);
+    let (ns, nu) = (eq.model_state_columns(), eq.model_control_columns());
+    let split: Vec<(Vec<f64>, Vec<f64>)> = system
+        .rows
+        .iter()
+        .map(|r| (r[..eq.nx()].to_vec(), r[eq.nx()..].to_vec()))
+        .collect();
+    let (mut labels, mut rows) =
+        leap::simulate::model_columns(&ns, &split.iter().map(|s| s.0.clone()).collect::<Vec<_>>());
+    let (cl, cr) =
+        leap::simulate::model_columns(&nu, &split.iter().map(|s| s.1.clone()).collect::<Vec<_>>());
+    labels.extend(cl);
+    for (r, c) in rows.iter_mut().zip(cr) {
+        r.extend(c);
+    }
+    StoTable {
+        labels,
+        rows,
+        ..system
+    }
+}
+
+/// As [`states_table`] with the system's columns alone (the right leg).
+fn system_states_table(eq: &StateEquation, x0: &[f64]) -> StoTable {
     let mut t = StoTable::default();
     t.metadata.insert("inDegrees".into(), "no".into());
     t.labels = eq.state_names();
@@ -180,9 +205,10 @@ fn states_in_degrees_are_read_in_radians_and_only_angles_are_converted() {
             }
         }
     }
-    // 5 of the symmetric system's 7 coordinates are angles (pelvis tilt,
-    // hip, knee, ankle, lumbar): value and speed in 4 rows.
-    assert_eq!(angles, 4 * 2 * 5, "angle cells");
+    // 8 of the model's 10 coordinates are angles (pelvis tilt, both hips,
+    // knees and ankles, lumbar): value and speed in 4 rows. The left leg's
+    // are converted too, or they would differ from their right partners.
+    assert_eq!(angles, 4 * 2 * 8, "angle cells");
     assert!(others > 0);
     // The file's degrees really are degrees: the knee of the squat.
     let knee = rad
@@ -251,6 +277,19 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
     let mut long = rad.clone();
     long.time = vec![0.0, 5.0, 10.0, 15.0];
     let tf = 15;
+    // A left leg's column that is not its right partner's copy, a state's
+    // and an excitation's: the symmetric model cannot carry it.
+    let column = |l: &str| rad.labels.iter().position(|x| x == l).unwrap();
+    let (knee_l, knee_r) = (
+        "/jointset/knee_l/knee_angle_l/value",
+        "/jointset/knee_r/knee_angle_r/value",
+    );
+    let mut bent = rad.clone();
+    bent.rows[2][column(knee_r)] = -1.375;
+    bent.rows[2][column(knee_l)] = -1.25;
+    let mut uneven = rad.clone();
+    uneven.rows[1][column("/forceset/soleus_l")] = 0.9;
+    let sr = uneven.rows[1][k];
     for (name, table, want) in [
         (
             "active",
@@ -279,6 +318,16 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
             "column 'time': row 4: inf is not finite".to_string(),
         ),
         (
+            "bent",
+            bent,
+            format!("column '{knee_l}': row 3 (t = 0.1): -1.25 differs from {knee_r} (-1.375): the symmetric model gives both legs one value; give both columns the same values, or leave this one out"),
+        ),
+        (
+            "uneven",
+            uneven,
+            format!("column '/forceset/soleus_l': row 2 (t = 0.05): 0.9 differs from {soleus} ({sr}): the symmetric model gives both legs one value; give both columns the same values, or leave this one out"),
+        ),
+        (
             "repeated",
             repeated,
             "column 'time': not strictly increasing: row 3 has t = 0.05 after t = 0.05".to_string(),
@@ -294,7 +343,7 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         // and times are read: the activation of 7 is no error there.
         let e = leap::solve::guess_from_excitations_file(&tr, &p).map_err(|e| e.to_string());
         match name {
-            "active" | "nan" => assert!(e.is_ok(), "{name}: {e:?}"),
+            "active" | "nan" | "bent" => assert!(e.is_ok(), "{name}: {e:?}"),
             _ => assert_eq!(e.unwrap_err(), format!("{}: {want}", p.display()), "{name}"),
         }
     }

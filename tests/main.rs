@@ -16,6 +16,7 @@ mod laws;
 mod laws_opensim;
 mod model_files;
 mod no_alloc;
+mod opensim_files;
 mod opensim_forward;
 mod paths;
 mod paths_opensim;

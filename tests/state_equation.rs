@@ -69,6 +69,30 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
             xf[2 * nf + nmf + j] = xs[2 * ns + nms + ks];
             uf[j] = us[ks];
         }
+        // The whole model's columns the files carry: the symmetric
+        // system's give this full state; the full system's are its own
+        // names in x's order.
+        let full_names = full.state_names();
+        let sym_columns = sym.model_state_columns();
+        assert_eq!(sym_columns.len(), full.nx());
+        for (label, i) in &sym_columns {
+            let j = full_names.iter().position(|l| l == label).unwrap();
+            assert_eq!(xs[*i], xf[j], "{label}");
+        }
+        let full_columns = full.model_state_columns();
+        assert_eq!(
+            full_columns,
+            full_names.iter().cloned().zip(0..).collect::<Vec<_>>()
+        );
+        let full_controls = full.control_names();
+        for (label, i) in sym.model_control_columns() {
+            let j = full_controls.iter().position(|l| *l == label).unwrap();
+            assert_eq!(us[i], uf[j], "{label}");
+        }
+        assert_eq!(
+            full.model_control_columns(),
+            full_controls.iter().cloned().zip(0..).collect::<Vec<_>>()
+        );
         let mut ds = vec![0.0; sym.nx()];
         let mut df = vec![0.0; full.nx()];
         sym.rhs(&laws, &mut sym.workspace(), &xs, &us, &mut ds)
