@@ -44,9 +44,10 @@ struct Cli {
 enum Command {
     /// Compare the Rust-native dynamics with Simbody at random states.
     Crosscheck {
-        /// Model file (JSON).
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Number of random states (default 100).
         #[arg(long)]
         samples: Option<usize>,
@@ -185,8 +186,10 @@ enum Command {
     /// {"x": [...], "u": [...]}, or an array of these) or CSV (a header of
     /// state and control names, one row per evaluation).
     Eval {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         #[arg(long)]
         input: PathBuf,
         /// The full 10-coordinate system instead of the symmetric one.
@@ -204,8 +207,10 @@ enum Command {
     Analyze {
         /// States over time (OpenSim .sto with the model's state names).
         states: PathBuf,
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Analyse from START to END (s) instead of the push-off.
         #[arg(long, num_args = 2, value_names = ["START", "END"], allow_negative_numbers = true)]
         window: Option<Vec<f64>>,
@@ -219,8 +224,10 @@ enum Command {
     /// Print the state and control names `leap eval` expects, and the static
     /// squat as a ready-made input.
     Squat {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         #[arg(long)]
         full: bool,
     },
@@ -228,8 +235,10 @@ enum Command {
     /// points switch (what the smooth option removes), other coordinates
     /// at a pose of the model.
     Paths {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Pose of the other coordinates (a pose name of the model file).
         #[arg(long, default_value = "squat")]
         pose: String,
@@ -247,16 +256,20 @@ enum Command {
 enum BenchCommand {
     /// Time per q̈ evaluation of a skeleton, Rust-native against Simbody.
     Dynamics {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
     /// Time per ẋ = f(x, u) evaluation, Rust-native against Simbody.
     StateEquation {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         #[arg(long)]
         json: bool,
     },
@@ -273,9 +286,11 @@ enum BenchCommand {
     /// bang-bang guess: time per iteration split into derivatives, Hessian,
     /// QP and line search.
     SqpJump {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
-        #[arg(long, default_value_t = 3)]
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
+        #[arg(long, default_value_t = 3, value_parser = at_least_one)]
         iterations: usize,
         /// "exact" (the jump's default) or "bfgs".
         #[arg(long, default_value = "exact")]
@@ -290,8 +305,10 @@ enum BenchCommand {
     /// the 29-node jump, time per iteration split into derivatives, Hessian,
     /// QP and line search, against the paper's CPU time per iteration.
     Methods {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// SQP iterations per method (a shooting iteration takes about 30 s).
         #[arg(long, default_value_t = 3, value_parser = at_least_one)]
         iterations: usize,
@@ -322,11 +339,22 @@ enum BenchCommand {
     /// One forward jump per integrator and accuracy: steps, rejected steps,
     /// f evaluations, wall time.
     Integrators {
-        #[arg(long, default_value = "models/jumper.json")]
-        model: PathBuf,
+        /// Model file (JSON; default: models/jumper.json in the working
+        /// directory, else leap's own, as `leap solve` finds it).
+        #[arg(long)]
+        model: Option<PathBuf>,
         #[arg(long)]
         json: bool,
     },
+}
+
+/// `--model`, or the default model: `models/jumper.json` in the working
+/// directory, else leap's own (as `leap solve` and `leap simulate` find
+/// it); a read error names the path.
+fn model_file(model: Option<PathBuf>) -> PathBuf {
+    model
+        .or_else(leap::study::default_model)
+        .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_MODEL))
 }
 
 /// A model's OpenSim laws and the state equation of its symmetric (or
@@ -376,6 +404,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             fiber_dynamics,
             json,
         } => {
+            let model = model_file(model);
             if !jacobian {
                 for (given, option) in [
                     (num_mesh_intervals.is_some(), "--num-mesh-intervals"),
@@ -486,6 +515,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
+            let model = model_file(model);
             let (laws, eq) = opensim_system(&model, full)?;
             let (time, xs) = leap::analyze::read_states(&eq, &states)?;
             let window = match window.as_deref() {
@@ -513,6 +543,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
+            let model = model_file(model);
             let (laws, eq) = opensim_system(&model, full)?;
             let inputs = leap::eval::read_inputs(&eq, &input)?;
             let mut reports = Vec::with_capacity(inputs.len());
@@ -580,6 +611,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Paths { model, pose, json } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
             let q = m.poses.get(&pose).cloned().ok_or_else(|| {
@@ -621,6 +653,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Squat { model, full } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let (laws, eq) = leap::ode::StateEquation::opensim(&m, !full)?;
             let pose = m.squat_pose()?;
@@ -644,6 +677,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::StateEquation { model, json },
         } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::state_equation(&m)?;
             if json {
@@ -656,6 +690,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::Integrators { model, json },
         } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let cases = [
                 ("RungeKuttaMerson", 1e-3),
@@ -698,6 +733,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     json,
                 },
         } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let mode: leap::sqp::HessianMode = hessian
                 .parse()
@@ -719,6 +755,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     json,
                 },
         } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::methods(&m, iterations).map_err(|e| anyhow::anyhow!(e))?;
             if json {
@@ -758,6 +795,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::Dynamics { model, json },
         } => {
+            let model = model_file(model);
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::dynamics(&m)?;
             if json {

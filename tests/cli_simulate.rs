@@ -404,3 +404,46 @@ fn a_controls_file_that_stops_early_is_warned_of() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// Every command with a `--model` finds the default model as `leap solve`
+/// does: `models/jumper.json` in the working directory, else leap's own.
+/// Run from a directory without it, `leap squat` prints the jumper's squat
+/// and `leap analyze` reads a states file with it; a named model that is
+/// not there is an error naming it.
+#[test]
+fn commands_find_the_default_model_outside_the_source_tree() {
+    let dir = tmp("default-model");
+    let o = leap().current_dir(&dir).args(["squat"]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        v["state"]["/forceset/soleus_r/activation"].is_number(),
+        "{v}"
+    );
+    let here = std::env::current_dir().unwrap();
+    let o = leap()
+        .current_dir(&dir)
+        .args(["simulate", "--out", "out"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = leap()
+        .current_dir(&dir)
+        .args(["analyze", "out/jump_states.sto", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = leap()
+        .current_dir(&dir)
+        .args(["squat", "--model", "models/jumper.json"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("models/jumper.json") && err.contains("cannot read"),
+        "{err}"
+    );
+    assert!(!dir.join("models").exists() && here.join("models/jumper.json").is_file());
+    let _ = std::fs::remove_dir_all(&dir);
+}
