@@ -697,6 +697,41 @@ fn rotational_coordinates(eq: &StateEquation) -> Vec<usize> {
     qs
 }
 
+/// The labels a muscle's excitation column may have: `/forceset/<m>`
+/// (Moco), `<m>` or `<m>.excitation` (OpenSim 3 controls).
+fn excitation_labels(m: &str) -> [String; 3] {
+    [
+        format!("/forceset/{m}"),
+        m.to_string(),
+        format!("{m}.excitation"),
+    ]
+}
+
+/// The columns of a controls table that look like excitations (labelled
+/// `/forceset/<x>`, or without a `/`) but that [`Controls::from_table`]
+/// neither reads for `muscles` nor checks as a left partner's copy: a
+/// misspelt muscle, or an actuator the model does not have. Nothing reads
+/// them; state columns (a solution's) are not counted.
+pub fn unread_excitation_columns(t: &StoTable, muscles: &[&str]) -> Vec<String> {
+    let mut known = std::collections::HashSet::new();
+    for m in muscles {
+        known.extend(excitation_labels(m));
+        if let Some(stem) = m.strip_suffix("_r") {
+            known.extend(excitation_labels(&format!("{stem}_l")));
+        }
+    }
+    t.labels
+        .iter()
+        .filter(|l| {
+            let control_like = l
+                .strip_prefix("/forceset/")
+                .map_or(!l.contains('/'), |m| !m.contains('/'));
+            control_like && !known.contains(l.as_str())
+        })
+        .cloned()
+        .collect()
+}
+
 /// Excitations over time read from a controls file, one column per muscle,
 /// linearly interpolated (held constant outside the time range).
 #[derive(Debug, Clone)]
@@ -724,11 +759,7 @@ impl Controls {
         t.check_time(path, 1)?;
         let mut cols = Vec::with_capacity(muscles.len());
         for m in muscles {
-            let names = [
-                format!("/forceset/{m}"),
-                m.to_string(),
-                format!("{m}.excitation"),
-            ];
+            let names = excitation_labels(m);
             let k = names
                 .iter()
                 .find_map(|n| t.labels.iter().position(|l| l == n))
@@ -764,11 +795,7 @@ impl Controls {
             if muscles.contains(&left.as_str()) {
                 continue;
             }
-            for copy in [
-                format!("/forceset/{left}"),
-                left.clone(),
-                format!("{left}.excitation"),
-            ] {
+            for copy in excitation_labels(&left) {
                 pairs.push((copy, t.labels[k].clone()));
             }
         }

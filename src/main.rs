@@ -882,8 +882,27 @@ fn simulate(
         .iter()
         .map(|&k| m.muscles[k].spec.name.as_str())
         .collect();
+    let mut unread = Vec::new();
     let exc = match &controls_path {
-        Some(p) => StudyExcitation::Controls(leap::io::Controls::from_file(p, &names)?),
+        Some(p) => {
+            let t = leap::io::StoTable::read(p)?;
+            let c = leap::io::Controls::from_table(&t, p, &names)?;
+            // A misspelt muscle's column would be lost without a word.
+            unread = leap::io::unread_excitation_columns(&t, &names);
+            if !unread.is_empty() {
+                let more = match unread.len() {
+                    n if n > 10 => format!(" and {} more", n - 10),
+                    _ => String::new(),
+                };
+                eprintln!(
+                    "warning: {}: {} column(s) name no muscle of the model and are not read: {}{more}",
+                    p.display(),
+                    unread.len(),
+                    unread[..unread.len().min(10)].join(", ")
+                );
+            }
+            StudyExcitation::Controls(c)
+        }
         None => {
             let bb = st.bang_bang.clone().unwrap_or(BangBangSpec {
                 on: None,
@@ -955,6 +974,7 @@ fn simulate(
             let mut v = serde_json::to_value(&summary)?;
             if let Some((a, b)) = controls_range {
                 v["controls_time_range"] = serde_json::json!([a, b]);
+                v["unread_controls_columns"] = serde_json::json!(unread);
                 // A controls file that stops well before lift-off (a
                 // solution's ends at its t_f, at about lift-off) leaves the
                 // jump to its held last row: say so. Without a lift-off the

@@ -447,3 +447,42 @@ fn commands_find_the_default_model_outside_the_source_tree() {
     assert!(!dir.join("models").exists() && here.join("models/jumper.json").is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A controls column that names no muscle of the model (here a misspelt
+/// soleus) is not read, and `leap simulate` says so, on stderr and in the
+/// JSON; a state column beside it (as in a solution) and the left leg's
+/// columns of leap's own files are not counted. The jump is the one of the
+/// file without the column.
+#[test]
+fn controls_columns_that_name_no_muscle_are_warned_of() {
+    let out = tmp("misspelt_controls");
+    let run = |file: &str| {
+        let o = leap()
+            .args(["simulate", "--json", "--controls", file, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{err}");
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (v, err)
+    };
+    let (v, err) = run("tests/data/controls/jumper_misspelt.sto");
+    assert!(
+        err.contains("warning: tests/data/controls/jumper_misspelt.sto: 1 column(s) name no muscle of the model and are not read: /forceset/solues_r"),
+        "{err}"
+    );
+    assert_eq!(
+        v["unread_controls_columns"],
+        serde_json::json!(["/forceset/solues_r"])
+    );
+    let (plain, err) = run("tests/data/controls/jump_optimal.sto");
+    assert!(!err.contains("not read"), "{err}");
+    assert_eq!(v["jump_height_m"], plain["jump_height_m"]);
+    // leap's own controls file, both legs.
+    let own = out.join("jump_controls.sto");
+    let (v, err) = run(own.to_str().unwrap());
+    assert!(!err.contains("not read"), "{err}");
+    assert_eq!(v["unread_controls_columns"], serde_json::json!([]));
+    let _ = std::fs::remove_dir_all(&out);
+}
