@@ -813,9 +813,9 @@ fn finite_rates<S: Scalar>(
     if !r.fiber_velocity.re().is_finite() || !r.tendon_force.re().is_finite() {
         return Err(format!(
             "non-finite fibre velocity (or force balance) or tendon force (a = {}, l_M = {}, l_MT = {})",
-            a.re(),
-            lm.re(),
-            lmt.re()
+            crate::io::readable(a.re()),
+            crate::io::readable(lm.re()),
+            crate::io::readable(lmt.re())
         ));
     }
     Ok(r)

@@ -921,8 +921,26 @@ impl Model {
                 if !(v.is_finite() && v > 0.0) {
                     return Err(err(
                         p(name),
-                        format!("{name} must be positive and finite, got {v}"),
+                        format!(
+                            "{name} must be positive and finite, got {}",
+                            crate::io::readable(v)
+                        ),
                     ));
+                }
+                if let Some(&(_, lo, hi, unit)) =
+                    MUSCLE_PARAMETER_RANGES.iter().find(|r| r.0 == name)
+                {
+                    if !(lo..=hi).contains(&v) {
+                        return Err(err(
+                            p(name),
+                            format!(
+                                "{} {unit} lies outside [{}, {}] {unit}, a range far wider than any human muscle's (a slip of units or digits?)",
+                                crate::io::readable(v),
+                                crate::io::readable(lo),
+                                crate::io::readable(hi)
+                            ),
+                        ));
+                    }
                 }
             }
             // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
@@ -1197,6 +1215,21 @@ impl Model {
         SystemSpec::build(self, symmetric)
     }
 }
+
+/// The range a muscle's physical parameters must lie in: (name, lowest,
+/// highest, unit). Generous, decades beyond the human muscles of gait2392
+/// (forces 100–8,000 N, fibres 0.02–0.5 m, tendons 0.01–0.5 m, v_max 10
+/// l_opt/s, time constants 0.01–0.06 s), so that they refuse only what
+/// would otherwise fail later under another name: a force in the wrong unit
+/// or with extra digits, a length in millimetres.
+const MUSCLE_PARAMETER_RANGES: [(&str, f64, f64, &str); 6] = [
+    ("max_isometric_force", 1e-3, 1e5, "N"),
+    ("optimal_fiber_length", 1e-4, 5.0, "m"),
+    ("tendon_slack_length", 1e-4, 5.0, "m"),
+    ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
+    ("activation_time_constant", 1e-4, 10.0, "s"),
+    ("deactivation_time_constant", 1e-4, 10.0, "s"),
+];
 
 impl MuscleSpec {
     /// The muscle's parameters by their model-file names.

@@ -382,7 +382,7 @@ fn sided_muscles_need_their_mirror_partner() {
 #[test]
 fn mirror_muscles_must_have_equal_parameters_and_the_error_names_the_parameter() {
     for (param, value) in [
-        ("max_isometric_force", 1e300),
+        ("max_isometric_force", 3e4),
         ("activation_time_constant", 0.02),
     ] {
         let mut v = jumper_json();
@@ -703,4 +703,45 @@ fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
             .contains("within ±100 m of the body's origin, got 1e150"),
         "{e}"
     );
+}
+
+/// A muscle's physical parameters lie in generous ranges, decades beyond
+/// gait2392's muscles: beyond them (a force with extra digits, a length in
+/// millimetres, a time constant in milliseconds) the file is refused,
+/// naming the parameter, instead of failing later as a squat that does
+/// not touch the ground or a non-finite fibre velocity. The bounds
+/// themselves load (both sides changed, as mirror partners must be).
+#[test]
+fn muscle_parameters_far_outside_human_ranges_are_refused() {
+    let v = jumper_json();
+    let (r, l) = (muscle_index(&v, "soleus_r"), muscle_index(&v, "soleus_l"));
+    for (name, lo, hi, unit) in [
+        ("max_isometric_force", 1e-3, 1e5, "N"),
+        ("optimal_fiber_length", 1e-4, 5.0, "m"),
+        ("tendon_slack_length", 1e-4, 5.0, "m"),
+        ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
+        ("activation_time_constant", 1e-4, 10.0, "s"),
+        ("deactivation_time_constant", 1e-4, 10.0, "s"),
+    ] {
+        for (value, ok) in [
+            (lo, true),
+            (hi, true),
+            (lo * 0.99, false),
+            (hi * 1.01, false),
+        ] {
+            let mut m = v.clone();
+            for k in [r, l] {
+                m["forces"]["muscles"][k][name] = serde_json::json!(value);
+            }
+            let got = Model::from_json_str(&m.to_string(), "m.json");
+            if ok {
+                assert!(got.is_ok(), "{name} = {value}: {:?}", got.err());
+                continue;
+            }
+            let e = got.unwrap_err();
+            assert_eq!(e.field(), format!("forces.muscles[{r}].{name}"), "{e}");
+            let text = e.to_string();
+            assert!(text.contains(&format!("{unit} lies outside")), "{text}");
+        }
+    }
 }
