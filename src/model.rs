@@ -620,7 +620,9 @@ impl Model {
             if let Some(r) = location_problem(&b.mass_center) {
                 return Err(err(p("mass_center"), r));
             }
-            if let Some(reason) = inertia_problem(&b.inertia) {
+            if let Some(reason) =
+                inertia_problem(&b.inertia).or_else(|| inertia_size_problem(&b.inertia, b.mass))
+            {
                 return Err(err(p("inertia"), reason));
             }
             // Simbody and leap's multibody take the inertia about the body's
@@ -1360,6 +1362,24 @@ fn inertia_problem(i: &[f64; 6]) -> Option<String> {
         ));
     }
     None
+}
+
+/// Why a physical inertia (about the mass centre) is too large for a body
+/// of `mass` kg, if it is: a body whose mass lies within ±[`MAX_LOCATION_M`]
+/// of its origin in each coordinate has its mass within 2√3·MAX_LOCATION_M
+/// of its mass centre, so no moment above mass·(2√3·MAX_LOCATION_M)² (a
+/// moment of 1e30 kg·m² had loaded, and swamped the dynamics' arithmetic).
+fn inertia_size_problem(i: &[f64; 6], mass: f64) -> Option<String> {
+    let k_max = 2.0 * 3f64.sqrt() * MAX_LOCATION_M;
+    let largest = i[0].max(i[1]).max(i[2]);
+    (largest > mass * k_max * k_max).then(|| {
+        format!(
+            "a moment of {} kg·m² gives a body of {} kg a radius of gyration of {} m; a body whose mass lies within ±{MAX_LOCATION_M} m of its origin has at most {k_max:.0} m",
+            crate::io::readable(largest),
+            crate::io::readable(mass),
+            crate::io::readable((largest / mass).sqrt())
+        )
+    })
 }
 
 /// How a mobilized body moves relative to its parent in a [`SystemSpec`].

@@ -667,6 +667,12 @@ fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
             "mass must be positive and at most 1e4 kg, got 1e12".to_string(),
         ),
         (
+            "bodies[1].inertia",
+            "/bodies/1/inertia",
+            serde_json::json!([1e30, 1e30, 1e30, 0.0, 0.0, 0.0]),
+            "a moment of 1e30 kg·m² gives a body of".to_string(),
+        ),
+        (
             "forces.contact.spheres[0].location",
             "/forces/contact/spheres/0/location",
             serde_json::json!([0.0, 0.0, f64::MAX]),
