@@ -54,6 +54,27 @@ def read_sto(path):
     return labels, rows
 
 
+def vertical_contact_force(model, s, side=None):
+    """The vertical force of the ground on the feet (N) at state s, realized
+    to Dynamics: the contact forces' records on the spheres' bodies, of
+    every foot, or with side "r" or "l" of the forces named *_<side>."""
+    total = 0.0
+    forces = model.getForceSet()
+    for i in range(forces.getSize()):
+        f = forces.get(i)
+        if f.getConcreteClassName() not in ("HuntCrossleyForce", "SmoothSphereHalfSpaceForce"):
+            continue
+        if side is not None and not f.getName().endswith("_" + side):
+            continue
+        labels = f.getRecordLabels()
+        values = f.getRecordValues(s)
+        for j in range(labels.getSize()):
+            lab = labels.get(j)
+            if lab.endswith(".force.Y") and ".ground." not in lab:
+                total += values.get(j)
+    return total
+
+
 def mirror(name):
     """The left partner of a right-side name (coordinate or muscle)."""
     return name[:-2] + "_l" if name.endswith("_r") else None
@@ -118,20 +139,9 @@ def main():
     mass = model.getTotalMass(state)
     g = -model.getGravity()[1]
     weight = mass * g
-    contacts = [model.getForceSet().get(i) for i in range(model.getForceSet().getSize())
-                if model.getForceSet().get(i).getConcreteClassName() in ("HuntCrossleyForce", "SmoothSphereHalfSpaceForce")]
-
     def grf_y(s):
         model.realizeDynamics(s)
-        total = 0.0
-        for f in contacts:
-            labels = f.getRecordLabels()
-            values = f.getRecordValues(s)
-            for j in range(labels.getSize()):
-                lab = labels.get(j)
-                if lab.endswith(".force.Y") and ".ground." not in lab:
-                    total += values.get(j)
-        return total
+        return vertical_contact_force(model, s)
 
     coords = model.getCoordinateSet()
     right_coords = [c["name"] for c in model_json["coordinates"] if not c["name"].endswith("_l")]

@@ -20,7 +20,7 @@ script asks OpenSim itself:
 
 and, at a few rows of the states file, what OpenSim computes from the row
 with both legs: the centre of mass, and the vertical contact force under
-each foot (the HuntCrossleyForces named *_r and *_l). The rows are stored
+each foot (the contact forces named *_r and *_l). The rows are stored
 whole, so the test compares leap's own values at the same states whatever
 later changes do to the simulated trajectory.
 
@@ -37,6 +37,8 @@ import sys
 import tempfile
 
 import opensim as osim
+
+from opensim_forward_jump import vertical_contact_force
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 LEAP = ROOT / "target/release/leap"
@@ -94,23 +96,6 @@ def main():
         sol_state_names = list(solution.getStateNames())
         sol_control_names = list(solution.getControlNames())
 
-        contacts = [model.getForceSet().get(i) for i in range(model.getForceSet().getSize())
-                    if model.getForceSet().get(i).getConcreteClassName() == "HuntCrossleyForce"]
-
-        def foot_force_y(s, side):
-            total = 0.0
-            for f in contacts:
-                if not f.getName().endswith("_" + side):
-                    continue
-                labels = f.getRecordLabels()
-                values = f.getRecordValues(s)
-                for j in range(labels.getSize()):
-                    lab = labels.get(j)
-                    if lab.endswith(".force.Y") and ".ground." not in lab:
-                        total += values.get(j)
-            return total
-
-        times = list(states.getIndependentColumn())
         grf = osim.TimeSeriesTable(str(sim / "jump_grf.mot"))
         grf_times = list(grf.getIndependentColumn())
         col = labels_of(states)
@@ -131,8 +116,8 @@ def main():
                 "state": {c: row[j] for j, c in enumerate(col)},
                 "com_position": list(model.calcMassCenterPosition(s).to_numpy()),
                 "com_velocity": list(model.calcMassCenterVelocity(s).to_numpy()),
-                "vertical_grf_r_bw": foot_force_y(s, "r") / weight,
-                "vertical_grf_l_bw": foot_force_y(s, "l") / weight,
+                "vertical_grf_r_bw": vertical_contact_force(model, s, "r") / weight,
+                "vertical_grf_l_bw": vertical_contact_force(model, s, "l") / weight,
             })
 
         out = {

@@ -417,7 +417,13 @@ impl StoTable {
         path: &Path,
         pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
     ) -> Result<(), StoError> {
-        let col = |l: &str| self.labels.iter().position(|x| x == l);
+        let index: std::collections::HashMap<&str, usize> = self
+            .labels
+            .iter()
+            .enumerate()
+            .map(|(k, l)| (l.as_str(), k))
+            .collect();
+        let col = |l: &str| index.get(l).copied();
         for (copy, original) in pairs {
             let (Some(c), Some(o)) = (col(copy), col(original)) else {
                 continue;
@@ -434,7 +440,7 @@ impl StoTable {
                         file: path.into(),
                         column: copy.into(),
                         reason: format!(
-                            "row {} (t = {}): {} differs from {original} ({}): the symmetric model gives both legs one value; give both columns the same values, or leave this one out",
+                            "row {} (t = {}): {} differs from {original} ({}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns",
                             r + 1,
                             self.time[r],
                             readable(vc),
@@ -708,18 +714,13 @@ fn excitation_labels(m: &str) -> [String; 3] {
 }
 
 /// The columns of a controls table that look like excitations (labelled
-/// `/forceset/<x>`, or without a `/`) but that [`Controls::from_table`]
-/// neither reads for `muscles` nor checks as a left partner's copy: a
-/// misspelt muscle, or an actuator the model does not have. Nothing reads
-/// them; state columns (a solution's) are not counted.
+/// `/forceset/<x>`, or without a `/`) but name none of `muscles` (every
+/// muscle of the model, both legs): a misspelt muscle, or an actuator the
+/// model does not have. Nothing reads them; state columns (a solution's)
+/// are not counted.
 pub fn unread_excitation_columns(t: &StoTable, muscles: &[&str]) -> Vec<String> {
-    let mut known = std::collections::HashSet::new();
-    for m in muscles {
-        known.extend(excitation_labels(m));
-        if let Some(stem) = m.strip_suffix("_r") {
-            known.extend(excitation_labels(&format!("{stem}_l")));
-        }
-    }
+    let known: std::collections::HashSet<String> =
+        muscles.iter().flat_map(|m| excitation_labels(m)).collect();
     t.labels
         .iter()
         .filter(|l| {

@@ -79,6 +79,8 @@ enum Command {
         /// Study file (JSON); command-line options override it.
         #[arg(long)]
         study: Option<PathBuf>,
+        /// Model file (JSON; default: the study's, else models/jumper.json in
+        /// the working directory, else leap's own).
         #[arg(long)]
         model: Option<PathBuf>,
         /// OpenSim controls (.sto) or Moco solution with /forceset/<muscle> columns.
@@ -846,10 +848,7 @@ fn simulate(
         }
     };
     // What the study omits is relative to the working directory.
-    let model_path = model
-        .or_else(|| st.model.as_deref().map(rel))
-        .or_else(leap::study::default_model)
-        .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_MODEL));
+    let model_path = model_file(model.or_else(|| st.model.as_deref().map(rel)));
     let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
     let out_dir = out
         .or_else(|| st.out.as_deref().map(rel))
@@ -888,7 +887,8 @@ fn simulate(
             let t = leap::io::StoTable::read(p)?;
             let c = leap::io::Controls::from_table(&t, p, &names)?;
             // A misspelt muscle's column would be lost without a word.
-            unread = leap::io::unread_excitation_columns(&t, &names);
+            let all: Vec<&str> = m.muscles.iter().map(|x| x.spec.name.as_str()).collect();
+            unread = leap::io::unread_excitation_columns(&t, &all);
             if !unread.is_empty() {
                 let more = match unread.len() {
                     n if n > 10 => format!(" and {} more", n - 10),

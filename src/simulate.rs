@@ -414,7 +414,7 @@ pub fn write_trajectory(
 
 /// The labels and rows of a table of the whole model's `columns` (as
 /// [`StateEquation::model_state_columns`] gives them) from the system's
-/// `rows`.
+/// `rows` (NaN where a row is too short).
 pub fn model_columns(
     columns: &[(String, usize)],
     rows: &[Vec<f64>],
@@ -422,7 +422,12 @@ pub fn model_columns(
     let labels = columns.iter().map(|(l, _)| l.clone()).collect();
     let rows = rows
         .iter()
-        .map(|r| columns.iter().map(|&(_, k)| r[k]).collect())
+        .map(|r| {
+            columns
+                .iter()
+                .map(|&(_, k)| r.get(k).copied().unwrap_or(f64::NAN))
+                .collect()
+        })
         .collect();
     (labels, rows)
 }

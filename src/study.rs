@@ -613,7 +613,7 @@ impl SolveStudy {
                 p
             }
             None => default_model()
-                .ok_or_else(|| err("model", format!("the default model '{DEFAULT_MODEL}' is not found in the working directory; name one")))?,
+                .ok_or_else(|| err("model", format!("the default model '{DEFAULT_MODEL}' is found neither in the working directory nor in leap's source tree; name one")))?,
         };
 
         let mut transcription = TranscriptionOptions::default();

@@ -320,12 +320,12 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         (
             "bent",
             bent,
-            format!("column '{knee_l}': row 3 (t = 0.1): -1.25 differs from {knee_r} (-1.375): the symmetric model gives both legs one value; give both columns the same values, or leave this one out"),
+            format!("column '{knee_l}': row 3 (t = 0.1): -1.25 differs from {knee_r} (-1.375): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "uneven",
             uneven,
-            format!("column '/forceset/soleus_l': row 2 (t = 0.05): 0.9 differs from {soleus} ({sr}): the symmetric model gives both legs one value; give both columns the same values, or leave this one out"),
+            format!("column '/forceset/soleus_l': row 2 (t = 0.05): 0.9 differs from {soleus} ({sr}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "repeated",

@@ -21,6 +21,14 @@ fn golden() -> Value {
     serde_json::from_str(&text).unwrap()
 }
 
+fn strings(v: &Value) -> Vec<String> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s.as_str().unwrap().to_string())
+        .collect()
+}
+
 fn names(v: &Value) -> BTreeSet<String> {
     v.as_array()
         .unwrap()
@@ -62,10 +70,19 @@ fn leap_files_hold_every_state_and_control_of_the_model() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let states = StoTable::read(&sim.join("jump_states.sto")).unwrap();
+    // The columns in the order OpenSim read them, and as many as its
+    // Storage (the GUI's reader) loaded with time.
+    assert_eq!(states.labels, strings(&g["states_file_columns"]));
+    let storage = |f: &str| g["storage"][f]["columns"].as_u64().unwrap() as usize;
+    assert_eq!(states.labels.len() + 1, storage("simulate/jump_states.sto"));
     let labels: BTreeSet<String> = states.labels.iter().cloned().collect();
     assert_eq!(labels.len(), states.labels.len(), "a column twice");
     assert_eq!(labels, state_variables);
     let c = StoTable::read(&sim.join("jump_controls.sto")).unwrap();
+    assert_eq!(c.labels, strings(&g["controls_file_columns"]));
+    assert_eq!(c.labels.len() + 1, storage("simulate/jump_controls.sto"));
+    let grf = StoTable::read(&sim.join("jump_grf.mot")).unwrap();
+    assert_eq!(grf.labels.len() + 1, storage("simulate/jump_grf.mot"));
     assert_eq!(c.labels.iter().cloned().collect::<BTreeSet<_>>(), controls);
     assert_eq!(c.labels.len(), controls.len());
 
@@ -82,6 +99,7 @@ fn leap_files_hold_every_state_and_control_of_the_model() {
         String::from_utf8_lossy(&o.stderr)
     );
     let t = StoTable::read(&sol.join("jump_solution.sto")).unwrap();
+    assert_eq!(t.labels.len() + 1, storage("solve/jump_solution.sto"));
     let count = |k: &str| t.metadata[k].parse::<usize>().unwrap();
     let (ns, nc) = (count("num_states"), count("num_controls"));
     assert_eq!(ns, g["solution_num_states"].as_u64().unwrap() as usize);

@@ -123,6 +123,43 @@ fn symmetric_system_equals_full_system_with_mirrored_states() {
     }
 }
 
+/// The whole model's columns of models without mirror partners (the
+/// double pendulum: the system's own, no muscles) and of the reduced
+/// jumper (10 muscles per side: 60 states): each left column takes its
+/// right partner's index.
+#[test]
+fn model_columns_of_other_models() {
+    let pendulum = Model::from_file("models/double_pendulum.json").unwrap();
+    let eq = StateEquation::new(&pendulum, true, PathSmoothing::Exact).unwrap();
+    assert_eq!(
+        eq.model_state_columns(),
+        eq.state_names().into_iter().zip(0..).collect::<Vec<_>>()
+    );
+    assert!(eq.model_control_columns().is_empty());
+    let reduced = Model::from_file("models/jumper_reduced.json").unwrap();
+    let eq = StateEquation::new(&reduced, true, PathSmoothing::Exact).unwrap();
+    assert_eq!(eq.nx(), 2 * 7 + 2 * 10);
+    let columns = eq.model_state_columns();
+    assert_eq!(columns.len(), 2 * 10 + 2 * 20);
+    let index = |l: &str| columns.iter().find(|c| c.0 == l).unwrap().1;
+    for (label, i) in &columns {
+        if label.contains("_l/") {
+            assert_eq!(*i, index(&label.replace("_l/", "_r/")), "{label}");
+        }
+    }
+    let controls = eq.model_control_columns();
+    assert_eq!(controls.len(), 20);
+    for (label, i) in &controls {
+        if let Some(stem) = label.strip_suffix("_l") {
+            let right = controls
+                .iter()
+                .find(|c| c.0 == format!("{stem}_r"))
+                .unwrap();
+            assert_eq!(*i, right.1, "{label}");
+        }
+    }
+}
+
 /// x as dual numbers with x[dir] seeded.
 fn seeded(x: &[f64], dir: usize) -> Vec<Dual64> {
     x.iter()
