@@ -74,6 +74,45 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let states = eq.state_names();
     let controls = eq.control_names();
+    // The left leg's columns of leap's files (and of `leap squat --full`'s
+    // names on the whole model) are read as checks: each must equal its
+    // right partner's, which the symmetric system carries for both.
+    let copies = |columns: Vec<(String, usize)>, names: &[String]| -> Vec<(String, usize)> {
+        columns
+            .into_iter()
+            .filter(|(l, i)| *l != names[*i])
+            .collect()
+    };
+    let state_copies = copies(eq.model_state_columns(), &states);
+    let control_copies = copies(eq.model_control_columns(), &controls);
+    // `given`: the copies an input holds, (label, value), values finite.
+    let check_copies =
+        |given: &[(String, f64)], x: &[f64], u: &[f64]| -> Result<(), (String, String)> {
+            for (label, copy) in given {
+                let found = state_copies
+                    .iter()
+                    .find(|(l, _)| l == label)
+                    .map(|(_, i)| (x[*i], &states[*i]))
+                    .or_else(|| {
+                        control_copies
+                            .iter()
+                            .find(|(l, _)| l == label)
+                            .map(|(_, i)| (u[*i], &controls[*i]))
+                    });
+                if let Some((original, name)) = found {
+                    if let Some(r) = crate::io::copy_mismatch(*copy, original, name) {
+                        return Err((label.clone(), r));
+                    }
+                }
+            }
+            Ok(())
+        };
+    let is_copy = |c: &str, copies: &[(String, usize)]| copies.iter().any(|(l, _)| l == c);
+    let known = |c: &str| {
+        states.iter().chain(&controls).any(|n| n == c)
+            || is_copy(c, &state_copies)
+            || is_copy(c, &control_copies)
+    };
     let is_csv = path
         .extension()
         .and_then(|e| e.to_str())
@@ -106,7 +145,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             ));
         }
         for (k, c) in cols.iter().enumerate() {
-            if !states.iter().chain(&controls).any(|n| n == c) {
+            if !known(c) {
                 return Err(err(
                     "header".into(),
                     format!("unknown column '{c}' (column {}): not a state or excitation of this model's system", k + 1),
@@ -156,6 +195,15 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             check_ranges(&states, &controls, &x, &u).map_err(|(name, reason)| {
                 err(format!("line {}, column '{name}'", ln + 1), reason)
             })?;
+            let given = cols
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| is_copy(c, &state_copies) || is_copy(c, &control_copies))
+                .map(|(k, c)| Ok((c.to_string(), parse(k)?)))
+                .collect::<Result<Vec<_>, EvalInputError>>()?;
+            check_copies(&given, &x, &u).map_err(|(name, reason)| {
+                err(format!("line {}, column '{name}'", ln + 1), reason)
+            })?;
             out.push((x, u));
         }
         if out.is_empty() {
@@ -190,9 +238,11 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 format!("expected an object with 'state' (or 'x') and 'excitation' (or 'u'), got {item}"),
             ));
         }
-        let vector = |key: &str,
-                      named: &str,
-                      names: &[String]|
+        let mut given = Vec::new();
+        let mut vector = |key: &str,
+                          named: &str,
+                          names: &[String],
+                          copies: &[(String, usize)]|
          -> Result<Vec<f64>, EvalInputError> {
             if let Some(arr) = item.get(key) {
                 if item.get(named).is_some() {
@@ -226,8 +276,13 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                     format!("missing: give '{named}' (by name) or '{key}' (array)"),
                 )
             })?;
-            for k in obj.keys() {
-                if !names.contains(k) {
+            for (k, v) in obj {
+                if is_copy(k, copies) {
+                    let v = v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| {
+                        err(place(&format!("{named}.{k}")), "not a finite number".into())
+                    })?;
+                    given.push((k.clone(), v));
+                } else if !names.contains(k) {
                     return Err(err(place(&format!("{named}.{k}")), "unknown name".into()));
                 }
             }
@@ -244,10 +299,11 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 })
                 .collect()
         };
-        let x = vector("x", "state", &states)?;
-        let u = vector("u", "excitation", &controls)?;
+        let x = vector("x", "state", &states, &state_copies)?;
+        let u = vector("u", "excitation", &controls, &control_copies)?;
         check_ranges(&states, &controls, &x, &u)
             .map_err(|(name, reason)| err(place(&name), reason))?;
+        check_copies(&given, &x, &u).map_err(|(name, reason)| err(place(&name), reason))?;
         out.push((x, u));
     }
     if out.is_empty() {

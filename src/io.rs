@@ -432,26 +432,32 @@ impl StoTable {
                 continue;
             }
             for (r, row) in self.rows.iter().enumerate() {
-                let (vc, vo) = (row[c], row[o]);
-                // A non-finite original is the reader's to name.
-                let agree = (vc - vo).abs() <= 1e-6 * (1.0 + vo.abs());
-                if vo.is_finite() && !agree {
+                if let Some(reason) = copy_mismatch(row[c], row[o], original) {
                     return Err(StoError::Column {
                         file: path.into(),
                         column: copy.into(),
-                        reason: format!(
-                            "row {} (t = {}): {} differs from {original} ({}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns",
-                            r + 1,
-                            self.time[r],
-                            readable(vc),
-                            readable(vo)
-                        ),
+                        reason: format!("row {} (t = {}): {reason}", r + 1, self.time[r]),
                     });
                 }
             }
         }
         Ok(())
     }
+}
+
+/// Why a value `copy` of a left leg's column differs from `original`, its
+/// right partner's (labelled `original_label`), which the symmetric system
+/// carries for both, if it does: by more than 1e-6 relative. A non-finite
+/// original is its own reader's to name.
+pub fn copy_mismatch(copy: f64, original: f64, original_label: &str) -> Option<String> {
+    let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
+    (original.is_finite() && !agree).then(|| {
+        format!(
+            "{} differs from {original_label} ({}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns",
+            readable(copy),
+            readable(original)
+        )
+    })
 }
 
 /// The first label that repeats one before it: (its first index, its

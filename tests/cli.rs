@@ -507,3 +507,96 @@ fn analyze_warns_when_impulse_and_momentum_disagree() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `leap eval` reads the left leg's columns of leap's files as checks, as
+/// the `.sto` readers do: equal to their right partners' they give the
+/// same evaluation; different, or not a number, they are refused, naming
+/// the column, its partner and the reason, in both input forms.
+#[test]
+fn eval_checks_the_left_legs_columns() {
+    let (dir, squat) = squat_input("eval-left");
+    let (knee_r, knee_l) = (
+        "/jointset/knee_r/knee_angle_r/value",
+        "/jointset/knee_l/knee_angle_l/value",
+    );
+    let knee = squat["state"][knee_r].as_f64().unwrap();
+    let soleus = squat["excitation"]["/forceset/soleus_r"].clone();
+    let with = |k: f64, s: serde_json::Value| {
+        let mut v = squat.clone();
+        v["state"][knee_l] = k.into();
+        v["excitation"]["/forceset/soleus_l"] = s;
+        v
+    };
+    let run = |name: &str, v: &serde_json::Value| {
+        let f = dir.join(format!("{name}.json"));
+        std::fs::write(&f, serde_json::to_vec(v).unwrap()).unwrap();
+        let mut cmd = Command::cargo_bin("leap").unwrap();
+        cmd.args(["eval", "--json", "--input"]).arg(f);
+        cmd
+    };
+    let out = |v: &serde_json::Value, name: &str| -> serde_json::Value {
+        let o = run(name, v).output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    assert_eq!(
+        out(&with(knee, soleus.clone()), "same")["state_derivative"],
+        out(&squat, "plain")["state_derivative"]
+    );
+    let err = refused(&mut run("bent", &with(-1.0, soleus.clone())), "bent");
+    assert!(
+        err.contains(&format!("{knee_l}: -1 differs from {knee_r} ({knee})"))
+            && err.contains("its right leg's"),
+        "{err}"
+    );
+    let err = refused(&mut run("text", &with(knee, "x".into())), "text");
+    assert!(
+        err.contains("excitation./forceset/soleus_l: not a finite number"),
+        "{err}"
+    );
+    // The CSV form.
+    let (st, ex) = (
+        squat["state"].as_object().unwrap(),
+        squat["excitation"].as_object().unwrap(),
+    );
+    let labels: Vec<&str> = st.keys().chain(ex.keys()).map(|k| k.as_str()).collect();
+    let values: Vec<String> = st
+        .values()
+        .chain(ex.values())
+        .map(|v| v.as_f64().unwrap().to_string())
+        .collect();
+    for (left, want) in [
+        (knee.to_string(), None),
+        (
+            "-1".to_string(),
+            Some(format!(
+                "line 2, column '{knee_l}': -1 differs from {knee_r}"
+            )),
+        ),
+        (
+            "abc".to_string(),
+            Some(format!("line 2, column '{knee_l}': 'abc' is not a number")),
+        ),
+    ] {
+        let f = dir.join("left.csv");
+        std::fs::write(
+            &f,
+            format!(
+                "{},{knee_l}\n{},{left}\n",
+                labels.join(","),
+                values.join(",")
+            ),
+        )
+        .unwrap();
+        let mut cmd = Command::cargo_bin("leap").unwrap();
+        cmd.args(["eval", "--json", "--input"]).arg(&f);
+        match want {
+            None => assert!(cmd.output().unwrap().status.success()),
+            Some(w) => {
+                let err = refused(&mut cmd, &left);
+                assert!(err.contains(&w), "{err}");
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
