@@ -161,6 +161,10 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             .iter()
             .map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'"))))
             .collect::<Result<_, _>>()?;
+        // The left leg's columns, read as checks.
+        let copy_cols: Vec<usize> = (0..cols.len())
+            .filter(|&k| is_copy(cols[k], &state_copies) || is_copy(cols[k], &control_copies))
+            .collect();
         for (ln, line) in lines {
             let cells: Vec<&str> = line.split(',').map(str::trim).collect();
             if cells.len() != cols.len() {
@@ -195,11 +199,9 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             check_ranges(&states, &controls, &x, &u).map_err(|(name, reason)| {
                 err(format!("line {}, column '{name}'", ln + 1), reason)
             })?;
-            let given = cols
+            let given = copy_cols
                 .iter()
-                .enumerate()
-                .filter(|(_, c)| is_copy(c, &state_copies) || is_copy(c, &control_copies))
-                .map(|(k, c)| Ok((c.to_string(), parse(k)?)))
+                .map(|&k| Ok((cols[k].to_string(), parse(k)?)))
                 .collect::<Result<Vec<_>, EvalInputError>>()?;
             check_copies(&given, &x, &u).map_err(|(name, reason)| {
                 err(format!("line {}, column '{name}'", ln + 1), reason)

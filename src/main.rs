@@ -44,10 +44,8 @@ struct Cli {
 enum Command {
     /// Compare the Rust-native dynamics with Simbody at random states.
     Crosscheck {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         /// Number of random states (default 100).
         #[arg(long)]
         samples: Option<usize>,
@@ -188,10 +186,8 @@ enum Command {
     /// {"x": [...], "u": [...]}, or an array of these) or CSV (a header of
     /// state and control names, one row per evaluation).
     Eval {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         #[arg(long)]
         input: PathBuf,
         /// The full 10-coordinate system instead of the symmetric one.
@@ -209,10 +205,8 @@ enum Command {
     Analyze {
         /// States over time (OpenSim .sto with the model's state names).
         states: PathBuf,
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         /// Analyse from START to END (s) instead of the push-off.
         #[arg(long, num_args = 2, value_names = ["START", "END"], allow_negative_numbers = true)]
         window: Option<Vec<f64>>,
@@ -226,10 +220,8 @@ enum Command {
     /// Print the state and control names `leap eval` expects, and the static
     /// squat as a ready-made input.
     Squat {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         #[arg(long)]
         full: bool,
     },
@@ -237,10 +229,8 @@ enum Command {
     /// points switch (what the smooth option removes), other coordinates
     /// at a pose of the model.
     Paths {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         /// Pose of the other coordinates (a pose name of the model file).
         #[arg(long, default_value = "squat")]
         pose: String,
@@ -258,20 +248,16 @@ enum Command {
 enum BenchCommand {
     /// Time per q̈ evaluation of a skeleton, Rust-native against Simbody.
     Dynamics {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
     /// Time per ẋ = f(x, u) evaluation, Rust-native against Simbody.
     StateEquation {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         #[arg(long)]
         json: bool,
     },
@@ -288,10 +274,8 @@ enum BenchCommand {
     /// bang-bang guess: time per iteration split into derivatives, Hessian,
     /// QP and line search.
     SqpJump {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         #[arg(long, default_value_t = 3, value_parser = at_least_one)]
         iterations: usize,
         /// "exact" (the jump's default) or "bfgs".
@@ -307,10 +291,8 @@ enum BenchCommand {
     /// the 29-node jump, time per iteration split into derivatives, Hessian,
     /// QP and line search, against the paper's CPU time per iteration.
     Methods {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         /// SQP iterations per method (a shooting iteration takes about 30 s).
         #[arg(long, default_value_t = 3, value_parser = at_least_one)]
         iterations: usize,
@@ -341,16 +323,31 @@ enum BenchCommand {
     /// One forward jump per integrator and accuracy: steps, rejected steps,
     /// f evaluations, wall time.
     Integrators {
-        /// Model file (JSON; default: models/jumper.json in the working
-        /// directory, else leap's own, as `leap solve` finds it).
-        #[arg(long)]
-        model: Option<PathBuf>,
+        #[command(flatten)]
+        model: ModelFile,
         #[arg(long)]
         json: bool,
     },
 }
 
-/// `--model`, or the default model: `models/jumper.json` in the working
+/// The `--model` option of every command but `simulate` (whose study may
+/// name one).
+#[derive(clap::Args)]
+struct ModelFile {
+    /// Model file (JSON; default: models/jumper.json in the working
+    /// directory, else leap's own, as `leap solve` finds it).
+    #[arg(long)]
+    model: Option<PathBuf>,
+}
+
+impl ModelFile {
+    /// The file given, or the default model.
+    fn path(self) -> PathBuf {
+        model_file(self.model)
+    }
+}
+
+/// `model`, or the default model: `models/jumper.json` in the working
 /// directory, else leap's own (as `leap solve` and `leap simulate` find
 /// it); a read error names the path.
 fn model_file(model: Option<PathBuf>) -> PathBuf {
@@ -406,7 +403,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             fiber_dynamics,
             json,
         } => {
-            let model = model_file(model);
+            let model = model.path();
             if !jacobian {
                 for (given, option) in [
                     (num_mesh_intervals.is_some(), "--num-mesh-intervals"),
@@ -517,7 +514,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let (laws, eq) = opensim_system(&model, full)?;
             let (time, xs) = leap::analyze::read_states(&eq, &states)?;
             let window = match window.as_deref() {
@@ -545,7 +542,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             full,
             json,
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let (laws, eq) = opensim_system(&model, full)?;
             let inputs = leap::eval::read_inputs(&eq, &input)?;
             let mut reports = Vec::with_capacity(inputs.len());
@@ -613,7 +610,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Paths { model, pose, json } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
             let q = m.poses.get(&pose).cloned().ok_or_else(|| {
@@ -655,7 +652,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             Ok(ExitCode::SUCCESS)
         }
         Command::Squat { model, full } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let (laws, eq) = leap::ode::StateEquation::opensim(&m, !full)?;
             let pose = m.squat_pose()?;
@@ -679,7 +676,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::StateEquation { model, json },
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::state_equation(&m)?;
             if json {
@@ -692,7 +689,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::Integrators { model, json },
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let cases = [
                 ("RungeKuttaMerson", 1e-3),
@@ -735,7 +732,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     json,
                 },
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let mode: leap::sqp::HessianMode = hessian
                 .parse()
@@ -757,7 +754,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     json,
                 },
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::methods(&m, iterations).map_err(|e| anyhow::anyhow!(e))?;
             if json {
@@ -797,7 +794,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Bench {
             which: BenchCommand::Dynamics { model, json },
         } => {
-            let model = model_file(model);
+            let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let report = leap::bench::dynamics(&m)?;
             if json {

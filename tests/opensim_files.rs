@@ -30,11 +30,7 @@ fn strings(v: &Value) -> Vec<String> {
 }
 
 fn names(v: &Value) -> BTreeSet<String> {
-    v.as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s.as_str().unwrap().to_string())
-        .collect()
+    strings(v).into_iter().collect()
 }
 
 fn leap(args: &[&str], out: &std::path::Path) -> std::process::Output {
