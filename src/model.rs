@@ -915,6 +915,23 @@ impl Model {
                     format!("muscle '{}' is defined twice", m.name),
                 ));
             }
+            // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
+            // lengthening force-velocity curve's asymptote) and a linear
+            // extrapolation threshold (0.95) not above 1/Flen. DeGroote's
+            // muscle has no Flen. (A non-finite Flen is refused below.)
+            if spec.forces.muscle_model == MuscleModel::Thelen2003Muscle
+                && m.Flen <= 1.0 / crate::laws::FV_THRESHOLD
+            {
+                return Err(err(
+                    p("Flen"),
+                    format!(
+                        "must be greater than 1/{} = {:.4} (OpenSim's Thelen2003Muscle: Flen > 1 and fv_linear_extrap_threshold > 1/Flen), got {}",
+                        crate::laws::FV_THRESHOLD,
+                        1.0 / crate::laws::FV_THRESHOLD,
+                        m.Flen
+                    ),
+                ));
+            }
             // Every parameter is positive but the pennation angle.
             for (name, v) in m.parameters() {
                 if name == "pennation_angle_at_optimal" {
@@ -929,38 +946,15 @@ impl Model {
                         ),
                     ));
                 }
-                if let Some(&(_, lo, hi, unit)) =
-                    MUSCLE_PARAMETER_RANGES.iter().find(|r| r.0 == name)
-                {
-                    if !(lo..=hi).contains(&v) {
-                        return Err(err(
-                            p(name),
-                            format!(
-                                "{} {unit} lies outside [{}, {}] {unit}, a range far wider than any human muscle's (a slip of units or digits?)",
-                                crate::io::readable(v),
-                                crate::io::readable(lo),
-                                crate::io::readable(hi)
-                            ),
-                        ));
-                    }
+                if let Some(r) = range_problem(
+                    &MUSCLE_PARAMETER_RANGES,
+                    name,
+                    v,
+                    false,
+                    "any human muscle's",
+                ) {
+                    return Err(err(p(name), r));
                 }
-            }
-            // OpenSim's Thelen2003Muscle refuses Flen ≤ 1 (the
-            // lengthening force-velocity curve's asymptote) and a linear
-            // extrapolation threshold (0.95) not above 1/Flen (Flen is
-            // finite and positive by now). DeGroote's muscle has no Flen.
-            if spec.forces.muscle_model == MuscleModel::Thelen2003Muscle
-                && m.Flen <= 1.0 / crate::laws::FV_THRESHOLD
-            {
-                return Err(err(
-                    p("Flen"),
-                    format!(
-                        "must be greater than 1/{} = {:.4} (OpenSim's Thelen2003Muscle: Flen > 1 and fv_linear_extrap_threshold > 1/Flen), got {}",
-                        crate::laws::FV_THRESHOLD,
-                        1.0 / crate::laws::FV_THRESHOLD,
-                        m.Flen
-                    ),
-                ));
             }
             let phi = m.pennation_angle_at_optimal;
             if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
@@ -1012,12 +1006,30 @@ impl Model {
                 if !v.is_finite() {
                     return Err(err(p(name), format!("{name} must be finite")));
                 }
+                if let Some(r) = range_problem(
+                    &LIGAMENT_PARAMETER_RANGES,
+                    name,
+                    v,
+                    true,
+                    "any joint's passive torque",
+                ) {
+                    return Err(err(p(name), r));
+                }
             }
             if !(l.damping.is_finite() && l.damping >= 0.0) {
                 return Err(err(
                     p("damping"),
                     format!("damping must be non-negative, got {}", l.damping),
                 ));
+            }
+            if let Some(r) = range_problem(
+                &LIGAMENT_PARAMETER_RANGES,
+                "damping",
+                l.damping,
+                false,
+                "any joint's passive torque",
+            ) {
+                return Err(err(p("damping"), r));
             }
             if let Some(j) = ligaments.iter().position(|g: &Ligament| g.coordinate == c) {
                 return Err(err(
@@ -1053,6 +1065,24 @@ impl Model {
                             p(name),
                             format!("{name} must be non-negative, got {v}"),
                         ));
+                    }
+                }
+                for (name, v) in [
+                    ("stiffness", cs.stiffness),
+                    ("dissipation", cs.dissipation),
+                    ("static_friction", cs.static_friction),
+                    ("dynamic_friction", cs.dynamic_friction),
+                    ("viscous_friction", cs.viscous_friction),
+                    ("transition_velocity", cs.transition_velocity),
+                ] {
+                    if let Some(r) = range_problem(
+                        &CONTACT_PARAMETER_RANGES,
+                        name,
+                        v,
+                        false,
+                        "any foot contact model's",
+                    ) {
+                        return Err(err(p(name), r));
                     }
                 }
                 if cs.dynamic_friction > cs.static_friction {
@@ -1106,6 +1136,15 @@ impl Model {
                             q("radius"),
                             format!("radius must be positive, got {}", sp.radius),
                         ));
+                    }
+                    if let Some(r) = range_problem(
+                        &CONTACT_PARAMETER_RANGES,
+                        "radius",
+                        sp.radius,
+                        false,
+                        "any foot contact model's",
+                    ) {
+                        return Err(err(q("radius"), r));
                     }
                     spheres.push(Sphere {
                         name: sp.name.clone(),
@@ -1218,20 +1257,106 @@ impl Model {
     }
 }
 
-/// The range a muscle's physical parameters must lie in: (name, lowest,
-/// highest, unit). Generous, decades beyond the human muscles of gait2392
-/// (forces 100–8,000 N, fibres 0.02–0.5 m, tendons 0.01–0.5 m, v_max 10
-/// l_opt/s, time constants 0.01–0.06 s), so that they refuse only what
-/// would otherwise fail later under another name: a force in the wrong unit
-/// or with extra digits, a length in millimetres.
-const MUSCLE_PARAMETER_RANGES: [(&str, f64, f64, &str); 6] = [
+/// A range a physical parameter must lie in: (name, lowest, highest, unit;
+/// "" for a ratio). Each is generous, a decade or more beyond the values of
+/// the human models leap meets, so that it refuses only what would
+/// otherwise fail later under another name (a squat that does not touch
+/// the ground, a non-finite fibre velocity) or load and mislead: a force in
+/// the wrong unit or with extra digits, a length in millimetres, a shape
+/// factor whose curve becomes a step or a constant.
+type ParameterRange = (&'static str, f64, f64, &'static str);
+
+/// The muscles' ranges, around gait2392's human muscles (forces 100–8,000
+/// N, fibres 0.02–0.5 m, tendons 0.01–0.5 m, v_max 10 l_opt/s, time
+/// constants 0.01–0.06 s) and the Thelen2003Muscle curves of every OpenSim
+/// model in leap's references (FmaxTendonStrain 0.033, FmaxMuscleStrain
+/// 0.6, KshapeActive 0.5, KshapePassive 4, Af 0.3, Flen 1.8; Thelen 2003:
+/// 0.04–0.05, 0.5–0.6, 0.45, 4–5, 0.25, 1.4). Flen's lowest is OpenSim's
+/// own rule, checked first.
+const MUSCLE_PARAMETER_RANGES: [ParameterRange; 12] = [
     ("max_isometric_force", 1e-3, 1e5, "N"),
     ("optimal_fiber_length", 1e-4, 5.0, "m"),
     ("tendon_slack_length", 1e-4, 5.0, "m"),
     ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
     ("activation_time_constant", 1e-4, 10.0, "s"),
     ("deactivation_time_constant", 1e-4, 10.0, "s"),
+    ("FmaxTendonStrain", 1e-3, 1.0, ""),
+    ("FmaxMuscleStrain", 1e-2, 10.0, ""),
+    ("KshapeActive", 1e-2, 10.0, ""),
+    ("KshapePassive", 0.1, 100.0, ""),
+    ("Af", 1e-2, 10.0, ""),
+    ("Flen", 1.0, 100.0, ""),
 ];
+
+/// The foot contact's ranges, around the parameters of the contact models
+/// in leap's references (Falisse et al. and Moco's 2D gait: stiffness
+/// 3.1–3.8e6 Pa, dissipation 2 s/m, friction 0.8, viscous friction 0.5
+/// s/m, transition velocity 0.1–0.2 m/s, radii 0.015–0.035 m; OpenSim's
+/// `HuntCrossleyForce` defaults a transition velocity of 0.001 m/s).
+const CONTACT_PARAMETER_RANGES: [ParameterRange; 7] = [
+    ("stiffness", 1e4, 1e10, "Pa"),
+    ("dissipation", 0.0, 100.0, "s/m"),
+    ("static_friction", 0.0, 10.0, ""),
+    ("dynamic_friction", 0.0, 10.0, ""),
+    ("viscous_friction", 0.0, 100.0, "s/m"),
+    ("transition_velocity", 1e-5, 10.0, "m/s"),
+    ("radius", 1e-3, 1.0, "m"),
+];
+
+/// The passive joint torques' ranges (k1·exp(k2·(q − θ2)) +
+/// k3·exp(k4·(q − θ1)) − damping·q̇), around Anderson & Pandy's
+/// coefficients (|k1|, |k3| ≤ 11 N·m, |k2|, |k4| ≤ 38 1/rad, angles within
+/// ±2.4 rad, damping 0.1 N·m·s/rad). Lowest and highest bound the
+/// magnitude for the signed ones.
+const LIGAMENT_PARAMETER_RANGES: [ParameterRange; 7] = [
+    ("k1", 0.0, 1e4, "N·m"),
+    ("k2", 0.0, 1e3, "1/rad"),
+    ("k3", 0.0, 1e4, "N·m"),
+    ("k4", 0.0, 1e3, "1/rad"),
+    ("theta1", 0.0, 2.0 * std::f64::consts::PI, "rad"),
+    ("theta2", 0.0, 2.0 * std::f64::consts::PI, "rad"),
+    ("damping", 0.0, 1e3, "N·m·s/rad"),
+];
+
+/// Why parameter `name` = `v` is refused by `ranges` (of `what`, "any human
+/// muscle's" say), if it is; `v` is compared by its magnitude when
+/// `signed`. A parameter without a range passes.
+fn range_problem(
+    ranges: &[ParameterRange],
+    name: &str,
+    v: f64,
+    signed: bool,
+    what: &str,
+) -> Option<String> {
+    let &(_, lo, hi, unit) = ranges.iter().find(|r| r.0 == name)?;
+    let m = if signed { v.abs() } else { v };
+    if m.is_finite() && (lo..=hi).contains(&m) {
+        return None;
+    }
+    // Bounds as written (2π to 4 decimals).
+    let r = |x: f64| {
+        let s = crate::io::readable(x);
+        if s.len() > 10 {
+            format!("{x:.4}")
+        } else {
+            s
+        }
+    };
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    let range = if signed {
+        format!("its magnitude lies above {}{unit}", r(hi))
+    } else {
+        format!("lies outside [{}, {}]{unit}", r(lo), r(hi))
+    };
+    Some(format!(
+        "{}{unit}: {range}, a range far wider than {what} (a slip of units or digits?)",
+        crate::io::readable(v)
+    ))
+}
 
 impl MuscleSpec {
     /// The muscle's parameters by their model-file names.

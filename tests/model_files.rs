@@ -711,43 +711,141 @@ fn far_locations_and_absurd_masses_are_refused_naming_the_field() {
     );
 }
 
-/// A muscle's physical parameters lie in generous ranges, decades beyond
-/// gait2392's muscles: beyond them (a force with extra digits, a length in
-/// millimetres, a time constant in milliseconds) the file is refused,
-/// naming the parameter, instead of failing later as a squat that does
-/// not touch the ground or a non-finite fibre velocity. The bounds
-/// themselves load (both sides changed, as mirror partners must be).
+/// The physical parameters of the muscles, the foot contact and the
+/// passive joint torques must lie within ranges a decade or more beyond
+/// those of the human models leap meets (gait2392's muscles and the
+/// Thelen2003Muscle curves of OpenSim's models, Falisse et al.'s contact,
+/// Anderson & Pandy's torques): beyond them (a force with extra digits, a
+/// length in millimetres, a time constant in milliseconds, a shape factor
+/// that turns a curve into a step) the file is refused, naming the
+/// parameter, instead of failing later as a squat that does not touch the
+/// ground or a non-finite fibre velocity, or loading to jump 78 cm (Af
+/// 1e-300 flattens the force-velocity curve). The bounds themselves load
+/// (a muscle's on both sides, as mirror partners must be; a signed
+/// torque coefficient by its magnitude, either sign).
 #[test]
-fn muscle_parameters_far_outside_human_ranges_are_refused() {
+fn parameters_far_outside_human_ranges_are_refused() {
     let v = jumper_json();
     let (r, l) = (muscle_index(&v, "soleus_r"), muscle_index(&v, "soleus_l"));
-    for (name, lo, hi, unit) in [
-        ("max_isometric_force", 1e-3, 1e5, "N"),
-        ("optimal_fiber_length", 1e-4, 5.0, "m"),
-        ("tendon_slack_length", 1e-4, 5.0, "m"),
-        ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
-        ("activation_time_constant", 1e-4, 10.0, "s"),
-        ("deactivation_time_constant", 1e-4, 10.0, "s"),
-    ] {
-        for (value, ok) in [
-            (lo, true),
-            (hi, true),
-            (lo * 0.99, false),
-            (hi * 1.01, false),
-        ] {
+    // (where, indices to change alike, parameter, lowest, highest, unit,
+    // signed)
+    let muscles = |p| ("forces/muscles", vec![r, l], p);
+    let contact = |p| ("forces/contact", vec![], p);
+    let ligament = |p| ("forces/ligaments", vec![2, 3], p);
+    let cases = [
+        (muscles("max_isometric_force"), 1e-3, 1e5, "N", false),
+        (muscles("optimal_fiber_length"), 1e-4, 5.0, "m", false),
+        (muscles("tendon_slack_length"), 1e-4, 5.0, "m", false),
+        (
+            muscles("max_contraction_velocity"),
+            0.1,
+            100.0,
+            "l_opt/s",
+            false,
+        ),
+        (muscles("activation_time_constant"), 1e-4, 10.0, "s", false),
+        (
+            muscles("deactivation_time_constant"),
+            1e-4,
+            10.0,
+            "s",
+            false,
+        ),
+        (muscles("FmaxTendonStrain"), 1e-3, 1.0, "", false),
+        (muscles("FmaxMuscleStrain"), 1e-2, 10.0, "", false),
+        (muscles("KshapeActive"), 1e-2, 10.0, "", false),
+        (muscles("KshapePassive"), 0.1, 100.0, "", false),
+        (muscles("Af"), 1e-2, 10.0, "", false),
+        // Flen's lowest is OpenSim's rule, tested with the broken files.
+        (muscles("Flen"), 1.0 / 0.95 + 1e-9, 100.0, "", false),
+        (contact("stiffness"), 1e4, 1e10, "Pa", false),
+        (contact("transition_velocity"), 1e-5, 10.0, "m/s", false),
+        (contact("dissipation"), 0.0, 100.0, "s/m", false),
+        (contact("viscous_friction"), 0.0, 100.0, "s/m", false),
+        (
+            ("forces/contact/spheres", vec![3, 11], "radius"),
+            1e-3,
+            1.0,
+            "m",
+            false,
+        ),
+        (ligament("k1"), 0.0, 1e4, "N·m", true),
+        (ligament("k2"), 0.0, 1e3, "1/rad", true),
+        (ligament("k3"), 0.0, 1e4, "N·m", true),
+        (ligament("k4"), 0.0, 1e3, "1/rad", true),
+        (
+            ligament("theta1"),
+            0.0,
+            2.0 * std::f64::consts::PI,
+            "rad",
+            true,
+        ),
+        (
+            ligament("theta2"),
+            0.0,
+            2.0 * std::f64::consts::PI,
+            "rad",
+            true,
+        ),
+        (ligament("damping"), 0.0, 1e3, "N·m·s/rad", false),
+    ];
+    for ((place, indices, name), lo, hi, unit, signed) in cases {
+        let mut values = vec![(lo, true), (hi, true), (hi * 1.01, false)];
+        if signed {
+            values.extend([(-hi, true), (-hi * 1.01, false)]);
+        } else if lo > 0.0 && name != "Flen" {
+            values.push((lo * 0.99, false));
+        }
+        for (value, ok) in values {
             let mut m = v.clone();
-            for k in [r, l] {
-                m["forces"]["muscles"][k][name] = serde_json::json!(value);
+            let mut field = place.replace('/', ".");
+            if indices.is_empty() {
+                *m.pointer_mut(&format!("/{place}/{name}")).unwrap() = serde_json::json!(value);
+            }
+            for (n, &k) in indices.iter().enumerate() {
+                *m.pointer_mut(&format!("/{place}/{k}/{name}")).unwrap() = serde_json::json!(value);
+                if n == 0 {
+                    field = format!("{field}[{k}]");
+                }
             }
             let got = Model::from_json_str(&m.to_string(), "m.json");
             if ok {
-                assert!(got.is_ok(), "{name} = {value}: {:?}", got.err());
+                assert!(got.is_ok(), "{place} {name} = {value}: {:?}", got.err());
                 continue;
             }
             let e = got.unwrap_err();
-            assert_eq!(e.field(), format!("forces.muscles[{r}].{name}"), "{e}");
+            assert_eq!(e.field(), format!("{field}.{name}"), "{e}");
             let text = e.to_string();
-            assert!(text.contains(&format!("{unit} lies outside")), "{text}");
+            let shown = if unit.is_empty() {
+                String::new()
+            } else {
+                format!(" {unit}")
+            };
+            let expected = if signed {
+                format!("{shown}: its magnitude lies above")
+            } else {
+                format!("{shown}: lies outside")
+            };
+            assert!(text.contains(&expected), "{text}");
+        }
+    }
+    // Friction coefficients up to 10 (dynamic at most static).
+    for (stat, dynamic, refused) in [
+        (10.0, 10.0, None),
+        (10.1, 0.8, Some("static_friction")),
+        (10.0, 10.1, Some("dynamic_friction")),
+    ] {
+        let mut m = v.clone();
+        m["forces"]["contact"]["static_friction"] = serde_json::json!(stat);
+        m["forces"]["contact"]["dynamic_friction"] = serde_json::json!(dynamic);
+        let got = Model::from_json_str(&m.to_string(), "m.json");
+        match refused {
+            None => assert!(got.is_ok(), "{:?}", got.err()),
+            Some(name) => {
+                let e = got.unwrap_err();
+                assert_eq!(e.field(), format!("forces.contact.{name}"), "{e}");
+                assert!(e.to_string().contains(": lies outside [0, 10]"), "{e}");
+            }
         }
     }
 }
