@@ -545,6 +545,43 @@ pub const MAX_LOCATION_M: f64 = 100.0;
 /// apart in their last digits).
 pub const MAX_BODY_MASS_KG: f64 = 1e4;
 
+/// Why coordinates `r` and `l` cannot be a symmetry pair [right, left], if
+/// they cannot: the symmetric system gives the left coordinate the right
+/// one's value, so the two need one range and one default, and names with
+/// side suffixes (`hip_flexion_r`) must name one coordinate of each side,
+/// the right first.
+fn pair_problem(r: &str, l: &str, cr: &Coordinate, cl: &Coordinate) -> Option<String> {
+    let side = |n: &str| {
+        n.strip_suffix("_r")
+            .map(|s| (s.to_owned(), 'r'))
+            .or_else(|| n.strip_suffix("_l").map(|s| (s.to_owned(), 'l')))
+    };
+    if let (Some((sr, ar)), Some((sl, al))) = (side(r), side(l)) {
+        if (ar, al) == ('l', 'r') && sr == sl {
+            return Some(format!(
+                "lists the left coordinate first: a pair is [right, left], so write [\"{l}\", \"{r}\"]"
+            ));
+        }
+        if ar == al {
+            return Some(format!(
+                "pairs two coordinates of one side ('{r}' and '{l}'): a pair is [right, left]"
+            ));
+        }
+        if sr != sl {
+            return Some(format!(
+                "pairs '{r}' with '{l}', whose names differ in more than the side: a pair is one coordinate's right and left (['{sr}_r', '{sr}_l'])"
+            ));
+        }
+    }
+    if cr.range != cl.range || cr.default_value != cl.default_value {
+        return Some(format!(
+            "'{r}' (range {:?}, default {}) and '{l}' (range {:?}, default {}) differ: the symmetric system gives both one value, so mirror partners need one range and one default",
+            cr.range, cr.default_value, cl.range, cl.default_value
+        ));
+    }
+    None
+}
+
 /// Why a location (m, body frame) cannot be used, if it cannot.
 pub(crate) fn location_problem(v: &[f64; 3]) -> Option<String> {
     (!v.iter().all(|x| x.is_finite() && x.abs() <= MAX_LOCATION_M)).then(|| {
@@ -843,7 +880,7 @@ impl Model {
         }
         // Symmetry pairs.
         let mut symmetry = Vec::new();
-        let mut in_pair = vec![false; coordinates.len()];
+        let mut in_pair: Vec<Option<usize>> = vec![None; coordinates.len()];
         for (i, [r, l]) in spec.symmetry.iter().enumerate() {
             let ri = *coord_index.get(r).ok_or_else(|| {
                 err(
@@ -857,14 +894,26 @@ impl Model {
                     format!("unknown coordinate '{l}'"),
                 )
             })?;
-            if ri == li || in_pair[ri] || in_pair[li] {
+            if ri == li {
                 return Err(err(
                     format!("symmetry[{i}]"),
-                    format!("coordinates '{r}' and '{l}' cannot form a new pair"),
+                    format!("pairs coordinate '{r}' with itself"),
                 ));
             }
-            in_pair[ri] = true;
-            in_pair[li] = true;
+            for (k, c) in [(0, r), (1, l)] {
+                let ci = coord_index[c];
+                if let Some(j) = in_pair[ci] {
+                    return Err(err(
+                        format!("symmetry[{i}][{k}]"),
+                        format!("coordinate '{c}' is already paired by symmetry[{j}]: each coordinate has at most one partner"),
+                    ));
+                }
+            }
+            if let Some(reason) = pair_problem(r, l, &coordinates[ri], &coordinates[li]) {
+                return Err(err(format!("symmetry[{i}]"), reason));
+            }
+            in_pair[ri] = Some(i);
+            in_pair[li] = Some(i);
             symmetry.push((ri, li));
         }
         // Poses.

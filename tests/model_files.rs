@@ -849,3 +849,77 @@ fn parameters_far_outside_human_ranges_are_refused() {
         }
     }
 }
+
+/// A symmetry pair is [right, left] of one coordinate: a reversed pair, a
+/// pair of one side or of two coordinates, a coordinate paired twice and
+/// partners whose ranges or defaults differ are refused at the pair's own
+/// entry (they had been reported at a joint, a later pair or a pose).
+#[test]
+fn symmetry_pairs_are_checked_at_their_own_entry() {
+    let v = jumper_json();
+    let pair = |r: &str, l: &str| serde_json::json!([r, l]);
+    let cases = [
+        (
+            pair("hip_flexion_l", "hip_flexion_r"),
+            "symmetry[0]",
+            "lists the left coordinate first: a pair is [right, left], so write [\"hip_flexion_r\", \"hip_flexion_l\"]",
+        ),
+        (
+            pair("hip_flexion_r", "knee_angle_l"),
+            "symmetry[0]",
+            "whose names differ in more than the side",
+        ),
+        (
+            pair("hip_flexion_r", "knee_angle_r"),
+            "symmetry[0]",
+            "pairs two coordinates of one side",
+        ),
+        (
+            pair("hip_flexion_r", "hip_flexion_r"),
+            "symmetry[0]",
+            "pairs coordinate 'hip_flexion_r' with itself",
+        ),
+    ];
+    for (p, field, reason) in cases {
+        let mut m = v.clone();
+        m["symmetry"][0] = p;
+        let e = refused(&m);
+        assert_eq!(e.field(), field, "{e}");
+        assert!(e.to_string().contains(reason), "{e}");
+    }
+    // A coordinate paired twice: the later pair is refused, naming the
+    // earlier one.
+    let mut m = v.clone();
+    m["symmetry"]
+        .as_array_mut()
+        .unwrap()
+        .push(pair("lumbar_extension", "knee_angle_l"));
+    let e = refused(&m);
+    assert_eq!(e.field(), "symmetry[3][1]", "{e}");
+    assert!(
+        e.to_string()
+            .contains("'knee_angle_l' is already paired by symmetry[1]"),
+        "{e}"
+    );
+    // Partners with different ranges or defaults.
+    let hip_l = v["coordinates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|c| c["name"] == "hip_flexion_l")
+        .unwrap();
+    for (key, value) in [
+        ("range", serde_json::json!([-2.0, 2.0])),
+        ("default_value", serde_json::json!(0.1)),
+    ] {
+        let mut m = v.clone();
+        m["coordinates"][hip_l][key] = value;
+        let e = refused(&m);
+        assert_eq!(e.field(), "symmetry[0]", "{e}");
+        assert!(
+            e.to_string()
+                .contains("mirror partners need one range and one default"),
+            "{e}"
+        );
+    }
+}
