@@ -445,6 +445,11 @@ impl StoTable {
     }
 }
 
+/// Why `copy_mismatch` refuses a left column; commands that can read both
+/// legs (`--full`) recognise their refusal by it and say so.
+pub const COPY_MISMATCH_REASON: &str =
+    "the symmetric model gives both legs one value, its right leg's";
+
 /// Why a value `copy` of a left leg's column differs from `original`, its
 /// right partner's (labelled `original_label`), which the symmetric system
 /// carries for both, if it does: by more than 1e-6 relative. A non-finite
@@ -453,7 +458,7 @@ pub fn copy_mismatch(copy: f64, original: f64, original_label: &str) -> Option<S
     let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
     (original.is_finite() && !agree).then(|| {
         format!(
-            "{} differs from {original_label} ({}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns",
+            "{} differs from {original_label} ({}): {COPY_MISMATCH_REASON}; give both columns the same values, or leave out the left leg's columns",
             readable(copy),
             readable(original)
         )
@@ -668,6 +673,24 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
 
 /// A number as a message shows it: as written for everyday magnitudes,
 /// in exponent form where `{}` would print hundreds of digits.
+/// `text` (an error message, which may echo its input: a column label of a
+/// 50 MB header, a name) bounded to about `MAX_MESSAGE_CHARS` characters
+/// for a terminal: its start and end kept (the file and field lead a
+/// message, the reason ends it) and the middle left out, with how much.
+pub fn bounded_message(text: &str) -> std::borrow::Cow<'_, str> {
+    let n = text.chars().count();
+    if n <= MAX_MESSAGE_CHARS {
+        return text.into();
+    }
+    let (head, tail) = (MAX_MESSAGE_CHARS * 2 / 3, MAX_MESSAGE_CHARS / 3);
+    let start: String = text.chars().take(head).collect();
+    let end: String = text.chars().skip(n - tail).collect();
+    format!("{start}…[{} characters left out]…{end}", n - head - tail).into()
+}
+
+/// The longest message `bounded_message` leaves whole (characters).
+pub const MAX_MESSAGE_CHARS: usize = 3000;
+
 pub fn readable(x: f64) -> String {
     if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
         format!("{x}")

@@ -366,6 +366,18 @@ fn opensim_system(
     Ok(leap::ode::StateEquation::opensim(&m, !full)?)
 }
 
+/// A symmetric command's refusal of a file whose legs differ, with the
+/// hint that `--full` reads both.
+fn full_hint(e: impl Into<anyhow::Error>, full: bool) -> anyhow::Error {
+    let e = e.into();
+    let text = format!("{e:#}");
+    if !full && text.contains(leap::io::COPY_MISMATCH_REASON) {
+        anyhow::anyhow!("{text}; or give --full to read both legs, on the full system")
+    } else {
+        e
+    }
+}
+
 fn main() -> ExitCode {
     // Built for x86-64-v3 (.cargo/config.toml): refuse a CPU without it
     // rather than die on an illegal instruction.
@@ -381,11 +393,11 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(code) => code,
         Err(e) if e.is::<StdoutError>() => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
             ExitCode::from(3)
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
             ExitCode::from(2)
         }
     }
@@ -516,7 +528,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let model = model.path();
             let (laws, eq) = opensim_system(&model, full)?;
-            let (time, xs) = leap::analyze::read_states(&eq, &states)?;
+            let (time, xs) =
+                leap::analyze::read_states(&eq, &states).map_err(|e| full_hint(e, full))?;
             let window = match window.as_deref() {
                 Some(&[a, b]) if a < b => Some((a, b)),
                 Some(w) => anyhow::bail!("--window: START must be below END, got {w:?}"),
@@ -544,7 +557,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let model = model.path();
             let (laws, eq) = opensim_system(&model, full)?;
-            let inputs = leap::eval::read_inputs(&eq, &input)?;
+            let inputs = leap::eval::read_inputs(&eq, &input).map_err(|e| full_hint(e, full))?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {
                 reports.push(

@@ -511,20 +511,23 @@ fn json_kind(v: &serde_json::Value) -> &'static str {
 }
 
 /// Why a component's name cannot be used, if it cannot: it becomes a part
-/// of OpenSim paths (`/forceset/<muscle>/activation`) and .sto column
-/// labels, so it may not hold `\\ / * +` (OpenSim's `ComponentPath`
-/// refuses them) nor whitespace or control characters (which split a .sto
-/// file's tab-separated labels).
+/// of OpenSim paths (`/forceset/<muscle>/activation`) and of column labels,
+/// so it may not hold `\\ / * +` (OpenSim's `ComponentPath` refuses them),
+/// whitespace or control characters (which split a .sto file's
+/// tab-separated labels), nor ',' (which splits the labels of `leap eval`'s
+/// CSV input and of OpenSim's CSV exports).
 fn name_problem(name: &str) -> Option<String> {
     if name.is_empty() {
         return Some("empty name".into());
     }
     let shown: String = name.chars().take(80).collect();
     name.chars()
-        .find(|c| matches!(c, '\\' | '/' | '*' | '+') || c.is_whitespace() || c.is_control())
+        .find(|c| {
+            matches!(c, '\\' | '/' | '*' | '+' | ',') || c.is_whitespace() || c.is_control()
+        })
         .map(|c| {
             format!(
-                "'{shown}' holds {c:?}: a name becomes part of OpenSim paths and .sto column labels, so it may not hold \\ / * +, whitespace or control characters"
+                "'{shown}' holds {c:?}: a name becomes part of OpenSim paths and of column labels (.sto, CSV), so it may not hold \\ / * + ,, whitespace or control characters"
             )
         })
 }

@@ -546,7 +546,8 @@ fn eval_checks_the_left_legs_columns() {
     let err = refused(&mut run("bent", &with(-1.0, soleus.clone())), "bent");
     assert!(
         err.contains(&format!("{knee_l}: -1 differs from {knee_r} ({knee})"))
-            && err.contains("its right leg's"),
+            && err.contains("its right leg's")
+            && err.contains("or give --full to read both legs, on the full system"),
         "{err}"
     );
     let err = refused(&mut run("text", &with(knee, "x".into())), "text");
@@ -599,4 +600,36 @@ fn eval_checks_the_left_legs_columns() {
         }
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An error that echoes its input (here an unknown `leap eval` CSV column
+/// of 200,000 characters) is bounded for the terminal: the file and the
+/// reason kept, the middle left out with its length.
+#[test]
+fn an_error_echoing_a_huge_input_is_bounded() {
+    let (dir, _) = squat_input("eval-huge-label");
+    let file = dir.join("huge.csv");
+    let label = "x".repeat(200_000);
+    std::fs::write(&file, format!("{label}\n0\n")).unwrap();
+    let err = refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&file),
+        "huge label",
+    );
+    assert!(
+        err.chars().count() < leap::io::MAX_MESSAGE_CHARS + 100,
+        "{} characters",
+        err.chars().count()
+    );
+    assert!(err.contains(file.to_str().unwrap()), "{err}");
+    assert!(err.contains("characters left out]"), "{err}");
+    assert!(
+        err.trim_end()
+            .ends_with("not a state or excitation of this model's system"),
+        "{}",
+        &err[err.len().saturating_sub(300)..]
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }

@@ -608,6 +608,7 @@ fn names_that_break_paths_or_column_labels_are_refused() {
         ("joints[0].name".to_string(), "ground*pelvis"),
         ("stations[0].name".to_string(), "a\\b"),
         ("forces.contact.spheres[0].name".to_string(), "heel\n"),
+        ("coordinates[3].name".to_string(), "hip,flexion_r"),
     ] {
         let mut m = v.clone();
         let mut at = &mut m;
@@ -625,7 +626,7 @@ fn names_that_break_paths_or_column_labels_are_refused() {
         let want = if name.is_empty() {
             "empty name".to_string()
         } else {
-            "may not hold \\ / * +, whitespace or control characters".to_string()
+            "may not hold \\ / * + ,, whitespace or control characters".to_string()
         };
         assert!(e.to_string().contains(&want), "{name:?}: {e}");
     }
