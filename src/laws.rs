@@ -333,7 +333,7 @@ impl Thelen {
         if let Some(b) = self.activation_smoothing {
             // 1/τ = s/(τ_act z) + (1 − s) z/τ_deact, s = ½ + ½ tanh(b (u − a)):
             // the same rates as OpenSim's away from u = a, smooth across it.
-            let s = ((u - ac) * b).tanh() * 0.5 + 0.5;
+            let s = crate::scalar::tanh((u - ac) * b) * 0.5 + 0.5;
             return (u - ac) * (s / (z * self.tau_act) + (s * -1.0 + 1.0) * z / self.tau_deact);
         }
         let tau = if u.re() > ac.re() {
@@ -508,7 +508,7 @@ pub fn sphere_ground_force_k<S: Scalar>(
             let fh = d2
                 * d2.sqrt()
                 * (4.0 / 3.0 * k * (r * k).sqrt())
-                * ((depth * bd).tanh() * 0.5 + 0.5);
+                * (crate::scalar::tanh(depth * bd) * 0.5 + 0.5);
             let shift = if spec.dissipation == 0.0 {
                 f64::INFINITY
             } else {
@@ -517,7 +517,7 @@ pub fn sphere_ground_force_k<S: Scalar>(
             let sw = if shift.is_infinite() {
                 S::one()
             } else {
-                ((vn + shift) * bv).tanh() * 0.5 + 0.5
+                crate::scalar::tanh((vn + shift) * bv) * 0.5 + 0.5
             };
             let f = fh * (vn * (1.5 * spec.dissipation) + 1.0) * sw;
             let vs = (v[0] * v[0] + v[2] * v[2] + cf).sqrt();
@@ -641,7 +641,7 @@ impl DeGroote {
 
     /// De Groote's smooth activation dynamics (model-equations.md §1.2).
     pub fn activation_rate<S: Scalar>(&self, a: S, u: S) -> S {
-        let f = ((u - a) * self.smoothing).tanh() * 0.5;
+        let f = crate::scalar::tanh((u - a) * self.smoothing) * 0.5;
         let z = a * 1.5 + 0.5;
         ((f + 0.5) / (z * self.tau_act) + (f * -1.0 + 0.5) * z / self.tau_deact) * (u - a)
     }

@@ -1794,3 +1794,51 @@ fn simbody_backend_matches_rust_native_rows_and_jacobian() {
         .set_differences(Differences::Central { step: 0.0 })
         .is_err());
 }
+
+/// The sparsity of the state equation does not depend on how sharply the
+/// optimizer's activation switch is smoothed: with b = 1000 (the largest
+/// `activation_dynamics_smoothing` a study may give) the pattern equals
+/// the default's, for both fibre dynamics, and builds a transcription.
+/// num-dual's tanh of a dual number overflowed there (NaN from |b·(u − a)|
+/// ≈ 355), which marked spurious dependencies at the sample states, one of
+/// them a fibre velocity input that the transcription mapped onto the next
+/// node's columns ("Jacobian entry (1730, 2409) is outside 1772×2409").
+#[test]
+fn the_pattern_does_not_depend_on_the_activation_smoothing() {
+    let model = leap::model::Model::from_file("models/jumper_reduced.json").unwrap();
+    let opts = TranscriptionOptions::default();
+    for fiber_dynamics in [FiberDynamics::Explicit, FiberDynamics::Implicit] {
+        let pattern = |b: f64| {
+            let ocp = Arc::new(
+                JumpOcp::new(
+                    &model,
+                    OcpOptions {
+                        activation_smoothing: Some(b),
+                        ..OcpOptions::default()
+                    },
+                )
+                .unwrap(),
+            );
+            let p = StatePattern::detect_for(
+                &ocp,
+                fiber_dynamics,
+                opts.pattern_samples,
+                opts.pattern_seed,
+            )
+            .unwrap();
+            (ocp, p)
+        };
+        let (_, default) = pattern(50.0);
+        let (ocp, sharp) = pattern(1000.0);
+        assert_eq!(sharp.rows, default.rows, "{fiber_dynamics:?}");
+        Transcription::with_pattern(
+            ocp,
+            TranscriptionOptions {
+                fiber_dynamics,
+                ..opts.clone()
+            },
+            sharp,
+        )
+        .unwrap();
+    }
+}
