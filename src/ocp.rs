@@ -143,6 +143,9 @@ pub struct OcpOptions {
     pub fiber_clamp_smoothing: Option<f64>,
 }
 
+/// The default b of [`OcpOptions::activation_smoothing`].
+pub const DEFAULT_ACTIVATION_SMOOTHING: f64 = 50.0;
+
 /// The band of [`OcpOptions::fiber_clamp_smoothing`] that `leap solve`
 /// takes where the scheme evaluates the dynamics at the nodes: 2% of l_min
 /// above the fibre-length bound (0.4 mm for soleus).
@@ -159,7 +162,7 @@ impl Default for OcpOptions {
             no_countermovement_nodes: 7,
             no_com_descent: true,
             liftoff: LiftOff::default(),
-            activation_smoothing: Some(50.0),
+            activation_smoothing: Some(DEFAULT_ACTIVATION_SMOOTHING),
             fiber_clamp_smoothing: None,
         }
     }

@@ -295,6 +295,9 @@ pub struct SolveReport {
     pub time_final_bounds: [f64; 2],
     pub no_countermovement_nodes: usize,
     pub no_com_descent: bool,
+    /// b of the optimizer's activation switch (the study's
+    /// `problem.activation_dynamics_smoothing`).
+    pub activation_dynamics_smoothing: Option<f64>,
     pub variables: usize,
     pub constraints: usize,
     pub time_split: crate::sqp::TimeSplit,
@@ -924,6 +927,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         time_final_bounds: ocp.options.final_time_bounds,
         no_countermovement_nodes: ocp.options.no_countermovement_nodes,
         no_com_descent: ocp.options.no_com_descent,
+        activation_dynamics_smoothing: ocp.options.activation_smoothing,
         variables: q.size.0,
         constraints: q.size.1,
         time_split: r.time,
@@ -1289,9 +1293,10 @@ impl SolveReport {
         if self.time_final_bounds != paper.final_time_bounds
             || self.no_countermovement_nodes != paper.no_countermovement_nodes
             || self.no_com_descent != paper.no_com_descent
+            || self.activation_dynamics_smoothing != paper.activation_smoothing
         {
             s.push_str(&format!(
-                "  problem (the study's): t_f in [{}, {}] s, {} no-countermovement rows (eq. 4), {}\n",
+                "  problem (the study's): t_f in [{}, {}] s, {} no-countermovement rows (eq. 4), {}{}\n",
                 self.time_final_bounds[0],
                 self.time_final_bounds[1],
                 self.no_countermovement_nodes,
@@ -1299,6 +1304,10 @@ impl SolveReport {
                     "centre of mass never descending at the nodes"
                 } else {
                     "no bound on the centre of mass's descent"
+                },
+                match self.activation_dynamics_smoothing {
+                    Some(b) => format!(", activation switch smoothed with b = {b}"),
+                    None => ", OpenSim's activation switch".into(),
                 }
             ));
         }

@@ -222,6 +222,12 @@ pub struct ProblemSpec {
     /// printed; [`crate::ocp::OcpOptions::no_com_descent`]).
     #[serde(default)]
     pub no_com_descent: Option<bool>,
+    /// b of the optimizer's activation switch ½ + ½·tanh(b·(u − a)), Moco's
+    /// `activation_dynamics_smoothing` (default 50, within [1, 1000];
+    /// [`crate::ocp::OcpOptions::activation_smoothing`]). The forward check
+    /// integrates OpenSim's own switch; a sharper blend narrows the gap.
+    #[serde(default)]
+    pub activation_dynamics_smoothing: Option<f64>,
 }
 
 /// The jump problem's settings, resolved.
@@ -231,7 +237,13 @@ pub struct ProblemSettings {
     /// None: the paper's 7, or every interval on a coarser mesh.
     pub no_countermovement_nodes: Option<usize>,
     pub no_com_descent: bool,
+    pub activation_dynamics_smoothing: f64,
 }
+
+/// The range of `problem.activation_dynamics_smoothing`: below 1 the blend
+/// mixes the activation and deactivation time constants wherever |u − a| <
+/// 1; above 1000 it is a step the optimizer's Newton steps meet as a kink.
+pub const ACTIVATION_SMOOTHING_RANGE: [f64; 2] = [1.0, 1000.0];
 
 impl Default for ProblemSettings {
     fn default() -> Self {
@@ -240,6 +252,9 @@ impl Default for ProblemSettings {
             final_time_bounds: d.final_time_bounds,
             no_countermovement_nodes: None,
             no_com_descent: d.no_com_descent,
+            activation_dynamics_smoothing: d
+                .activation_smoothing
+                .unwrap_or(crate::ocp::DEFAULT_ACTIVATION_SMOOTHING),
         }
     }
 }
@@ -255,6 +270,7 @@ impl ProblemSettings {
                 .no_countermovement_nodes
                 .unwrap_or(d.no_countermovement_nodes.min(num_intervals)),
             no_com_descent: self.no_com_descent,
+            activation_smoothing: Some(self.activation_dynamics_smoothing),
             ..d
         }
     }
@@ -658,6 +674,20 @@ impl SolveStudy {
             .map_err(|r| err("problem.no_countermovement_nodes", r))?;
         if let Some(d) = p.no_com_descent {
             problem.no_com_descent = d;
+        }
+        if let Some(b) = p.activation_dynamics_smoothing {
+            let [lo, hi] = ACTIVATION_SMOOTHING_RANGE;
+            if !(b.is_finite() && (lo..=hi).contains(&b)) {
+                return Err(err(
+                    "problem.activation_dynamics_smoothing",
+                    format!(
+                        "need {lo} ≤ b ≤ {hi} (the switch ½ + ½·tanh(b·(u − a)); default {}), got {}",
+                        crate::ocp::DEFAULT_ACTIVATION_SMOOTHING,
+                        crate::io::readable(b)
+                    ),
+                ));
+            }
+            problem.activation_dynamics_smoothing = b;
         }
 
         // The jump's variables range from centimetres (fibre lengths) to
@@ -1613,6 +1643,9 @@ mod tests {
         assert_eq!(o.final_time_bounds, [0.2, 0.39]);
         assert_eq!(o.no_countermovement_nodes, 12);
         assert!(!o.no_com_descent);
+        assert_eq!(o.activation_smoothing, Some(50.0));
+        let c = resolved(r#"{"problem": {"activation_dynamics_smoothing": 200}}"#);
+        assert_eq!(c.problem.ocp_options(28).activation_smoothing, Some(200.0));
         // Moco's property name and leap's own both read.
         let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.35]}}"#);
         assert_eq!(c.problem.final_time_bounds, [0.3, 0.35]);
@@ -1648,6 +1681,14 @@ mod tests {
                 "got 3 values",
             ),
             (r#"{"problem": {"no_countermovement_nodes": -3}}"#, "got -3"),
+            (
+                r#"{"problem": {"activation_dynamics_smoothing": 0.5}}"#,
+                "need 1 ≤ b ≤ 1000 (the switch ½ + ½·tanh(b·(u − a)); default 50), got 0.5",
+            ),
+            (
+                r#"{"problem": {"activation_dynamics_smoothing": 1e300}}"#,
+                "got 1e300",
+            ),
         ] {
             let (f, r) = field_error(json);
             assert!(f.starts_with("problem."), "{json}: {f}");
