@@ -998,13 +998,7 @@ impl Model {
                         ),
                     ));
                 }
-                if let Some(r) = range_problem(
-                    &MUSCLE_PARAMETER_RANGES,
-                    name,
-                    v,
-                    false,
-                    "any human muscle's",
-                ) {
+                if let Some(r) = MUSCLE_PARAMETER_RANGES.problem(name, v) {
                     return Err(err(p(name), r));
                 }
             }
@@ -1058,13 +1052,7 @@ impl Model {
                 if !v.is_finite() {
                     return Err(err(p(name), format!("{name} must be finite")));
                 }
-                if let Some(r) = range_problem(
-                    &LIGAMENT_PARAMETER_RANGES,
-                    name,
-                    v,
-                    true,
-                    "any joint's passive torque",
-                ) {
+                if let Some(r) = LIGAMENT_PARAMETER_RANGES.problem(name, v) {
                     return Err(err(p(name), r));
                 }
             }
@@ -1074,13 +1062,7 @@ impl Model {
                     format!("damping must be non-negative, got {}", l.damping),
                 ));
             }
-            if let Some(r) = range_problem(
-                &LIGAMENT_PARAMETER_RANGES,
-                "damping",
-                l.damping,
-                false,
-                "any joint's passive torque",
-            ) {
+            if let Some(r) = LIGAMENT_PARAMETER_RANGES.problem("damping", l.damping) {
                 return Err(err(p("damping"), r));
             }
             if let Some(j) = ligaments.iter().position(|g: &Ligament| g.coordinate == c) {
@@ -1127,13 +1109,7 @@ impl Model {
                     ("viscous_friction", cs.viscous_friction),
                     ("transition_velocity", cs.transition_velocity),
                 ] {
-                    if let Some(r) = range_problem(
-                        &CONTACT_PARAMETER_RANGES,
-                        name,
-                        v,
-                        false,
-                        "any foot contact model's",
-                    ) {
+                    if let Some(r) = CONTACT_PARAMETER_RANGES.problem(name, v) {
                         return Err(err(p(name), r));
                     }
                 }
@@ -1189,13 +1165,7 @@ impl Model {
                             format!("radius must be positive, got {}", sp.radius),
                         ));
                     }
-                    if let Some(r) = range_problem(
-                        &CONTACT_PARAMETER_RANGES,
-                        "radius",
-                        sp.radius,
-                        false,
-                        "any foot contact model's",
-                    ) {
+                    if let Some(r) = CONTACT_PARAMETER_RANGES.problem("radius", sp.radius) {
                         return Err(err(q("radius"), r));
                     }
                     spheres.push(Sphere {
@@ -1318,6 +1288,13 @@ impl Model {
 /// factor whose curve becomes a step or a constant.
 type ParameterRange = (&'static str, f64, f64, &'static str);
 
+/// The ranges of one kind of force element's parameters, and what they
+/// are wider than (for the message).
+struct ParameterRanges {
+    wider_than: &'static str,
+    ranges: &'static [ParameterRange],
+}
+
 /// The muscles' ranges, around gait2392's human muscles (forces 100–8,000
 /// N, fibres 0.02–0.5 m, tendons 0.01–0.5 m, v_max 10 l_opt/s, time
 /// constants 0.01–0.06 s) and the Thelen2003Muscle curves of every OpenSim
@@ -1325,89 +1302,99 @@ type ParameterRange = (&'static str, f64, f64, &'static str);
 /// 0.6, KshapeActive 0.5, KshapePassive 4, Af 0.3, Flen 1.8; Thelen 2003:
 /// 0.04–0.05, 0.5–0.6, 0.45, 4–5, 0.25, 1.4). Flen's lowest is OpenSim's
 /// own rule, checked first.
-const MUSCLE_PARAMETER_RANGES: [ParameterRange; 12] = [
-    ("max_isometric_force", 1e-3, 1e5, "N"),
-    ("optimal_fiber_length", 1e-4, 5.0, "m"),
-    ("tendon_slack_length", 1e-4, 5.0, "m"),
-    ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
-    ("activation_time_constant", 1e-4, 10.0, "s"),
-    ("deactivation_time_constant", 1e-4, 10.0, "s"),
-    ("FmaxTendonStrain", 1e-3, 1.0, ""),
-    ("FmaxMuscleStrain", 1e-2, 10.0, ""),
-    ("KshapeActive", 1e-2, 10.0, ""),
-    ("KshapePassive", 0.1, 100.0, ""),
-    ("Af", 1e-2, 10.0, ""),
-    ("Flen", 1.0, 100.0, ""),
-];
+const MUSCLE_PARAMETER_RANGES: ParameterRanges = ParameterRanges {
+    wider_than: "any human muscle's",
+    ranges: &[
+        ("max_isometric_force", 1e-3, 1e5, "N"),
+        ("optimal_fiber_length", 1e-4, 5.0, "m"),
+        ("tendon_slack_length", 1e-4, 5.0, "m"),
+        ("max_contraction_velocity", 0.1, 100.0, "l_opt/s"),
+        ("activation_time_constant", 1e-4, 10.0, "s"),
+        ("deactivation_time_constant", 1e-4, 10.0, "s"),
+        ("FmaxTendonStrain", 1e-3, 1.0, ""),
+        ("FmaxMuscleStrain", 1e-2, 10.0, ""),
+        ("KshapeActive", 1e-2, 10.0, ""),
+        ("KshapePassive", 0.1, 100.0, ""),
+        ("Af", 1e-2, 10.0, ""),
+        ("Flen", 1.0, 100.0, ""),
+    ],
+};
 
 /// The foot contact's ranges, around the parameters of the contact models
 /// in leap's references (Falisse et al. and Moco's 2D gait: stiffness
 /// 3.1–3.8e6 Pa, dissipation 2 s/m, friction 0.8, viscous friction 0.5
 /// s/m, transition velocity 0.1–0.2 m/s, radii 0.015–0.035 m; OpenSim's
 /// `HuntCrossleyForce` defaults a transition velocity of 0.001 m/s).
-const CONTACT_PARAMETER_RANGES: [ParameterRange; 7] = [
-    ("stiffness", 1e4, 1e10, "Pa"),
-    ("dissipation", 0.0, 100.0, "s/m"),
-    ("static_friction", 0.0, 10.0, ""),
-    ("dynamic_friction", 0.0, 10.0, ""),
-    ("viscous_friction", 0.0, 100.0, "s/m"),
-    ("transition_velocity", 1e-5, 10.0, "m/s"),
-    ("radius", 1e-3, 1.0, "m"),
-];
+const CONTACT_PARAMETER_RANGES: ParameterRanges = ParameterRanges {
+    wider_than: "any foot contact model's",
+    ranges: &[
+        ("stiffness", 1e4, 1e10, "Pa"),
+        ("dissipation", 0.0, 100.0, "s/m"),
+        ("static_friction", 0.0, 10.0, ""),
+        ("dynamic_friction", 0.0, 10.0, ""),
+        ("viscous_friction", 0.0, 100.0, "s/m"),
+        ("transition_velocity", 1e-5, 10.0, "m/s"),
+        ("radius", 1e-3, 1.0, "m"),
+    ],
+};
 
 /// The passive joint torques' ranges (k1·exp(k2·(q − θ2)) +
 /// k3·exp(k4·(q − θ1)) − damping·q̇), around Anderson & Pandy's
 /// coefficients (|k1|, |k3| ≤ 11 N·m, |k2|, |k4| ≤ 38 1/rad, angles within
-/// ±2.4 rad, damping 0.1 N·m·s/rad). Lowest and highest bound the
-/// magnitude for the signed ones.
-const LIGAMENT_PARAMETER_RANGES: [ParameterRange; 7] = [
-    ("k1", 0.0, 1e4, "N·m"),
-    ("k2", 0.0, 1e3, "1/rad"),
-    ("k3", 0.0, 1e4, "N·m"),
-    ("k4", 0.0, 1e3, "1/rad"),
-    ("theta1", 0.0, 2.0 * std::f64::consts::PI, "rad"),
-    ("theta2", 0.0, 2.0 * std::f64::consts::PI, "rad"),
-    ("damping", 0.0, 1e3, "N·m·s/rad"),
-];
+/// ±2.4 rad, damping 0.1 N·m·s/rad).
+const LIGAMENT_PARAMETER_RANGES: ParameterRanges = ParameterRanges {
+    wider_than: "any joint's passive torque",
+    ranges: &[
+        ("k1", -1e4, 1e4, "N·m"),
+        ("k2", -1e3, 1e3, "1/rad"),
+        ("k3", -1e4, 1e4, "N·m"),
+        ("k4", -1e3, 1e3, "1/rad"),
+        (
+            "theta1",
+            -2.0 * std::f64::consts::PI,
+            2.0 * std::f64::consts::PI,
+            "rad",
+        ),
+        (
+            "theta2",
+            -2.0 * std::f64::consts::PI,
+            2.0 * std::f64::consts::PI,
+            "rad",
+        ),
+        ("damping", 0.0, 1e3, "N·m·s/rad"),
+    ],
+};
 
-/// Why parameter `name` = `v` is refused by `ranges` (of `what`, "any human
-/// muscle's" say), if it is; `v` is compared by its magnitude when
-/// `signed`. A parameter without a range passes.
-fn range_problem(
-    ranges: &[ParameterRange],
-    name: &str,
-    v: f64,
-    signed: bool,
-    what: &str,
-) -> Option<String> {
-    let &(_, lo, hi, unit) = ranges.iter().find(|r| r.0 == name)?;
-    let m = if signed { v.abs() } else { v };
-    if m.is_finite() && (lo..=hi).contains(&m) {
-        return None;
-    }
-    // Bounds as written (2π to 4 decimals).
-    let r = |x: f64| {
-        let s = crate::io::readable(x);
-        if s.len() > 10 {
-            format!("{x:.4}")
-        } else {
-            s
+impl ParameterRanges {
+    /// Why parameter `name` = `v` is refused, if it is. A parameter
+    /// without a range passes.
+    fn problem(&self, name: &str, v: f64) -> Option<String> {
+        let &(_, lo, hi, unit) = self.ranges.iter().find(|r| r.0 == name)?;
+        if v.is_finite() && (lo..=hi).contains(&v) {
+            return None;
         }
-    };
-    let unit = if unit.is_empty() {
-        String::new()
-    } else {
-        format!(" {unit}")
-    };
-    let range = if signed {
-        format!("its magnitude lies above {}{unit}", r(hi))
-    } else {
-        format!("lies outside [{}, {}]{unit}", r(lo), r(hi))
-    };
-    Some(format!(
-        "{}{unit}: {range}, a range far wider than {what} (a slip of units or digits?)",
-        crate::io::readable(v)
-    ))
+        // Bounds as written (2π to 4 decimals).
+        let r = |x: f64| {
+            let s = crate::io::readable(x);
+            if s.len() > 10 {
+                format!("{x:.4}")
+            } else {
+                s
+            }
+        };
+        let unit = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {unit}")
+        };
+        Some(format!(
+            "{}{unit}: lies outside [{}, {}]{unit}, a range far wider than {} (a slip of units or digits?)",
+            crate::io::readable(v),
+            r(lo),
+            r(hi),
+            self.wider_than
+        ))
+    }
 }
 
 impl MuscleSpec {
