@@ -1835,7 +1835,7 @@ fn the_pattern_does_not_depend_on_the_activation_smoothing() {
             ocp,
             TranscriptionOptions {
                 fiber_dynamics,
-                ..opts.clone()
+                ..opts
             },
             sharp,
         )
