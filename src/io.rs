@@ -671,8 +671,6 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
     Ok(t)
 }
 
-/// A number as a message shows it: as written for everyday magnitudes,
-/// in exponent form where `{}` would print hundreds of digits.
 /// `text` (an error message, which may echo its input: a column label of a
 /// 50 MB header, a name) bounded to about `MAX_MESSAGE_CHARS` characters
 /// for a terminal: its start and end kept (the file and field lead a
@@ -691,6 +689,8 @@ pub fn bounded_message(text: &str) -> std::borrow::Cow<'_, str> {
 /// The longest message `bounded_message` leaves whole (characters).
 pub const MAX_MESSAGE_CHARS: usize = 3000;
 
+/// A number as a message shows it: as written for everyday magnitudes,
+/// in exponent form where `{}` would print hundreds of digits.
 pub fn readable(x: f64) -> String {
     if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
         format!("{x}")
@@ -918,5 +918,28 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert_eq!(e, "e.sto: line 1: the file is empty");
+    }
+
+    /// Up to the bound a message is whole; beyond it, its first two thirds
+    /// and last third of the bound in characters (not bytes: 'µ' and '…'
+    /// are two and three bytes) with the count of what was left out.
+    #[test]
+    fn bounded_messages_keep_their_ends_and_count_the_middle() {
+        let whole = "µ".repeat(MAX_MESSAGE_CHARS);
+        assert_eq!(bounded_message(&whole), whole.as_str());
+        let long = format!("head{}tail", "µ".repeat(10_000));
+        let b = bounded_message(&long);
+        let (head, tail) = (MAX_MESSAGE_CHARS * 2 / 3, MAX_MESSAGE_CHARS / 3);
+        let left_out = long.chars().count() - head - tail;
+        assert!(b.starts_with("headµ"), "{}", &b[..10]);
+        assert!(b.ends_with("µtail"));
+        assert!(b.contains(&format!("…[{left_out} characters left out]…")));
+        assert_eq!(
+            b.chars().count(),
+            head + tail
+                + format!("…[{left_out} characters left out]…")
+                    .chars()
+                    .count()
+        );
     }
 }

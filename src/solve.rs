@@ -86,6 +86,13 @@ pub enum SolveError {
         file: PathBuf,
         error: std::io::Error,
     },
+    /// A study setting the model cannot take.
+    #[error("{origin}: {field}: {reason}")]
+    Setting {
+        origin: String,
+        field: String,
+        reason: String,
+    },
 }
 
 /// Create the results directory `dir` (and its parents), with an error
@@ -394,6 +401,24 @@ pub fn run(
     }
     progress(&format!("model {}", config.model.display()));
     let model = Model::from_file(&config.model)?;
+    // The setting blends Thelen's switch for the optimizer; De Groote's
+    // smooth switch is the model's own (its forward check integrates it).
+    if model.muscle_model == crate::model::MuscleModel::DeGrooteFregly2016Muscle
+        && config.problem.activation_dynamics_smoothing
+            != ProblemSettings::default().activation_dynamics_smoothing
+    {
+        return Err(SolveError::Setting {
+            origin: config
+                .study_file
+                .as_ref()
+                .map_or_else(|| "built-in study".into(), |p| p.display().to_string()),
+            field: "problem.activation_dynamics_smoothing".into(),
+            reason: format!(
+                "smooths Thelen2003Muscle's activation switch for the optimizer; the muscles of {} are DeGrooteFregly2016Muscle, whose smooth switch is the model's own",
+                config.model.display()
+            ),
+        });
+    }
     if config.method == Method::Shooting {
         return run_shooting(config, &model, verbose, progress);
     }

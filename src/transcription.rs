@@ -1334,9 +1334,10 @@ impl Transcription {
         // another row's entry for one (every row of the dense pattern of
         // `leap crosscheck --jacobian`) would map it onto the next node's
         // columns, so it is dropped.
+        let balance_row = |r: usize| implicit && (lm0..lm0 + nm).contains(&r);
         let mut pattern = pattern;
         for (r, row) in pattern.rows.iter_mut().enumerate() {
-            if !(implicit && (lm0..lm0 + nm).contains(&r)) {
+            if !balance_row(r) {
                 row.retain(|&c| c < nx + nu);
             }
         }
@@ -1346,7 +1347,6 @@ impl Transcription {
             .iter()
             .map(|&mi| ocp.laws.muscles[mi].max_fiber_speed())
             .collect();
-        let balance_row = |r: usize| implicit && (lm0..lm0 + nm).contains(&r);
         if options.threads == 0 {
             return Err(TranscriptionError::Invalid(
                 "threads must be at least 1".into(),

@@ -1145,3 +1145,31 @@ fn unwritable_result_files_are_refused_before_the_solve() {
         "{err}"
     );
 }
+
+/// `problem.activation_dynamics_smoothing` blends Thelen2003Muscle's switch
+/// for the optimizer; on a DeGrooteFregly2016Muscle model, whose smooth
+/// switch is the model's own, it is refused naming the study and the field
+/// (it had been reported as applied and changed nothing).
+#[test]
+fn activation_smoothing_is_refused_for_de_groote_muscles() {
+    let dir = fresh_dir("dg-smoothing");
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    std::fs::write(dir.join("dg.json"), model.to_string()).unwrap();
+    let study = dir.join("study.json");
+    std::fs::write(
+        &study,
+        r#"{"model": "dg.json", "problem": {"activation_dynamics_smoothing": 200}}"#,
+    )
+    .unwrap();
+    let err = refused(&["solve", study.to_str().unwrap()]);
+    assert!(
+        err.contains(&format!(
+            "{}: problem.activation_dynamics_smoothing: smooths Thelen2003Muscle's activation switch",
+            study.display()
+        )) && err.contains("DeGrooteFregly2016Muscle"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

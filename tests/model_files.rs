@@ -626,7 +626,7 @@ fn names_that_break_paths_or_column_labels_are_refused() {
         let want = if name.is_empty() {
             "empty name".to_string()
         } else {
-            "may not hold \\ / * + ,, whitespace or control characters".to_string()
+            "may not hold \\ / * + or ',', whitespace or control characters".to_string()
         };
         assert!(e.to_string().contains(&want), "{name:?}: {e}");
     }
