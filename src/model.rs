@@ -554,11 +554,11 @@ pub const MAX_BODY_MASS_KG: f64 = 1e4;
 /// side suffixes (`hip_flexion_r`) must name one coordinate of each side,
 /// the right first.
 fn pair_problem(r: &str, l: &str, cr: &Coordinate, cl: &Coordinate) -> Option<String> {
-    let side = |n: &str| {
+    fn side(n: &str) -> Option<(&str, char)> {
         n.strip_suffix("_r")
-            .map(|s| (s.to_owned(), 'r'))
-            .or_else(|| n.strip_suffix("_l").map(|s| (s.to_owned(), 'l')))
-    };
+            .map(|s| (s, 'r'))
+            .or_else(|| n.strip_suffix("_l").map(|s| (s, 'l')))
+    }
     if let (Some((sr, ar)), Some((sl, al))) = (side(r), side(l)) {
         if (ar, al) == ('l', 'r') && sr == sl {
             return Some(format!(
@@ -903,8 +903,7 @@ impl Model {
                     format!("pairs coordinate '{r}' with itself"),
                 ));
             }
-            for (k, c) in [(0, r), (1, l)] {
-                let ci = coord_index[c];
+            for (k, c, ci) in [(0, r, ri), (1, l, li)] {
                 if let Some(j) = in_pair[ci] {
                     return Err(err(
                         format!("symmetry[{i}][{k}]"),
@@ -984,20 +983,9 @@ impl Model {
                     ),
                 ));
             }
-            // Every parameter is positive but the pennation angle.
+            // Every parameter but the pennation angle has a range, which
+            // refuses what is not finite and positive.
             for (name, v) in m.parameters() {
-                if name == "pennation_angle_at_optimal" {
-                    continue;
-                }
-                if !(v.is_finite() && v > 0.0) {
-                    return Err(err(
-                        p(name),
-                        format!(
-                            "{name} must be positive and finite, got {}",
-                            crate::io::readable(v)
-                        ),
-                    ));
-                }
                 if let Some(r) = MUSCLE_PARAMETER_RANGES.problem(name, v) {
                     return Err(err(p(name), r));
                 }
@@ -1130,12 +1118,6 @@ impl Model {
                         .ok_or_else(|| err(q("body"), format!("unknown body '{}'", sp.body)))?;
                     if let Some(r) = location_problem(&sp.location) {
                         return Err(err(q("location"), r));
-                    }
-                    if !(sp.radius.is_finite() && sp.radius > 0.0) {
-                        return Err(err(
-                            q("radius"),
-                            format!("radius must be positive, got {}", sp.radius),
-                        ));
                     }
                     if let Some(r) = CONTACT_PARAMETER_RANGES.problem("radius", sp.radius) {
                         return Err(err(q("radius"), r));
@@ -1742,5 +1724,36 @@ impl SystemSpec {
     /// Expand a system vector (q or u) to all model coordinates.
     pub fn model_from_q(&self, q: &[f64]) -> Vec<f64> {
         self.q_of_model_coordinate.iter().map(|&k| q[k]).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The muscle loop refuses a non-positive or non-finite parameter only
+    /// through its range: every parameter but the pennation angle (checked
+    /// on its own, in [0, π/2)) must have one, above zero.
+    #[test]
+    fn every_muscle_parameter_but_the_pennation_has_a_positive_range() {
+        let model = Model::from_file("models/jumper.json").unwrap();
+        for (name, _) in model.muscles[0].spec.parameters() {
+            let range = MUSCLE_PARAMETER_RANGES.ranges.iter().find(|r| r.0 == name);
+            if name == "pennation_angle_at_optimal" {
+                assert!(range.is_none());
+                continue;
+            }
+            let &(_, lo, hi, _) = range.unwrap_or_else(|| panic!("{name} has no range"));
+            assert!(
+                lo > 0.0 && lo < hi && hi.is_finite(),
+                "{name}: [{lo}, {hi}]"
+            );
+            for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+                assert!(
+                    MUSCLE_PARAMETER_RANGES.problem(name, bad).is_some(),
+                    "{name} = {bad}"
+                );
+            }
+        }
     }
 }

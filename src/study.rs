@@ -252,9 +252,7 @@ impl Default for ProblemSettings {
             final_time_bounds: d.final_time_bounds,
             no_countermovement_nodes: None,
             no_com_descent: d.no_com_descent,
-            activation_dynamics_smoothing: d
-                .activation_smoothing
-                .unwrap_or(crate::ocp::DEFAULT_ACTIVATION_SMOOTHING),
+            activation_dynamics_smoothing: crate::ocp::DEFAULT_ACTIVATION_SMOOTHING,
         }
     }
 }

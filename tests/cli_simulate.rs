@@ -413,33 +413,29 @@ fn a_controls_file_that_stops_early_is_warned_of() {
 #[test]
 fn commands_find_the_default_model_outside_the_source_tree() {
     let dir = tmp("default-model");
-    let o = leap().current_dir(&dir).args(["squat"]).output().unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let run = |args: &[&str]| {
+        let o = leap().current_dir(&dir).args(args).output().unwrap();
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        o
+    };
+    let v: serde_json::Value = serde_json::from_slice(&run(&["squat"]).stdout).unwrap();
     assert!(
         v["state"]["/forceset/soleus_r/activation"].is_number(),
         "{v}"
     );
     let here = std::env::current_dir().unwrap();
-    let o = leap()
-        .current_dir(&dir)
-        .args(["simulate", "--out", "out"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = leap()
-        .current_dir(&dir)
-        .args(["analyze", "out/jump_states.sto", "--json"])
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = leap()
-        .current_dir(&dir)
-        .args(["squat", "--model", "models/jumper.json"])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
+    run(&["simulate", "--out", "out"]);
+    run(&["analyze", "out/jump_states.sto", "--json"]);
+    let err = refused(
+        leap()
+            .current_dir(&dir)
+            .args(["squat", "--model", "models/jumper.json"]),
+        "a named model that is not there",
+    );
     assert!(
         err.contains("models/jumper.json") && err.contains("cannot read"),
         "{err}"
