@@ -876,12 +876,16 @@ fn symmetry_pairs_are_checked_at_their_own_entry() {
             "pairs coordinate 'hip_flexion_r' with itself",
         ),
     ];
+    // Refused at `field`, for `reason`.
+    let refused_at = |m: &serde_json::Value, field: &str, reason: &str| {
+        let e = refused(m);
+        assert_eq!(e.field(), field, "{e}");
+        assert!(e.to_string().contains(reason), "{e}");
+    };
     for (p, field, reason) in cases {
         let mut m = v.clone();
         m["symmetry"][0] = p;
-        let e = refused(&m);
-        assert_eq!(e.field(), field, "{e}");
-        assert!(e.to_string().contains(reason), "{e}");
+        refused_at(&m, field, reason);
     }
     // A coordinate paired twice: the later pair is refused, naming the
     // earlier one.
@@ -890,12 +894,10 @@ fn symmetry_pairs_are_checked_at_their_own_entry() {
         .as_array_mut()
         .unwrap()
         .push(pair("lumbar_extension", "knee_angle_l"));
-    let e = refused(&m);
-    assert_eq!(e.field(), "symmetry[3][1]", "{e}");
-    assert!(
-        e.to_string()
-            .contains("'knee_angle_l' is already paired by symmetry[1]"),
-        "{e}"
+    refused_at(
+        &m,
+        "symmetry[3][1]",
+        "'knee_angle_l' is already paired by symmetry[1]",
     );
     // Partners with different ranges or defaults.
     let hip_l = v["coordinates"]
@@ -910,12 +912,10 @@ fn symmetry_pairs_are_checked_at_their_own_entry() {
     ] {
         let mut m = v.clone();
         m["coordinates"][hip_l][key] = value;
-        let e = refused(&m);
-        assert_eq!(e.field(), "symmetry[0]", "{e}");
-        assert!(
-            e.to_string()
-                .contains("mirror partners need one range and one default"),
-            "{e}"
+        refused_at(
+            &m,
+            "symmetry[0]",
+            "mirror partners need one range and one default",
         );
     }
 }
