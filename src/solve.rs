@@ -404,8 +404,7 @@ pub fn run(
     // The setting blends Thelen's switch for the optimizer; De Groote's
     // smooth switch is the model's own (its forward check integrates it).
     if model.muscle_model == crate::model::MuscleModel::DeGrooteFregly2016Muscle
-        && config.problem.activation_dynamics_smoothing
-            != ProblemSettings::default().activation_dynamics_smoothing
+        && config.problem.activation_dynamics_smoothing.is_some()
     {
         return Err(SolveError::Setting {
             origin: config
@@ -517,8 +516,13 @@ fn integrate_guess_on_mesh(
 ) -> Result<crate::transcription::MeshIntegration, String> {
     let started = std::time::Instant::now();
     let m = tr.integrate_on_mesh(v).map_err(|e| e.to_string())?;
+    let at_bound = if m.at_bound > 0 {
+        format!(", {} stopped with a state at its bound", m.at_bound)
+    } else {
+        String::new()
+    };
     progress(&format!(
-        "initial guess: {} of {} intervals integrated to {:.0e} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
+        "initial guess: {} of {} intervals integrated to {:.0e}{at_bound} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
         m.converged,
         m.intervals,
         crate::transcription::MESH_NEWTON_TOL,

@@ -237,7 +237,9 @@ pub struct ProblemSettings {
     /// None: the paper's 7, or every interval on a coarser mesh.
     pub no_countermovement_nodes: Option<usize>,
     pub no_com_descent: bool,
-    pub activation_dynamics_smoothing: f64,
+    /// None: the default, [`crate::ocp::DEFAULT_ACTIVATION_SMOOTHING`]
+    /// (Some: the study gave it, which a De Groote model refuses).
+    pub activation_dynamics_smoothing: Option<f64>,
 }
 
 /// The range of `problem.activation_dynamics_smoothing`: below 1 the blend
@@ -252,7 +254,7 @@ impl Default for ProblemSettings {
             final_time_bounds: d.final_time_bounds,
             no_countermovement_nodes: None,
             no_com_descent: d.no_com_descent,
-            activation_dynamics_smoothing: crate::ocp::DEFAULT_ACTIVATION_SMOOTHING,
+            activation_dynamics_smoothing: None,
         }
     }
 }
@@ -268,7 +270,10 @@ impl ProblemSettings {
                 .no_countermovement_nodes
                 .unwrap_or(d.no_countermovement_nodes.min(num_intervals)),
             no_com_descent: self.no_com_descent,
-            activation_smoothing: Some(self.activation_dynamics_smoothing),
+            activation_smoothing: Some(
+                self.activation_dynamics_smoothing
+                    .unwrap_or(crate::ocp::DEFAULT_ACTIVATION_SMOOTHING),
+            ),
             ..d
         }
     }
@@ -685,7 +690,7 @@ impl SolveStudy {
                     ),
                 ));
             }
-            problem.activation_dynamics_smoothing = b;
+            problem.activation_dynamics_smoothing = Some(b);
         }
 
         // The jump's variables range from centimetres (fibre lengths) to
@@ -1641,9 +1646,12 @@ mod tests {
         assert_eq!(o.final_time_bounds, [0.2, 0.39]);
         assert_eq!(o.no_countermovement_nodes, 12);
         assert!(!o.no_com_descent);
-        assert_eq!(o.activation_smoothing, Some(50.0));
-        let c = resolved(r#"{"problem": {"activation_dynamics_smoothing": 200}}"#);
-        assert_eq!(c.problem.ocp_options(28).activation_smoothing, Some(200.0));
+        assert_eq!(
+            o.activation_smoothing,
+            Some(crate::ocp::DEFAULT_ACTIVATION_SMOOTHING)
+        );
+        let c = resolved(r#"{"problem": {"activation_dynamics_smoothing": 123}}"#);
+        assert_eq!(c.problem.ocp_options(28).activation_smoothing, Some(123.0));
         // Moco's property name and leap's own both read.
         let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.35]}}"#);
         assert_eq!(c.problem.final_time_bounds, [0.3, 0.35]);
@@ -1681,7 +1689,7 @@ mod tests {
             (r#"{"problem": {"no_countermovement_nodes": -3}}"#, "got -3"),
             (
                 r#"{"problem": {"activation_dynamics_smoothing": 0.5}}"#,
-                "need 1 ≤ b ≤ 1000 (the switch ½ + ½·tanh(b·(u − a)); default 50), got 0.5",
+                "need 1 ≤ b ≤ 1000 (the switch ½ + ½·tanh(b·(u − a)); default ",
             ),
             (
                 r#"{"problem": {"activation_dynamics_smoothing": 1e300}}"#,

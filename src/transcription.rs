@@ -1168,6 +1168,10 @@ pub struct MeshIntegration {
     /// Mesh intervals, and those whose defects reached [`MESH_NEWTON_TOL`].
     pub intervals: usize,
     pub converged: usize,
+    /// Intervals whose Newton iteration stopped short with a state held at
+    /// its bound against the step: the defects' solution lies outside the
+    /// bounds (e.g. an activation the scheme would take below a_min).
+    pub at_bound: usize,
     /// The largest defect left (the problem's units), and its interval
     /// (1-based) and state.
     pub worst_defect: f64,
@@ -1950,6 +1954,7 @@ impl Transcription {
         let mut report = MeshIntegration {
             intervals: big_n,
             converged: 0,
+            at_bound: 0,
             worst_defect: 0.0,
             worst_interval: 0,
             worst_state: 0,
@@ -1962,6 +1967,8 @@ impl Transcription {
                     EvalError::new("guess", format!("node {k} has no state variables"))
                 })?;
             let mut res = self.interval_residual(v, k, &mut rows)?;
+            // Whether the last Newton step pushed a state held at its bound.
+            let mut held = false;
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
                     break;
@@ -1974,6 +1981,9 @@ impl Transcription {
                 if step.iter().any(|s| !s.is_finite()) {
                     break;
                 }
+                held = cols.iter().zip(step.iter()).any(|(&col, &d)| {
+                    (v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0)
+                });
                 let mut alpha = 1.0;
                 let mut taken = false;
                 for _ in 0..MESH_NEWTON_BACKTRACKS {
@@ -2003,6 +2013,7 @@ impl Transcription {
                 // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
+            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held);
             if res > report.worst_defect {
                 self.interval_residual(v, k, &mut rows)?;
                 report.worst_state = (0..nx)

@@ -764,8 +764,10 @@ fn problem_settings_reach_both_methods() {
 /// resampled, its states violate the new mesh's defects most (the largest
 /// violation of the first iterate is a defect row); with
 /// `--integrate-guess` its excitations are integrated on the new mesh,
-/// every interval's defects meet the mesh Newton tolerance (1e-10) and the
-/// largest violation lies elsewhere. The same from a controls file.
+/// every interval's defects meet the mesh Newton tolerance (1e-10) or its
+/// Newton iteration stops with a state held at its bound (the scheme would
+/// take an activation below a_min), and the largest violation lies
+/// elsewhere. The same from a controls file.
 #[test]
 fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
     let dir = fresh_dir("integrate_guess");
@@ -803,8 +805,14 @@ fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
     let (integrated, worst) = first_row(&solution, "6", true);
     let m = &integrated["guess_mesh_integration"];
     assert_eq!(m["intervals"].as_u64(), Some(6));
-    assert_eq!(m["converged"].as_u64(), Some(6), "{m}");
-    assert!(m["worst_defect"].as_f64().unwrap() <= 1e-10, "{m}");
+    let (converged, at_bound) = (
+        m["converged"].as_u64().unwrap(),
+        m["at_bound"].as_u64().unwrap(),
+    );
+    assert_eq!(converged + at_bound, 6, "{m}");
+    if at_bound == 0 {
+        assert!(m["worst_defect"].as_f64().unwrap() <= 1e-10, "{m}");
+    }
     assert!(!mesh_row(&worst), "integrated: {worst}");
     // Integrated, the excitations alone are read: also a controls file's
     // (the default jump's optimal excitations, as OpenSim reads them),
