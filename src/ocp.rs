@@ -124,13 +124,16 @@ pub struct OcpOptions {
     /// Thelen's activation dynamics switch time constants at u = a, a kink
     /// the optimizer cannot step across (muscles at rest sit on it: u = a =
     /// 0.01). Some(b) blends the switch by ½ + ½·tanh(b·(u − a)) (De Groote
-    /// et al. 2016; Moco's `activation_dynamics_smoothing`). Default 50:
-    /// the rates are OpenSim's within 1% once |u − a| > 0.05. The forward
+    /// et al. 2016; Moco's `activation_dynamics_smoothing`). Default 200:
+    /// the rates are OpenSim's within 1% once |u − a| > 0.012. The forward
     /// check integrates OpenSim's own switch, so a softer blend shows as
-    /// a gap between predicted and simulated jump: at b = 10 (the earlier
+    /// a gap between predicted and simulated jump: at b = 10 (an earlier
     /// default) the reduced jump at 28 intervals predicted 1.19 cm more
     /// than its forward check, of which 1.13 cm vanished when the forward
-    /// check used the blended switch too; at b = 50 the gap is 0.34 cm.
+    /// check used the blended switch too; at b = 50 (the default until
+    /// 2026-12-06) the gap is 0.34 cm. On the full jump the forward check's
+    /// gap is 0.37–0.51 cm at b = 50 and 0.08–0.24 cm at b = 200 on 24–30
+    /// mesh intervals (README, "Mesh error and open-loop sensitivity").
     pub activation_smoothing: Option<f64>,
     /// Thelen's fibre clamp spread over a band (see
     /// [`crate::laws::FiberClampSmoothing`]) from the fibre-length lower
@@ -144,7 +147,7 @@ pub struct OcpOptions {
 }
 
 /// The default b of [`OcpOptions::activation_smoothing`].
-pub const DEFAULT_ACTIVATION_SMOOTHING: f64 = 50.0;
+pub const DEFAULT_ACTIVATION_SMOOTHING: f64 = 200.0;
 
 /// The band of [`OcpOptions::fiber_clamp_smoothing`] that `leap solve`
 /// takes where the scheme evaluates the dynamics at the nodes: 2% of l_min

@@ -223,7 +223,7 @@ pub struct ProblemSpec {
     #[serde(default)]
     pub no_com_descent: Option<bool>,
     /// b of the optimizer's activation switch ½ + ½·tanh(b·(u − a)), Moco's
-    /// `activation_dynamics_smoothing` (default 50, within [1, 1000];
+    /// `activation_dynamics_smoothing` (default 200, within [1, 1000];
     /// [`crate::ocp::OcpOptions::activation_smoothing`]). The forward check
     /// integrates OpenSim's own switch; a sharper blend narrows the gap.
     #[serde(default)]

@@ -801,7 +801,7 @@ fn defects_vanish_at_the_schemes_order_on_a_forward_trajectory() {
                 // activation switch, the finer the mesh on which the ratio
                 // reaches its asymptote (backward Euler from 32 to 64
                 // intervals: 3.64 at b = 50, 3.48 at b = 200; from 64 to
-                // 128: 3.96 at b = 50).
+                // 128: 3.96 and 4.01).
                 let want = if scheme == Scheme::BackwardEuler {
                     2f64.powf(1.5)
                 } else {
