@@ -61,8 +61,9 @@ pub enum StoError {
     },
     /// Too few data rows.
     #[error(
-        "{file}: {rows} data row{s}; at least {needed} are needed",
-        s = if *rows == 1 { "" } else { "s" }
+        "{file}: {rows} data row{s}; at least {needed} {are} needed",
+        s = if *rows == 1 { "" } else { "s" },
+        are = if *needed == 1 { "is" } else { "are" }
     )]
     Rows {
         file: PathBuf,

@@ -396,6 +396,17 @@ fn controls_refuse_an_infinite_time_and_take_one_row() {
         e,
         format!("{}: column 'time': row 2: inf is not finite", p.display())
     );
+    // No row at all: one is needed.
+    t.time.clear();
+    t.rows.clear();
+    t.write_sto(&p).unwrap();
+    let e = Controls::from_file(&p, &["soleus_r"])
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        format!("{}: 0 data rows; at least 1 is needed", p.display())
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
