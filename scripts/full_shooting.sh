@@ -2,7 +2,7 @@
 # The paper's two methods on the full 29-node jump, both from the bang-bang
 # guess: direct shooting (forward sensitivities) against the collocation
 # solve (solved, violation within 1e-3, forward check and the two methods
-# within 1 cm): about 2 minutes on 2 cores once built. Prints both solves' summary
+# within 1 cm): about 4 minutes on 2 cores once built. Prints both solves' summary
 # lines.
 set -euo pipefail
 cd "$(dirname "$0")/.."

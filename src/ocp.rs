@@ -125,7 +125,8 @@ pub struct OcpOptions {
     /// the optimizer cannot step across (muscles at rest sit on it: u = a =
     /// 0.01). Some(b) blends the switch by ½ + ½·tanh(b·(u − a)) (De Groote
     /// et al. 2016; Moco's `activation_dynamics_smoothing`). Default 200:
-    /// the rates are OpenSim's within 1% once |u − a| > 0.012. The forward
+    /// the rates are OpenSim's within 1% once |u − a| > 0.018 (at a_min,
+    /// where the blended rates differ most; 0.013 at a ≈ 0.5). The forward
     /// check integrates OpenSim's own switch, so a softer blend shows as
     /// a gap between predicted and simulated jump: at b = 10 (an earlier
     /// default) the reduced jump at 28 intervals predicted 1.19 cm more

@@ -1689,7 +1689,7 @@ mod tests {
             (r#"{"problem": {"no_countermovement_nodes": -3}}"#, "got -3"),
             (
                 r#"{"problem": {"activation_dynamics_smoothing": 0.5}}"#,
-                "need 1 ≤ b ≤ 1000 (the switch ½ + ½·tanh(b·(u − a)); default ",
+                "got 0.5",
             ),
             (
                 r#"{"problem": {"activation_dynamics_smoothing": 1e300}}"#,
@@ -1700,6 +1700,12 @@ mod tests {
             assert!(f.starts_with("problem."), "{json}: {f}");
             assert!(r.contains(want), "{json}: {r}");
         }
+        let (_, r) = field_error(r#"{"problem": {"activation_dynamics_smoothing": 0.5}}"#);
+        let want = format!(
+            "need 1 ≤ b ≤ 1000 (the switch ½ + ½·tanh(b·(u − a)); default {}), got 0.5",
+            crate::ocp::DEFAULT_ACTIVATION_SMOOTHING
+        );
+        assert!(r.contains(&want), "{r}");
         let (f, r) = field_error(
             r#"{"mesh": {"num_mesh_intervals": 8}, "problem": {"no_countermovement_nodes": 9}}"#,
         );

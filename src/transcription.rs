@@ -1169,8 +1169,10 @@ pub struct MeshIntegration {
     pub intervals: usize,
     pub converged: usize,
     /// Intervals whose Newton iteration stopped short with a state held at
-    /// its bound against the step: the defects' solution lies outside the
-    /// bounds (e.g. an activation the scheme would take below a_min).
+    /// its bound against its last step (by a hundredth of the step or
+    /// more): the defects' solution lies outside the bounds (e.g. an
+    /// activation the scheme would take below a_min, a fibre shorter than
+    /// its shortest).
     pub at_bound: usize,
     /// The largest defect left (the problem's units), and its interval
     /// (1-based) and state.
@@ -1949,6 +1951,7 @@ impl Transcription {
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
         let (mut rows, mut scratch) = (vec![0.0; nx], vec![0.0; nx]);
+        let mut held = vec![false; nx];
         let mut jac = nalgebra::DMatrix::<f64>::zeros(nx, nx);
         let mut trial = v.to_vec();
         let mut report = MeshIntegration {
@@ -1967,12 +1970,13 @@ impl Transcription {
                     EvalError::new("guess", format!("node {k} has no state variables"))
                 })?;
             let mut res = self.interval_residual(v, k, &mut rows)?;
-            // Whether the last Newton step pushed a state held at its bound.
-            let mut held = false;
+            // The states the last Newton step pushed against their bounds.
+            held.fill(false);
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
                     break;
                 }
+                held.fill(false);
                 self.interval_state_jacobian(v, k, &mut jac)?;
                 let rhs = nalgebra::DVector::from_iterator(nx, rows.iter().map(|r| -r));
                 let Some(step) = jac.clone().lu().solve(&rhs) else {
@@ -1981,9 +1985,13 @@ impl Transcription {
                 if step.iter().any(|s| !s.is_finite()) {
                     break;
                 }
-                held = cols.iter().zip(step.iter()).any(|(&col, &d)| {
-                    (v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0)
-                });
+                // A component of a hundredth of the step or more: the clamp
+                // removes part of the Newton step, not roundoff.
+                let significant = 1e-2 * step.amax();
+                for ((h, &col), &d) in held.iter_mut().zip(&cols).zip(step.iter()) {
+                    *h = d.abs() >= significant
+                        && ((v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0));
+                }
                 let mut alpha = 1.0;
                 let mut taken = false;
                 for _ in 0..MESH_NEWTON_BACKTRACKS {
@@ -2013,8 +2021,9 @@ impl Transcription {
                 // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
-            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held);
+            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held.contains(&true));
             if res > report.worst_defect {
+                // rows may hold a rejected trial's defects: v's again.
                 self.interval_residual(v, k, &mut rows)?;
                 report.worst_state = (0..nx)
                     .max_by(|&a, &b| rows[a].abs().total_cmp(&rows[b].abs()))

@@ -810,9 +810,13 @@ fn integrate_guess_makes_a_coarser_solution_meet_the_defects() {
         m["at_bound"].as_u64().unwrap(),
     );
     assert_eq!(converged + at_bound, 6, "{m}");
-    if at_bound == 0 {
-        assert!(m["worst_defect"].as_f64().unwrap() <= 1e-10, "{m}");
-    }
+    // An interval stopped at a bound is left a hair off (b = 200: 1.2e-8,
+    // an activation 4e-9 below a_min), the resampled guess by O(1).
+    let worst_defect = m["worst_defect"].as_f64().unwrap();
+    assert!(
+        worst_defect <= if at_bound == 0 { 1e-10 } else { 1e-6 },
+        "{m}"
+    );
     assert!(!mesh_row(&worst), "integrated: {worst}");
     // Integrated, the excitations alone are read: also a controls file's
     // (the default jump's optimal excitations, as OpenSim reads them),
@@ -1157,7 +1161,9 @@ fn unwritable_result_files_are_refused_before_the_solve() {
 /// `problem.activation_dynamics_smoothing` blends Thelen2003Muscle's switch
 /// for the optimizer; on a DeGrooteFregly2016Muscle model, whose smooth
 /// switch is the model's own, it is refused naming the study and the field
-/// (it had been reported as applied and changed nothing).
+/// (it had been reported as applied and changed nothing) whenever the
+/// study gives it, even at its default value (the 200 below); without it
+/// such a model is read.
 #[test]
 fn activation_smoothing_is_refused_for_de_groote_muscles() {
     let dir = fresh_dir("dg-smoothing");
@@ -1177,6 +1183,15 @@ fn activation_smoothing_is_refused_for_de_groote_muscles() {
             "{}: problem.activation_dynamics_smoothing: smooths Thelen2003Muscle's activation switch",
             study.display()
         )) && err.contains("DeGrooteFregly2016Muscle"),
+        "{err}"
+    );
+    // Without the field the model is read and the solve goes on to its
+    // guess (where, in leap's fibre-length state, the bang-bang jump's
+    // inverted force–velocity curve overflows; README, "The model").
+    std::fs::write(&study, r#"{"model": "dg.json"}"#).unwrap();
+    let err = refused(&["solve", study.to_str().unwrap()]);
+    assert!(
+        err.contains("initial guess") && !err.contains("activation_dynamics_smoothing"),
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);
