@@ -386,25 +386,22 @@ fn controls_refuse_an_infinite_time_and_take_one_row() {
     let mut u = [0.0];
     c.at(1.0, &mut u);
     assert_eq!(u, [0.5]);
+    let refusal = |t: &StoTable| {
+        t.write_sto(&p).unwrap();
+        let e = Controls::from_file(&p, &["soleus_r"]).unwrap_err();
+        e.to_string()
+    };
     t.time.push(f64::INFINITY);
     t.rows.push(vec![0.5]);
-    t.write_sto(&p).unwrap();
-    let e = Controls::from_file(&p, &["soleus_r"])
-        .unwrap_err()
-        .to_string();
     assert_eq!(
-        e,
+        refusal(&t),
         format!("{}: column 'time': row 2: inf is not finite", p.display())
     );
     // No row at all: one is needed.
     t.time.clear();
     t.rows.clear();
-    t.write_sto(&p).unwrap();
-    let e = Controls::from_file(&p, &["soleus_r"])
-        .unwrap_err()
-        .to_string();
     assert_eq!(
-        e,
+        refusal(&t),
         format!("{}: 0 data rows; at least 1 is needed", p.display())
     );
     std::fs::remove_dir_all(&dir).ok();
