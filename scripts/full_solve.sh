@@ -6,4 +6,4 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ./scripts/install-deps.sh
-exec cargo test --release --test integration -- --ignored --nocapture jump_solve::full_jump
+exec cargo test --release --test integration -- --ignored --nocapture jump_solve::full_jump_meets_the_papers_ranges jump_solve::full_jump_by_hermite_simpson
