@@ -26,55 +26,23 @@ CONTROLS.sto defaults to tests/data/controls/jump_optimal.sto. Measured
 within 1 ms.
 """
 import pathlib
-import subprocess
 import sys
-import tempfile
 
 import opensim as osim
 
+from opensim_forward_jump import leap_simulate, mirror, prescribe_excitations
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
-
-
-def read_sto(path):
-    lines = pathlib.Path(path).read_text().splitlines()
-    end = next(i for i, l in enumerate(lines) if l.strip() == "endheader")
-    labels = lines[end + 1].split("\t")
-    rows = [[float(v) for v in l.split("\t")] for l in lines[end + 2:] if l.strip()]
-    return labels, rows
-
-
-def mirror(name):
-    """The left partner of a right-side name (coordinate or muscle)."""
-    return name[:-2] + "_l" if name.endswith("_r") else None
 
 
 def main():
     osim.Logger.setLevelString("warn")
     controls = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ROOT / "tests/data/controls/jump_optimal.sto")
-    with tempfile.TemporaryDirectory() as out:
-        subprocess.run([str(ROOT / "target/release/leap"), "simulate", "--controls", str(controls),
-                        "--out", out, "--json"], capture_output=True, text=True, check=True)
-        labels, rows = read_sto(pathlib.Path(out) / "jump_states.sto")
-    x0 = dict(zip(labels, rows[0]))
+    _, x0 = leap_simulate(controls, 1e-5)
 
     model = osim.Model(str(ROOT / "models/jumper.osim"))
     osim.DeGrooteFregly2016Muscle.replaceMuscles(model)
-    clabels, crows = read_sto(controls)
-    ctrl = osim.PrescribedController()
-    muscles = model.getMuscles()
-    in_file = {label.split("/")[-1] for label in clabels[1:]}
-    for k, label in enumerate(clabels[1:], start=1):
-        name = label.split("/")[-1]
-        for side in (name, mirror(name)):
-            if side is None or (side != name and side in in_file):
-                continue
-            f = osim.PiecewiseLinearFunction()
-            for row in crows:
-                f.addPoint(row[0], row[k])
-            f.addPoint(crows[-1][0] + 10.0, crows[-1][k])
-            ctrl.addActuator(muscles.get(side))
-            ctrl.prescribeControlForActuator(side, f)
-    model.addController(ctrl)
+    prescribe_excitations(model, controls)
     state = model.initSystem()
 
     coords = model.getCoordinateSet()

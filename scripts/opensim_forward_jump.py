@@ -80,21 +80,21 @@ def mirror(name):
     return name[:-2] + "_l" if name.endswith("_r") else None
 
 
-def main():
-    osim.Logger.setLevelString("warn")
-    controls = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ROOT / "tests/data/controls/jump_optimal.sto")
-    model_json = json.loads((ROOT / "models/jumper.json").read_text())
-
-    # leap's squat and leap's own forward simulation of the same controls.
+def leap_simulate(controls, accuracy):
+    """`leap simulate --controls CONTROLS` at the given accuracy: its JSON
+    summary and row 0 of its states file (leap's static squat, by label)."""
     with tempfile.TemporaryDirectory() as out:
         run = subprocess.run([str(ROOT / "target/release/leap"), "simulate", "--controls", str(controls),
-                              "--accuracy", str(ACCURACY), "--out", out, "--json"], capture_output=True, text=True, check=True)
-        leap = json.loads(run.stdout)
+                              "--accuracy", str(accuracy), "--out", out, "--json"], capture_output=True, text=True, check=True)
         labels, rows = read_sto(pathlib.Path(out) / "jump_states.sto")
-    x0 = dict(zip(labels, rows[0]))
+    return json.loads(run.stdout), dict(zip(labels, rows[0]))
 
+
+def prescribe_excitations(model, controls):
+    """Add a PrescribedController to model that plays the excitations of
+    the controls file (`/forceset/<muscle>` columns, linear between rows,
+    held after the last)."""
     clabels, crows = read_sto(controls)
-    model = osim.Model(str(ROOT / "models/jumper.osim"))
     ctrl = osim.PrescribedController()
     ctrl.setName("leap_excitations")
     muscles = model.getMuscles()
@@ -113,6 +113,19 @@ def main():
             ctrl.addActuator(muscles.get(side))
             ctrl.prescribeControlForActuator(side, f)
     model.addController(ctrl)
+
+
+def main():
+    osim.Logger.setLevelString("warn")
+    controls = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ROOT / "tests/data/controls/jump_optimal.sto")
+    model_json = json.loads((ROOT / "models/jumper.json").read_text())
+
+    # leap's squat and leap's own forward simulation of the same controls.
+    leap, x0 = leap_simulate(controls, ACCURACY)
+
+    model = osim.Model(str(ROOT / "models/jumper.osim"))
+    prescribe_excitations(model, controls)
+    muscles = model.getMuscles()
     state = model.initSystem()
 
     # leap's initial state on both legs: every state variable of OpenSim's.
