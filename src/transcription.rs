@@ -1951,7 +1951,6 @@ impl Transcription {
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
         let (mut rows, mut scratch) = (vec![0.0; nx], vec![0.0; nx]);
-        let mut held = vec![false; nx];
         let mut jac = nalgebra::DMatrix::<f64>::zeros(nx, nx);
         let mut trial = v.to_vec();
         let mut report = MeshIntegration {
@@ -1970,13 +1969,13 @@ impl Transcription {
                     EvalError::new("guess", format!("node {k} has no state variables"))
                 })?;
             let mut res = self.interval_residual(v, k, &mut rows)?;
-            // The states the last Newton step pushed against their bounds.
-            held.fill(false);
+            // Whether the last Newton step pushed a state against its bound.
+            let mut held = false;
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
                     break;
                 }
-                held.fill(false);
+                held = false;
                 self.interval_state_jacobian(v, k, &mut jac)?;
                 let rhs = nalgebra::DVector::from_iterator(nx, rows.iter().map(|r| -r));
                 let Some(step) = jac.clone().lu().solve(&rhs) else {
@@ -1988,10 +1987,10 @@ impl Transcription {
                 // A component of a hundredth of the step or more: the clamp
                 // removes part of the Newton step, not roundoff.
                 let significant = 1e-2 * step.amax();
-                for ((h, &col), &d) in held.iter_mut().zip(&cols).zip(step.iter()) {
-                    *h = d.abs() >= significant
-                        && ((v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0));
-                }
+                held = cols.iter().zip(step.iter()).any(|(&col, &d)| {
+                    d.abs() >= significant
+                        && ((v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0))
+                });
                 let mut alpha = 1.0;
                 let mut taken = false;
                 for _ in 0..MESH_NEWTON_BACKTRACKS {
@@ -2021,7 +2020,7 @@ impl Transcription {
                 // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
-            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held.contains(&true));
+            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held);
             if res > report.worst_defect {
                 // rows may hold a rejected trial's defects: v's again.
                 self.interval_residual(v, k, &mut rows)?;
