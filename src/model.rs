@@ -1139,7 +1139,8 @@ impl Model {
             check_gravity_down(&spec.gravity).map_err(|r| err("gravity".into(), r))?;
         }
         if !symmetry.is_empty() {
-            check_muscle_pairs(&spec.forces.muscles).map_err(|(path, r)| err(path, r))?;
+            check_muscle_pairs(&spec.forces.muscles, &spec.symmetry)
+                .map_err(|(path, r)| err(path, r))?;
         }
         let model = Model {
             muscle_model: spec.forces.muscle_model,
@@ -1399,7 +1400,10 @@ fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
 /// a side suffix is a midline muscle, carried once; `StateEquation::new`
 /// checks that partners' paths are mirror images.) Returns the JSON path
 /// and the reason.
-fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
+fn check_muscle_pairs(
+    muscles: &[MuscleSpec],
+    symmetry: &[[String; 2]],
+) -> Result<(), (String, String)> {
     let index = |name: &str| muscles.iter().position(|m| m.name == name);
     for (i, m) in muscles.iter().enumerate() {
         let (stem, own, other) = if let Some(stem) = m.name.strip_suffix("_r") {
@@ -1428,6 +1432,15 @@ fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
             continue; // compared from its right partner
         }
         let l = &muscles[j];
+        if let Some((field, why)) = path_mirror_problem(&m.path, &l.path, symmetry) {
+            return Err((
+                format!("forces.muscles[{j}].path{field}"),
+                format!(
+                    "muscle '{}' is not the mirror image of '{}' (forces.muscles[{i}]): {why}; the symmetric system carries both by the right one",
+                    l.name, m.name
+                ),
+            ));
+        }
         for ((name, vr), (_, vl)) in m.parameters().into_iter().zip(l.parameters()) {
             if vr != vl {
                 return Err((
@@ -1441,6 +1454,152 @@ fn check_muscle_pairs(muscles: &[MuscleSpec]) -> Result<(), (String, String)> {
         }
     }
     Ok(())
+}
+
+/// Where and why a left muscle's path `left` is not the mirror image of
+/// its right partner's `right`, if it is not: the same kinds of points in
+/// the same order, on mirrored bodies (`<stem>_r` ↔ `<stem>_l`, a midline
+/// body itself), at mirrored locations (z negated), switched or moved by
+/// symmetry partners over the same ranges and splines. The symmetric
+/// system evaluates only the right path; sampled path lengths
+/// (`StateEquation::new`) cannot see a conditional point whose range
+/// differs only away from the samples. Returns (the JSON path below
+/// `path`, the reason).
+fn path_mirror_problem(
+    right: &[crate::path::PathPointSpec],
+    left: &[crate::path::PathPointSpec],
+    symmetry: &[[String; 2]],
+) -> Option<(String, String)> {
+    use crate::path::PathPointSpec as P;
+    if right.len() != left.len() {
+        return Some((
+            String::new(),
+            format!("{} path points against {}", left.len(), right.len()),
+        ));
+    }
+    let mirror_body = |r: &str| match (r.strip_suffix("_r"), r.strip_suffix("_l")) {
+        (Some(stem), _) => format!("{stem}_l"),
+        (_, Some(stem)) => format!("{stem}_r"),
+        _ => r.to_string(),
+    };
+    let partner = |c: &str| {
+        symmetry
+            .iter()
+            .find(|[r, _]| r == c)
+            .map_or(c.to_string(), |[_, l]| l.clone())
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
+    let mirrored =
+        |a: &[f64; 3], b: &[f64; 3]| close(a[0], b[0]) && close(a[1], b[1]) && close(a[2], -b[2]);
+    for (k, (r, l)) in right.iter().zip(left).enumerate() {
+        let at = |f: &str| format!("[{k}].{f}");
+        let (rb, lb) = match (r, l) {
+            (P::Fixed { body: rb, .. }, P::Fixed { body: lb, .. })
+            | (P::Conditional { body: rb, .. }, P::Conditional { body: lb, .. })
+            | (P::Moving { body: rb, .. }, P::Moving { body: lb, .. }) => (rb, lb),
+            _ => return Some((
+                format!("[{k}]"),
+                "its point is of another kind (fixed, conditional or moving) than the right one's"
+                    .into(),
+            )),
+        };
+        if *lb != mirror_body(rb) {
+            return Some((
+                at("body"),
+                format!(
+                    "body '{lb}' where the mirror of '{rb}' is '{}'",
+                    mirror_body(rb)
+                ),
+            ));
+        }
+        match (r, l) {
+            (P::Fixed { location: a, .. }, P::Fixed { location: b, .. }) if !mirrored(a, b) => {
+                return Some((
+                    at("location"),
+                    format!("location {b:?} is not {a:?} with z negated"),
+                ));
+            }
+            (
+                P::Conditional {
+                    location: a,
+                    coordinate: ca,
+                    range: ra,
+                    ..
+                },
+                P::Conditional {
+                    location: b,
+                    coordinate: cb,
+                    range: rb,
+                    ..
+                },
+            ) => {
+                if !mirrored(a, b) {
+                    return Some((
+                        at("location"),
+                        format!("location {b:?} is not {a:?} with z negated"),
+                    ));
+                }
+                if *cb != partner(ca) {
+                    return Some((
+                        at("coordinate"),
+                        format!(
+                            "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
+                            partner(ca)
+                        ),
+                    ));
+                }
+                if ra != rb {
+                    return Some((at("range"), format!("range {rb:?} against {ra:?}")));
+                }
+            }
+            (
+                P::Moving {
+                    coordinate: ca,
+                    x_location: xa,
+                    y_location: ya,
+                    z_location: za,
+                    ..
+                },
+                P::Moving {
+                    coordinate: cb,
+                    x_location: xb,
+                    y_location: yb,
+                    z_location: zb,
+                    ..
+                },
+            ) => {
+                if *cb != partner(ca) {
+                    return Some((
+                        at("coordinate"),
+                        format!(
+                            "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
+                            partner(ca)
+                        ),
+                    ));
+                }
+                let zb_mirrored: Vec<f64> = zb.y.iter().map(|v| -v).collect();
+                for (f, same) in [
+                    ("x_location", xa.x == xb.x && xa.y == xb.y),
+                    ("y_location", ya.x == yb.x && ya.y == yb.y),
+                    (
+                        "z_location",
+                        za.x == zb.x
+                            && za.y.iter().zip(&zb_mirrored).all(|(a, b)| close(*a, *b))
+                            && za.y.len() == zb.y.len(),
+                    ),
+                ] {
+                    if !same {
+                        return Some((
+                            at(f),
+                            format!("{f} is not the right point's spline (z negated)"),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Why an inertia `[Ixx, Iyy, Izz, Ixy, Ixz, Iyz]` (about the mass centre,

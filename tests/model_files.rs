@@ -452,35 +452,69 @@ fn coincident_path_points_are_refused() {
             .contains("when the conditional points between them are inactive"),
         "{e}"
     );
-    // The same location on another body is a different point.
+    // The same location on another body is a different point (moved on
+    // both sides, so that the paths stay mirror images).
     let mut w = v.clone();
-    w["forces"]["muscles"][i]["path"][3]["location"] =
-        w["forces"]["muscles"][i]["path"][1]["location"].clone();
+    let l = muscle_index(&v, "iliacus_l");
+    for m in [i, l] {
+        w["forces"]["muscles"][m]["path"][3]["location"] =
+            w["forces"]["muscles"][m]["path"][1]["location"].clone();
+    }
     assert!(Model::from_json_str(&w.to_string(), "m.json").is_ok());
 }
 
 /// The symmetric system carries a left muscle by its right partner only if
-/// their paths are mirror images: a left path point moved by a millimetre
-/// is refused when the system is built, naming the left muscle's path.
+/// their paths are mirror images, compared point by point when the file is
+/// read: a left path point moved by a millimetre, a conditional point's
+/// range (which sampled path lengths miss where the poses do not reach
+/// it), its coordinate, its kind or a point's body are refused, naming the
+/// left point's field.
 #[test]
-fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_path() {
-    let mut v = jumper_json();
+fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_point() {
+    let v = jumper_json();
     let (l, r) = (muscle_index(&v, "iliacus_l"), muscle_index(&v, "iliacus_r"));
+    let stem = format!("m.json: forces.muscles[{l}].path");
+    let why =
+        format!("muscle 'iliacus_l' is not the mirror image of 'iliacus_r' (forces.muscles[{r}])");
+    assert_eq!(v["forces"]["muscles"][l]["path"][2]["type"], "conditional");
     let x = v["forces"]["muscles"][l]["path"][4]["location"][0]
         .as_f64()
         .unwrap();
-    v["forces"]["muscles"][l]["path"][4]["location"][0] = (x + 1e-3).into();
-    let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
-    let Err(e) = leap::ode::StateEquation::new(&model, true, leap::path::PathSmoothing::Exact)
-    else {
-        panic!("a left path a millimetre off its mirror image was accepted");
-    };
-    assert!(
-        e.to_string().starts_with(&format!(
-            "m.json: forces.muscles[{l}].path: muscle 'iliacus_l' is not the mirror image of 'iliacus_r' (forces.muscles[{r}]): path lengths"
-        )),
-        "{e}"
-    );
+    let cases: [(&str, usize, serde_json::Value, &str); 5] = [
+        ("location", 4, serde_json::json!([x + 1e-3, 0.0, 0.0]), "location"),
+        ("range", 2, serde_json::json!([-1.5708, 1e-300]), "range [-1.5708, 1e-300] against"),
+        ("coordinate", 2, "knee_angle_l".into(), "coordinate 'knee_angle_l' where the right point's 'hip_flexion_r' has the partner 'hip_flexion_l'"),
+        ("body", 4, "femur_r".into(), "body 'femur_r' where the mirror of 'femur_r' is 'femur_l'"),
+        ("type", 2, "fixed".into(), "its point is of another kind"),
+    ];
+    for (field, k, value, reason) in cases {
+        let mut w = v.clone();
+        if field == "location" {
+            let mut loc = w["forces"]["muscles"][l]["path"][k]["location"].clone();
+            loc[0] = value[0].clone();
+            w["forces"]["muscles"][l]["path"][k]["location"] = loc;
+        } else if field == "type" {
+            let p = &mut w["forces"]["muscles"][l]["path"][k];
+            p["type"] = value;
+            let o = p.as_object_mut().unwrap();
+            o.remove("coordinate");
+            o.remove("range");
+        } else {
+            w["forces"]["muscles"][l]["path"][k][field] = value;
+        }
+        let e = refused(&w);
+        let at = if field == "type" {
+            format!("forces.muscles[{l}].path[{k}]")
+        } else {
+            format!("forces.muscles[{l}].path[{k}].{field}")
+        };
+        assert_eq!(e.field(), at, "{e}");
+        assert!(e.to_string().starts_with(&format!("{stem}")), "{e}");
+        assert!(
+            e.to_string().contains(&why) && e.to_string().contains(reason),
+            "{field}: {e}"
+        );
+    }
 }
 
 /// What OpenSim refuses or what the symmetric jump would drop unseen.
