@@ -177,6 +177,7 @@ impl StateEquation {
             )));
         }
         check_path_lengths(model, &system, &multibody, smoothing)?;
+        check_standing_pose(model, &system, &multibody)?;
         let mut muscles = Vec::new();
         let mut multiplicity = Vec::new();
         for (i, m) in model.muscles.iter().enumerate() {
@@ -633,6 +634,70 @@ pub struct Outputs<'a, S> {
     pub tendon_force: &'a mut [S],
     pub sphere_force: &'a mut [[S; 3]],
     pub ligament_torque: &'a mut [S],
+}
+
+/// How far the lowest contact sphere of a jump model may lie above or
+/// below the ground at the standing pose (m). The jump height is the apex
+/// of the centre of mass above its height at that pose, so feet off the
+/// ground there shift every height reported; resting on Hunt–Crossley
+/// spheres the shipped models sink by under a millimetre.
+pub const STANDING_GROUND_TOLERANCE: f64 = 0.005;
+
+/// A jump model's standing pose (`poses.standing`, else the coordinates'
+/// default values) must put its feet on the ground: its lowest contact
+/// sphere within [`STANDING_GROUND_TOLERANCE`] of it.
+fn check_standing_pose(model: &Model, system: &SystemSpec, mb: &Multibody) -> Result<(), OdeError> {
+    let Some(contact) = model
+        .contact
+        .as_ref()
+        .filter(|_| model.poses.contains_key("squat"))
+    else {
+        return Ok(());
+    };
+    let defaults: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
+    let (field, pose) = match model.poses.get("standing") {
+        Some(p) => ("poses.standing", p),
+        None => ("poses", &defaults),
+    };
+    let q = system.q_from_model(pose);
+    let mut ws = mb.workspace::<f64>();
+    mb.set_state(&mut ws, &q, &vec![0.0; q.len()]);
+    let lowest = contact
+        .spheres
+        .iter()
+        .map(|sp| {
+            let (ci, off) = mb.frame_of_model_body(sp.body);
+            let loc = [
+                sp.location[0] + off[0],
+                sp.location[1] + off[1],
+                sp.location[2] + off[2],
+            ];
+            mb.point_position(&ws, ci, loc)[1] - sp.radius
+        })
+        .fold(f64::INFINITY, f64::min);
+    if lowest.is_finite() && lowest.abs() <= STANDING_GROUND_TOLERANCE {
+        return Ok(());
+    }
+    let which = if field == "poses" {
+        "the coordinates' default values (the model has no standing pose)"
+    } else {
+        "the standing pose"
+    };
+    let place = if !lowest.is_finite() {
+        format!("the lowest contact sphere's height is {lowest}")
+    } else if lowest > 0.0 {
+        format!("the feet are {:.1} mm above the ground", lowest * 1e3)
+    } else {
+        format!("the feet are {:.1} mm into the ground", -lowest * 1e3)
+    };
+    Err(OdeError::Model(ModelError::Invalid {
+        file: model.file.clone(),
+        path: field.into(),
+        reason: format!(
+            "at {which} {place} (the lowest contact sphere; at most {:.0} mm either way): the jump height is measured from the centre of mass at this pose, standing on the ground",
+            STANDING_GROUND_TOLERANCE * 1e3
+        ),
+    }))
 }
 
 /// Every muscle path has a positive finite length at the coordinates'

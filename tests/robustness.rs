@@ -377,3 +377,52 @@ fn a_path_without_a_finite_length_is_named_with_its_point() {
         assert!(e.to_string().contains("within ±100 m"), "{e}");
     }
 }
+
+/// A jump model's standing pose must put its feet on the ground, since the
+/// jump height is measured from the centre of mass there: the pelvis raised
+/// or lowered by 10 cm moves every sphere by exactly that (a translation),
+/// and the refusal names `poses.standing` with the distance; without a
+/// standing pose the coordinates' default values are checked, named
+/// `poses`. Each shipped jump model stands within a millimetre.
+#[test]
+fn a_standing_pose_off_the_ground_is_refused_naming_it() {
+    let base: Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    let ty = base["poses"]["standing"]["pelvis_ty"].as_f64().unwrap();
+    for (shift, words) in [(0.1, "100.0 mm above"), (-0.1, "100.0 mm into")] {
+        let mut v = base.clone();
+        v["poses"]["standing"]["pelvis_ty"] = (ty + shift).into();
+        let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+        let e = JumpOcp::new(&model, OcpOptions::default()).err().unwrap();
+        let e = e.to_string();
+        assert!(e.starts_with("m.json: poses.standing: "), "{e}");
+        assert!(e.contains(words), "{e}");
+    }
+    let mut v = base.clone();
+    v["poses"].as_object_mut().unwrap().remove("standing");
+    let coords = v["coordinates"].as_array_mut().unwrap();
+    let k = coords
+        .iter()
+        .position(|c| c["name"] == "pelvis_ty")
+        .unwrap();
+    coords[k]["default_value"] = (ty + 0.1).into();
+    let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    let e = JumpOcp::new(&model, OcpOptions::default())
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(e.starts_with("m.json: poses: "), "{e}");
+    assert!(
+        e.contains("default values") && e.contains("100.0 mm above"),
+        "{e}"
+    );
+    for file in [
+        "models/jumper.json",
+        "models/jumper_gait2392.json",
+        "models/jumper_jmp_strength.json",
+        "models/jumper_reduced.json",
+    ] {
+        let model = Model::from_file(file).unwrap();
+        JumpOcp::new(&model, OcpOptions::default()).unwrap();
+    }
+}
