@@ -1043,6 +1043,28 @@ impl Model {
                     return Err(err(p(name), r));
                 }
             }
+            // Each exponential term, with its first and second derivatives
+            // (the collocation's Hessian), finite over the coordinate's
+            // range: a term is monotonic, so its ends bound it.
+            for (k, kexp, theta, field) in
+                [(l.k1, l.k2, l.theta2, "k2"), (l.k3, l.k4, l.theta1, "k4")]
+            {
+                for q in coordinates[c].range {
+                    let term = k * (kexp * (q - theta)).exp();
+                    if !(term * kexp.abs().max(1.0).powi(2)).is_finite() {
+                        return Err(err(
+                            p(field),
+                            format!(
+                                "the passive torque's term {} · exp({} · (q − {})) overflows at {q} rad, an end of '{}''s range: it must stay finite over the range",
+                                crate::io::readable(k),
+                                crate::io::readable(kexp),
+                                crate::io::readable(theta),
+                                l.coordinate
+                            ),
+                        ));
+                    }
+                }
+            }
             if let Some(j) = ligaments.iter().position(|g: &Ligament| g.coordinate == c) {
                 return Err(err(
                     p("coordinate"),
@@ -1084,10 +1106,15 @@ impl Model {
                     ("hunt_crossley_smoothing", cs.hunt_crossley_smoothing),
                     ("derivative_smoothing", cs.derivative_smoothing),
                 ] {
-                    if let Some(v) = v {
-                        if !(v.is_finite() && v > 0.0) {
-                            return Err(err(p(name), format!("{name} must be positive, got {v}")));
-                        }
+                    let Some(v) = v else { continue };
+                    if cs.law == ContactLaw::HuntCrossleyForce {
+                        return Err(err(
+                            p(name),
+                            format!("{name} is a constant of SmoothSphereHalfSpaceForce; HuntCrossleyForce does not use it (leave it out, or set `law` to SmoothSphereHalfSpaceForce)"),
+                        ));
+                    }
+                    if let Some(r) = CONTACT_PARAMETER_RANGES.problem(name, v) {
+                        return Err(err(p(name), r));
                     }
                 }
                 if cs.spheres.is_empty() {
@@ -1290,6 +1317,13 @@ const CONTACT_PARAMETER_RANGES: ParameterRanges = ParameterRanges {
         ("viscous_friction", 0.0, 100.0, "s/m"),
         ("transition_velocity", 1e-5, 10.0, "m/s"),
         ("radius", 1e-3, 1.0, "m"),
+        // SmoothSphereHalfSpaceForce's constants (OpenSim's defaults 300
+        // 1/m, 50 s/m, 1e-5 m² for constant_contact_force): a smoothing
+        // near zero halves every force (tanh(0) = 0), one of 1e-2 m² adds
+        // 10 cm to the depth.
+        ("hertz_smoothing", 10.0, 1e5, "1/m"),
+        ("hunt_crossley_smoothing", 1.0, 1e4, "s/m"),
+        ("derivative_smoothing", 1e-9, 1e-3, "m²"),
     ],
 };
 
@@ -1384,14 +1418,27 @@ impl MuscleSpec {
 /// Gravity of a model standing on the ground, whose half-space has the
 /// normal +y: `[0, -g, 0]` with g > 0. (A model without contact, a
 /// pendulum say, may point it anywhere.)
+/// The magnitude of gravity a contact model may have (m/s²).
+const GRAVITY_RANGE: (f64, f64) = (1.0, 100.0);
+
 fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
-    if g[1] < 0.0 && g[0] == 0.0 && g[2] == 0.0 {
-        Ok(())
-    } else {
-        Err(format!(
-            "must point down (−y), [0, -g, 0] with g > 0, got {g:?}: the ground's normal is +y, and the squat and the jump need the model's weight on it"
-        ))
+    if !(g[1] < 0.0 && g[0] == 0.0 && g[2] == 0.0) {
+        return Err(format!(
+            "must point down (−y), [0, -g, 0] with g > 0, got [{}, {}, {}]: the ground's normal is +y, and the squat and the jump need the model's weight on it",
+            crate::io::readable(g[0]),
+            crate::io::readable(g[1]),
+            crate::io::readable(g[2])
+        ));
     }
+    if !(GRAVITY_RANGE.0..=GRAVITY_RANGE.1).contains(&-g[1]) {
+        return Err(format!(
+            "g = {} m/s² lies outside [{}, {}] m/s², far beyond where a person stands (the Moon's 1.62, the Earth's 9.81; a slip of units or digits?)",
+            crate::io::readable(-g[1]),
+            GRAVITY_RANGE.0,
+            GRAVITY_RANGE.1
+        ));
+    }
+    Ok(())
 }
 
 /// With a `symmetry` section the symmetric system carries each left muscle

@@ -37,7 +37,23 @@ pub enum SplineError {
     },
     #[error("knot {index} is not finite")]
     NotFinite { index: usize },
+    #[error("the knots x[{prev}] = {prev_x}, x[{index}] = {x} rise by {rise:e} over {run:e}, a slope of {slope:e} (at most {MAX_SECANT_SLOPE:e}): a location moving that fast with its coordinate (m per rad) is a slip of digits", prev = index - 1, slope = rise / run)]
+    TooSteep {
+        index: usize,
+        prev_x: f64,
+        x: f64,
+        rise: f64,
+        run: f64,
+    },
 }
+
+/// The steepest secant between neighbouring knots. leap's splines give a
+/// location (m) as a function of a coordinate (the knee's translations and
+/// moving path points, of an angle in rad): gait2392's reach 0.08 m/rad.
+/// Knots far steeper (a knot moved to 1e-12 rad of its neighbour) make a
+/// joint or path that flies apart with a tiny rotation, and would be met
+/// only later as a singular mass matrix or a failed squat.
+pub const MAX_SECANT_SLOPE: f64 = 100.0;
 
 /// A `SimmSpline` with its coefficients computed once.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,6 +88,18 @@ impl SimmSpline {
                     index: i,
                     value: x[i],
                     prev_value: x[i - 1],
+                });
+            }
+        }
+        for i in 1..n {
+            let (rise, run) = (y[i] - y[i - 1], x[i] - x[i - 1]);
+            if !rise.is_finite() || rise.abs() > MAX_SECANT_SLOPE * run {
+                return Err(SplineError::TooSteep {
+                    index: i,
+                    prev_x: x[i - 1],
+                    x: x[i],
+                    rise,
+                    run,
                 });
             }
         }
@@ -233,6 +261,26 @@ mod tests {
             ],
         })
         .unwrap()
+    }
+
+    /// A secant of 100 per unit passes, one a hair steeper (or a knot moved
+    /// to 1e-12 of its neighbour) is refused naming the knots.
+    #[test]
+    fn knots_steeper_than_the_limit_are_refused() {
+        let ok = SimmSpline::new(&SplineData {
+            x: vec![0.0, 0.01, 1.0],
+            y: vec![0.0, 1.0, 1.0],
+        });
+        assert!(ok.is_ok(), "{ok:?}");
+        for x1 in [0.0099, 1e-12] {
+            let e = SimmSpline::new(&SplineData {
+                x: vec![0.0, x1, 1.0],
+                y: vec![0.0, 1.0, 1.0],
+            })
+            .unwrap_err();
+            assert!(matches!(e, SplineError::TooSteep { index: 1, .. }), "{e}");
+            assert!(e.to_string().contains("x[0] = 0, x[1] = "), "{e}");
+        }
     }
 
     #[test]

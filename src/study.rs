@@ -1081,10 +1081,16 @@ pub fn check_mesh_intervals(n: i64) -> Result<usize, String> {
 fn check_tolerance(v: f64) -> Result<Option<f64>, String> {
     if v == -1.0 {
         Ok(None)
-    } else if v.is_finite() && v > 0.0 {
+    } else if v.is_finite() && v > 0.0 && v < 1.0 {
         Ok(Some(v))
+    } else if v >= 1.0 {
+        Err(format!(
+            "must be below 1 (or -1 for the default), got {v:e}: at 1 or more the solve ends at iterates far from optimal or feasible (defects of a metre or radian)"
+        ))
     } else {
-        Err(format!("must be positive (or -1 for the default), got {v}"))
+        Err(format!(
+            "must be positive (or -1 for the default), got {v:e}"
+        ))
     }
 }
 
@@ -1312,6 +1318,11 @@ mod tests {
         assert_eq!(f, "tolerances.optim_constraint_tolerance");
         let (f, _) = field_error(r#"{"tolerances": {"optim_convergence_tolerance": 0}}"#);
         assert_eq!(f, "tolerances.optim_convergence_tolerance");
+        let (f, r) = field_error(r#"{"tolerances": {"optim_convergence_tolerance": 1e308}}"#);
+        assert_eq!(f, "tolerances.optim_convergence_tolerance");
+        assert!(r.contains("below 1") && r.contains("1e308"), "{r}");
+        let (f, _) = field_error(r#"{"tolerances": {"optim_constraint_tolerance": 1}}"#);
+        assert_eq!(f, "tolerances.optim_constraint_tolerance");
         let (f, r) = field_error(r#"{"hessian": "newton"}"#);
         assert_eq!(f, "hessian");
         assert!(r.contains("exact-block-diagonal"), "{r}");

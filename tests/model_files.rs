@@ -322,6 +322,27 @@ fn jump_models_need_gravity_down_muscles_and_contact() {
         assert_eq!(e.field(), "gravity");
         assert!(e.to_string().contains("must point down (−y)"), "{e}");
     }
+    // Its magnitude within [1, 100] m/s² (the Moon's 1.62 passes).
+    for (g, ok) in [
+        (1.62, true),
+        (1.0, true),
+        (100.0, true),
+        (0.99, false),
+        (5e-324, false),
+        (100.5, false),
+        (1e308, false),
+    ] {
+        let mut v = jumper_json();
+        v["gravity"] = serde_json::json!([0.0, -g, 0.0]);
+        let got = Model::from_json_str(&v.to_string(), "m.json");
+        if ok {
+            assert!(got.is_ok(), "g = {g}: {:?}", got.err());
+        } else {
+            let e = got.unwrap_err();
+            assert_eq!(e.field(), "gravity");
+            assert!(e.to_string().contains("lies outside [1, 100] m/s²"), "{e}");
+        }
+    }
     let mut v = jumper_json();
     v["forces"]["muscles"] = serde_json::json!([]);
     let e = refused(&v);
@@ -844,8 +865,19 @@ fn parameters_far_outside_human_ranges_are_refused() {
                 }
             }
             let got = Model::from_json_str(&m.to_string(), "m.json");
+            // Inside its range an exponent may still overflow its term
+            // over the coordinate's range (tested below), named alike.
+            let overflows = |e: &ModelError| {
+                (name == "k2" || name == "k4")
+                    && e.field() == format!("{field}.{name}")
+                    && e.to_string().contains("overflows at")
+            };
             if ok {
-                assert!(got.is_ok(), "{place} {name} = {value}: {:?}", got.err());
+                assert!(
+                    got.as_ref().err().is_none_or(overflows),
+                    "{place} {name} = {value}: {:?}",
+                    got.err()
+                );
                 continue;
             }
             let e = got.unwrap_err();
@@ -857,6 +889,58 @@ fn parameters_far_outside_human_ranges_are_refused() {
                 format!(" {unit}")
             };
             assert!(text.contains(&format!("{shown}: lies outside [")), "{text}");
+        }
+    }
+    // SmoothSphereHalfSpaceForce's smoothing constants (OpenSim's defaults
+    // 300 1/m, 50 s/m, 1e-5 m²): within their ranges under that law, and
+    // refused under HuntCrossleyForce, which has none.
+    for (name, lo, hi) in [
+        ("hertz_smoothing", 10.0, 1e5),
+        ("hunt_crossley_smoothing", 1.0, 1e4),
+        ("derivative_smoothing", 1e-9, 1e-3),
+    ] {
+        for (law, value, ok) in [
+            ("SmoothSphereHalfSpaceForce", lo, true),
+            ("SmoothSphereHalfSpaceForce", hi, true),
+            ("SmoothSphereHalfSpaceForce", lo * 0.99, false),
+            ("SmoothSphereHalfSpaceForce", hi * 1.01, false),
+            ("SmoothSphereHalfSpaceForce", 1e-300, false),
+            ("HuntCrossleyForce", lo, false),
+        ] {
+            let mut m = v.clone();
+            m["forces"]["contact"]["law"] = law.into();
+            m["forces"]["contact"][name] = value.into();
+            let got = Model::from_json_str(&m.to_string(), "m.json");
+            if ok {
+                assert!(got.is_ok(), "{law} {name} = {value}: {:?}", got.err());
+                continue;
+            }
+            let e = got.unwrap_err();
+            assert_eq!(e.field(), format!("forces.contact.{name}"), "{e}");
+            let want = if law == "HuntCrossleyForce" {
+                "HuntCrossleyForce does not use it"
+            } else {
+                ": lies outside ["
+            };
+            assert!(e.to_string().contains(want), "{e}");
+        }
+    }
+    // The knee's passive torque −6.09·exp(k2·(q − 0.13)) with its second
+    // derivative (×k2²) is finite over the knee's range [−2.0944, 0.1745]
+    // while 6.09·k2²·exp(−k2·2.2244) stays below f64::MAX (ln = 709.78):
+    // k2 = −300 gives 680.5, −320 gives 725.2.
+    for (k2, ok) in [(-300.0, true), (-320.0, false)] {
+        let mut m = v.clone();
+        for k in [2, 3] {
+            m["forces"]["ligaments"][k]["k2"] = serde_json::json!(k2);
+        }
+        let got = Model::from_json_str(&m.to_string(), "m.json");
+        if ok {
+            assert!(got.is_ok(), "k2 = {k2}: {:?}", got.err());
+        } else {
+            let e = got.unwrap_err();
+            assert_eq!(e.field(), "forces.ligaments[2].k2", "{e}");
+            assert!(e.to_string().contains("overflows at -2.0944 rad"), "{e}");
         }
     }
     // Friction coefficients up to 10 (dynamic at most static).
@@ -952,4 +1036,38 @@ fn symmetry_pairs_are_checked_at_their_own_entry() {
             "mirror partners need one range and one default",
         );
     }
+}
+
+/// A spline whose neighbouring knots rise more than 100 m per radian (a
+/// knot moved to 1e-12 rad of its neighbour) is refused when the file is
+/// read, naming the joint's translation or the moving point's coordinate
+/// function, where before it loaded and failed later as a singular mass
+/// matrix. gait2392's knee and patella splines reach 0.08 m/rad.
+#[test]
+fn steep_splines_are_refused_naming_the_function() {
+    let v = jumper_json();
+    for (joint, f) in [(2, "translation_x"), (7, "translation_y")] {
+        let mut m = v.clone();
+        let x0 = m["joints"][joint][f]["x"][0].as_f64().unwrap();
+        m["joints"][joint][f]["x"][1] = (x0 + 1e-12).into();
+        let e = refused(&m);
+        assert_eq!(e.field(), format!("joints[{joint}].{f}"), "{e}");
+        assert!(e.to_string().contains("a slip of digits"), "{e}");
+    }
+    let k = muscle_index(&v, "rect_fem_r");
+    let l = muscle_index(&v, "rect_fem_l");
+    let mut m = v.clone();
+    for j in [k, l] {
+        let x0 = m["forces"]["muscles"][j]["path"][2]["y_location"]["x"][0]
+            .as_f64()
+            .unwrap();
+        m["forces"]["muscles"][j]["path"][2]["y_location"]["x"][1] = (x0 + 1e-12).into();
+    }
+    let e = refused(&m);
+    assert_eq!(
+        e.field(),
+        format!("forces.muscles[{k}].path[2].y_location"),
+        "{e}"
+    );
+    assert!(e.to_string().contains("a slip of digits"), "{e}");
 }
