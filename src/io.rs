@@ -492,21 +492,8 @@ pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
     use std::io::{Error, ErrorKind, Read};
     let meta = std::fs::metadata(path)?;
     let kind = meta.file_type();
-    if kind.is_dir() {
-        return Err(Error::new(
-            ErrorKind::InvalidInput,
-            "is a directory, not a file",
-        ));
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::FileTypeExt;
-        if kind.is_char_device() || kind.is_block_device() || kind.is_socket() {
-            return Err(Error::new(
-                ErrorKind::InvalidInput,
-                "is a device or socket, not a file",
-            ));
-        }
+    if let Some(why) = not_readable_kind(&kind) {
+        return Err(Error::new(ErrorKind::InvalidInput, why));
     }
     let too_long = || {
         Error::new(
@@ -526,6 +513,33 @@ pub fn read_input(path: &Path) -> std::io::Result<Vec<u8>> {
         return Err(too_long());
     }
     Ok(bytes)
+}
+
+/// Why a path of this kind is no input file leap reads: a directory, a
+/// device or a socket (a file or a pipe is one).
+fn not_readable_kind(kind: &std::fs::FileType) -> Option<&'static str> {
+    if kind.is_dir() {
+        return Some("is a directory, not a file");
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_char_device() || kind.is_block_device() || kind.is_socket() {
+            return Some("is a device or socket, not a file");
+        }
+    }
+    None
+}
+
+/// Why `path` names no input file leap could read, checked before the
+/// file is (a study's model and guess): it is missing, a directory, or a
+/// device or socket. `None` when it is a file or a pipe.
+pub fn input_file_problem(path: &Path) -> Option<String> {
+    match std::fs::metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Some("not found".into()),
+        Err(e) => Some(format!("cannot be read: {e}")),
+        Ok(meta) => not_readable_kind(&meta.file_type()).map(str::to_string),
+    }
 }
 
 /// [`read_input`] as UTF-8 text.

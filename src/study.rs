@@ -395,11 +395,13 @@ fn parse_guess(g: &str, path: PathBuf) -> Result<GuessChoice, String> {
     match g {
         "bang-bang" => Ok(GuessChoice::BangBang),
         "bang-bang-resampled" => Ok(GuessChoice::BangBangResampled),
-        _ if path.is_file() => Ok(GuessChoice::File(path)),
-        _ => Err(format!(
-            "guess file '{}' not found (use \"bang-bang\", \"bang-bang-resampled\" or a .sto file)",
-            path.display()
-        )),
+        _ => match crate::io::input_file_problem(&path) {
+            None => Ok(GuessChoice::File(path)),
+            Some(why) => Err(format!(
+                "guess file '{}' {why} (use \"bang-bang\", \"bang-bang-resampled\" or a .sto file)",
+                path.display()
+            )),
+        },
     }
 }
 
@@ -623,11 +625,8 @@ impl SolveStudy {
         let model = match &self.model {
             Some(m) => {
                 let p = rel(m);
-                if !p.is_file() {
-                    return Err(err(
-                        "model",
-                        format!("model file '{}' not found", p.display()),
-                    ));
+                if let Some(why) = crate::io::input_file_problem(&p) {
+                    return Err(err("model", format!("model file '{}' {why}", p.display())));
                 }
                 p
             }
@@ -1289,6 +1288,20 @@ mod tests {
             r.contains("no_such_solution.sto") && r.contains("bang-bang-resampled"),
             "{r}"
         );
+        // A directory or a device is named as such, not as missing.
+        let dir = std::env::temp_dir();
+        let dir = dir.display().to_string().replace('\\', "/");
+        for field in ["guess", "model"] {
+            let (f, r) = field_error(&format!(r#"{{"{field}": "{dir}"}}"#));
+            assert_eq!(f, field);
+            assert!(r.contains("is a directory, not a file"), "{r}");
+        }
+        #[cfg(unix)]
+        {
+            let (f, r) = field_error(r#"{"model": "/dev/zero"}"#);
+            assert_eq!(f, "model");
+            assert!(r.contains("is a device or socket"), "{r}");
+        }
     }
 
     #[test]
