@@ -95,6 +95,16 @@ pub enum SolveError {
     },
 }
 
+/// A failure of the built-in bang-bang guess (the model too stiff to
+/// integrate, a jump that does not lift off) is the model's: named by its
+/// file, as a guess file's failures are by theirs.
+fn of_model(model: &Model, e: impl std::fmt::Display) -> SolveError {
+    SolveError::Guess {
+        file: model.file.clone(),
+        reason: e.to_string(),
+    }
+}
+
 /// Create the results directory `dir` (and its parents), with an error
 /// that says what stands in the way (the OS's own, "File exists", does not
 /// say that a regular file has the directory's name).
@@ -437,15 +447,15 @@ pub fn run(
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
-            let (mut v, s) = tr.bang_bang_guess()?;
+            let (mut v, s) = tr.bang_bang_guess().map_err(|e| of_model(&model, e))?;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress)
-                .map_err(crate::transcription::TranscriptionError::Guess)?;
+                .map_err(|e| of_model(&model, e))?;
             mesh_integration = Some(m);
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang jump, resampled onto the mesh");
-            let (v, s) = tr.bang_bang_guess()?;
+            let (v, s) = tr.bang_bang_guess().map_err(|e| of_model(&model, e))?;
             (v, "bang-bang-resampled".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) if config.integrate_guess => {
@@ -577,7 +587,7 @@ fn run_shooting(
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang | GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang excitations at the nodes");
-            let (v, s) = sh.bang_bang_guess()?;
+            let (v, s) = sh.bang_bang_guess().map_err(|e| of_model(&model, e))?;
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) => {
