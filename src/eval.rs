@@ -334,7 +334,10 @@ fn check_ranges(
         if !(0.0..=1.0).contains(&v) {
             return Err((
                 name.clone(),
-                format!("an excitation must be in [0, 1], got {v}"),
+                format!(
+                    "an excitation must be in [0, 1], got {}",
+                    crate::io::readable(v)
+                ),
             ));
         }
     }

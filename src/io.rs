@@ -720,9 +720,15 @@ pub fn readable(x: f64) -> String {
 /// 1e-8), a fibre length positive. Other states have no range here.
 pub fn muscle_state_out_of_range(label: &str, v: f64) -> Option<String> {
     if label.ends_with("/activation") && !(-1e-6..=1.0 + 1e-6).contains(&v) {
-        Some(format!("an activation must be in [0, 1], got {v}"))
+        Some(format!(
+            "an activation must be in [0, 1], got {}",
+            readable(v)
+        ))
     } else if label.ends_with("/fiber_length") && (v.is_nan() || v <= 0.0) {
-        Some(format!("a fibre length must be positive, got {v} m"))
+        Some(format!(
+            "a fibre length must be positive, got {} m",
+            readable(v)
+        ))
     } else {
         None
     }

@@ -931,7 +931,10 @@ impl Model {
                 if !(v.is_finite() && lo <= v && v <= hi) {
                     return Err(err(
                         path,
-                        format!("value {v} is outside the range [{lo}, {hi}]"),
+                        format!(
+                            "value {} is outside the range [{lo}, {hi}]",
+                            crate::io::readable(v)
+                        ),
                     ));
                 }
                 q[ci] = v;
@@ -979,7 +982,7 @@ impl Model {
                         "must be greater than 1/{} = {:.4} (OpenSim's Thelen2003Muscle: Flen > 1 and fv_linear_extrap_threshold > 1/Flen), got {}",
                         crate::laws::FV_THRESHOLD,
                         1.0 / crate::laws::FV_THRESHOLD,
-                        m.Flen
+                        crate::io::readable(m.Flen)
                     ),
                 ));
             }
@@ -994,7 +997,7 @@ impl Model {
             if !(phi.is_finite() && (0.0..std::f64::consts::FRAC_PI_2).contains(&phi)) {
                 return Err(err(
                     p("pennation_angle_at_optimal"),
-                    format!("must be in [0, π/2) rad, got {phi}"),
+                    format!("must be in [0, π/2) rad, got {}", crate::io::readable(phi)),
                 ));
             }
             let path = crate::path::GeometryPath::new(&m.path, body_of, coord_of).map_err(

@@ -700,7 +700,10 @@ pub fn check_integrator_accuracy(
     t_max: Option<f64>,
 ) -> Result<(), String> {
     if !(accuracy.is_finite() && accuracy > 0.0) {
-        return Err(format!("must be positive, got {accuracy}"));
+        return Err(format!(
+            "must be positive, got {}",
+            crate::io::readable(accuracy)
+        ));
     }
     if let IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::ExplicitEuler) = integrator
     {
@@ -736,11 +739,15 @@ pub fn check_integrator_accuracy(
 /// if it does.
 fn check_report_interval(report_interval: f64, t_max: f64) -> Result<(), String> {
     if !(report_interval.is_finite() && report_interval > 0.0) {
-        return Err(format!("must be positive, got {report_interval}"));
+        return Err(format!(
+            "must be positive, got {}",
+            crate::io::readable(report_interval)
+        ));
     }
     if report_interval > MAX_REPORT_INTERVAL {
         return Err(format!(
-            "at most {MAX_REPORT_INTERVAL} s, got {report_interval}: the peak ground force is read at the reports, and a landing within one report of lift-off would hide the flight"
+            "at most {MAX_REPORT_INTERVAL} s, got {}: the peak ground force is read at the reports, and a landing within one report of lift-off would hide the flight",
+            crate::io::readable(report_interval)
         ));
     }
     let rows = t_max / report_interval;

@@ -587,7 +587,7 @@ fn run_shooting(
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang | GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang excitations at the nodes");
-            let (v, s) = sh.bang_bang_guess().map_err(|e| of_model(&model, e))?;
+            let (v, s) = sh.bang_bang_guess().map_err(|e| of_model(model, e))?;
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) => {

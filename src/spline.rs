@@ -29,7 +29,7 @@ pub enum SplineError {
     LengthMismatch { nx: usize, ny: usize },
     #[error("at least 2 knots are needed, got {0}")]
     TooFewKnots(usize),
-    #[error("knots are not strictly increasing: x[{index}] = {value} does not exceed x[{prev}] = {prev_value}", prev = index - 1)]
+    #[error("knots are not strictly increasing: x[{index}] = {} does not exceed x[{prev}] = {}", crate::io::readable(*value), crate::io::readable(*prev_value), prev = index - 1)]
     NotIncreasing {
         index: usize,
         value: f64,
@@ -37,7 +37,7 @@ pub enum SplineError {
     },
     #[error("knot {index} is not finite")]
     NotFinite { index: usize },
-    #[error("the knots x[{prev}] = {prev_x}, x[{index}] = {x} rise by {rise:e} over {run:e}, a slope of {slope:e} (at most {MAX_SECANT_SLOPE:e}): a location moving that fast with its coordinate (m per rad) is a slip of digits", prev = index - 1, slope = rise / run)]
+    #[error("the knots x[{prev}] = {}, x[{index}] = {} rise by {rise:e} over {run:e}, a slope of {slope:e} (at most {MAX_SECANT_SLOPE:e}): a location moving that fast with its coordinate (m per rad) is a slip of digits", crate::io::readable(*prev_x), crate::io::readable(*x), prev = index - 1, slope = rise / run)]
     TooSteep {
         index: usize,
         prev_x: f64,

@@ -557,7 +557,7 @@ impl SolveStudy {
             if !(a.is_finite() && (1e-12..=1e-4).contains(&a)) {
                 return Err(err(
                     "shooting.integrator_accuracy",
-                    format!("must lie in [1e-12, 1e-4], got {a}: the derivatives' error follows the integration's"),
+                    format!("must lie in [1e-12, 1e-4], got {}: the derivatives' error follows the integration's", crate::io::readable(a)),
                 ));
             }
             shooting.accuracy = a;
@@ -584,7 +584,7 @@ impl SolveStudy {
             if !(d.is_finite() && d > 0.0 && d < 0.1) {
                 return Err(err(
                     "shooting.finite_difference_step",
-                    format!("must lie in (0, 0.1), got {d}"),
+                    format!("must lie in (0, 0.1), got {}", crate::io::readable(d)),
                 ));
             }
             shooting.finite_difference_step = d;
@@ -758,7 +758,10 @@ impl SolveStudy {
             if !(v.is_finite() && v > 0.0 && v < 1.0) {
                 return Err(err(
                     "hessian_eigenvalue_floor",
-                    format!("{v} is not a relative floor in (0, 1)"),
+                    format!(
+                        "{} is not a relative floor in (0, 1)",
+                        crate::io::readable(v)
+                    ),
                 ));
             }
             settings.eigenvalue_floor = v;
