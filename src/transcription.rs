@@ -2897,6 +2897,16 @@ impl Nlp for Transcription {
         self.hessian_of_element(x, e, sigma, lambda, h)
     }
 
+    fn element_hessians(
+        &mut self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        blocks: &mut [Vec<f64>],
+    ) -> Result<(), EvalError> {
+        self.hessians_of_elements(x, sigma, lambda, blocks)
+    }
+
     fn variable_name(&self, i: usize) -> String {
         if i == self.final_time_index() {
             return "t_f".into();
@@ -3621,6 +3631,50 @@ impl Transcription {
     ) -> Result<(), EvalError> {
         check_len("hessian", "x", x.len(), self.num_variables())?;
         check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
+        if self
+            .hess_elements
+            .get(e)
+            .is_some_and(|k| !matches!(k, HessElement::ComVelocity(_)))
+        {
+            self.refresh_hessian(x)?;
+        }
+        self.hessian_of_fresh_element(x, e, sigma, lambda, h)
+    }
+
+    /// Every element's Hessian, the point derivatives refreshed (and x
+    /// compared with the last point's) once, not once per element.
+    fn hessians_of_elements(
+        &mut self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        blocks: &mut [Vec<f64>],
+    ) -> Result<(), EvalError> {
+        check_len("hessian", "x", x.len(), self.num_variables())?;
+        check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
+        if self
+            .hess_elements
+            .iter()
+            .any(|k| !matches!(k, HessElement::ComVelocity(_)))
+        {
+            self.refresh_hessian(x)?;
+        }
+        for (e, h) in blocks.iter_mut().enumerate() {
+            self.hessian_of_fresh_element(x, e, sigma, lambda, h)?;
+        }
+        Ok(())
+    }
+
+    /// [`Self::hessian_of_element`] once the point derivatives are
+    /// refreshed at x and the lengths of x and λ checked.
+    fn hessian_of_fresh_element(
+        &mut self,
+        x: &[f64],
+        e: usize,
+        sigma: f64,
+        lambda: &[f64],
+        h: &mut [f64],
+    ) -> Result<(), EvalError> {
         let Some(&kind) = self.hess_elements.get(e) else {
             return Err(EvalError::new(
                 "hessian",
@@ -3639,7 +3693,6 @@ impl Transcription {
             h.iter_mut().for_each(|v| *v *= l);
             return finite("hessian", h, |i| format!("element {e} entry {i}"));
         }
-        self.refresh_hessian(x)?;
         // A force balance's row, point input of v̄, Δl^M, t_f and v_max l_o.
         let balance = match kind {
             HessElement::Defect { group, k } => {

@@ -1377,18 +1377,38 @@ fn random_multipliers(m: usize, seed: u64) -> Vec<f64> {
         .collect()
 }
 
-/// Every element Hessian at `x`: finite and exactly symmetric.
+/// Every element Hessian at `x`: finite and exactly symmetric, and the
+/// same whether computed element by element or all at once (the point
+/// derivatives refreshed once), also through the SQP's variable scaling.
 fn element_hessians_symmetric(tr: &mut Transcription, x: &[f64], lambda: &[f64]) {
-    for (e, el) in tr.elements().iter().enumerate() {
+    let elements = tr.elements();
+    let fresh = |els: &[leap::nlp::Element]| -> Vec<Vec<f64>> {
+        els.iter()
+            .map(|el| vec![f64::NAN; el.variables.len().pow(2)])
+            .collect()
+    };
+    let mut all = fresh(&elements);
+    tr.element_hessians(x, 0.7, lambda, &mut all).unwrap();
+    for (e, el) in elements.iter().enumerate() {
         let k = el.variables.len();
         let mut h = vec![f64::NAN; k * k];
         tr.element_hessian(x, e, 0.7, lambda, &mut h).unwrap();
+        assert_eq!(h, all[e], "element {e}: one by one and all at once");
         for a in 0..k {
             for b in 0..k {
                 assert!(h[a * k + b].is_finite(), "element {e} ({a}, {b})");
                 assert_eq!(h[a * k + b], h[b * k + a], "element {e} ({a}, {b})");
             }
         }
+    }
+    let mut scaled = leap::nlp::ScaledVariables::from_bounds(tr);
+    let xs = scaled.scale_point(x);
+    let mut all = fresh(&elements);
+    scaled.element_hessians(&xs, 0.7, lambda, &mut all).unwrap();
+    for (e, el) in elements.iter().enumerate() {
+        let mut h = vec![f64::NAN; el.variables.len().pow(2)];
+        scaled.element_hessian(&xs, e, 0.7, lambda, &mut h).unwrap();
+        assert_eq!(h, all[e], "scaled element {e}: one by one and all at once");
     }
 }
 

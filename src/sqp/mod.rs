@@ -1333,6 +1333,19 @@ impl<N: Nlp + ?Sized> Nlp for GradientScaled<'_, N> {
         self.inner
             .element_hessian(x, e, sigma * self.sf, &self.lambda, h)
     }
+    fn element_hessians(
+        &mut self,
+        x: &[f64],
+        sigma: f64,
+        lambda: &[f64],
+        blocks: &mut [Vec<f64>],
+    ) -> Result<(), EvalError> {
+        for i in 0..lambda.len() {
+            self.lambda[i] = lambda[i] * self.sc[i];
+        }
+        self.inner
+            .element_hessians(x, sigma * self.sf, &self.lambda, blocks)
+    }
     fn variable_name(&self, i: usize) -> String {
         self.inner.variable_name(i)
     }
@@ -1522,8 +1535,8 @@ impl<'s> Solver<'s> {
     ) -> Result<(), EvalError> {
         match self.mode {
             HessianMode::ExactConvexified => {
-                for (e, b) in self.blocks.iter_mut().enumerate() {
-                    nlp.element_hessian(&p.x, e, 1.0, lambda, b)?;
+                nlp.element_hessians(&p.x, 1.0, lambda, &mut self.blocks)?;
+                for (e, b) in self.blocks.iter().enumerate() {
                     if b.iter().any(|v| !v.is_finite()) {
                         return Err(EvalError::new(
                             "hessian",
