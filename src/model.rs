@@ -486,13 +486,22 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned>(text: &str) -> Result<T
     let mut de = serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();
+        let inner = e.into_inner();
+        let whole = path == "." || path == "?";
+        // serde_json says "trailing characters" of an array longer than a
+        // fixed-size field ([x, y, z]) takes.
+        let reason = if !whole && inner.to_string().starts_with("trailing characters") {
+            format!(
+                "more elements than this field takes, at line {} column {}",
+                inner.line(),
+                inner.column()
+            )
+        } else {
+            inner.to_string()
+        };
         JsonError {
-            path: if path == "." || path == "?" {
-                "(document)".into()
-            } else {
-                path
-            },
-            reason: e.into_inner().to_string(),
+            path: if whole { "(document)".into() } else { path },
+            reason,
         }
     })?;
     de.end().map_err(|e| document(e.to_string()))?;

@@ -322,6 +322,16 @@ fn jump_models_need_gravity_down_muscles_and_contact() {
         assert_eq!(e.field(), "gravity");
         assert!(e.to_string().contains("must point down (−y)"), "{e}");
     }
+    // Three components, no more.
+    let mut v = jumper_json();
+    v["gravity"] = serde_json::json!([0.0, -9.81, 0.0, 1.0]);
+    let e = refused(&v);
+    assert_eq!(e.field(), "gravity");
+    assert!(
+        e.to_string()
+            .contains("more elements than this field takes"),
+        "{e}"
+    );
     // Its magnitude within [1, 100] m/s² (the Moon's 1.62 passes).
     for (g, ok) in [
         (1.62, true),
