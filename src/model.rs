@@ -466,7 +466,9 @@ pub struct JsonError {
 /// path of the field), refuse what serde would accept: a top-level array,
 /// which fills a struct's fields by position, and anything after the
 /// object (a second object, stray text), which serde leaves unread.
-pub fn parse_json_object<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, JsonError> {
+pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
+    text: &str,
+) -> Result<T, JsonError> {
     let document = |reason: String| JsonError {
         path: "(document)".into(),
         reason,
@@ -505,7 +507,54 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned>(text: &str) -> Result<T
         }
     })?;
     de.end().map_err(|e| document(e.to_string()))?;
+    // serde fills a struct's fields by position from an array too
+    // (`"mesh": [28, "trapezoidal"]`): where the parsed value is an object
+    // and the text held an array, refuse it.
+    if let (Ok(given), Ok(parsed)) = (
+        serde_json::from_str::<serde_json::Value>(text),
+        serde_json::to_value(&value),
+    ) {
+        if let Some(path) = array_for_object(&given, &parsed, String::new()) {
+            return Err(JsonError {
+                path,
+                reason: "expected an object with named fields, got an array (fields are not read by position)".into(),
+            });
+        }
+    }
     Ok(value)
+}
+
+/// The JSON path (`forces.muscles[3].path[1]`) of the first place where
+/// `given` holds an array and `parsed` (the same document read and written
+/// back) an object.
+fn array_for_object(
+    given: &serde_json::Value,
+    parsed: &serde_json::Value,
+    at: String,
+) -> Option<String> {
+    use serde_json::Value::{Array, Object};
+    match (given, parsed) {
+        (Array(_), Object(_)) => Some(if at.is_empty() {
+            "(document)".into()
+        } else {
+            at
+        }),
+        (Object(g), Object(p)) => g.iter().find_map(|(k, gv)| {
+            let pv = p.get(k)?;
+            let at = if at.is_empty() {
+                k.clone()
+            } else {
+                format!("{at}.{k}")
+            };
+            array_for_object(gv, pv, at)
+        }),
+        (Array(g), Array(p)) => g
+            .iter()
+            .zip(p)
+            .enumerate()
+            .find_map(|(i, (gv, pv))| array_for_object(gv, pv, format!("{at}[{i}]"))),
+        _ => None,
+    }
 }
 
 fn json_kind(v: &serde_json::Value) -> &'static str {

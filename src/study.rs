@@ -491,7 +491,9 @@ pub struct Overrides {
 
 /// Read a study file of any kind (`leap solve`'s, `leap simulate`'s): one
 /// JSON object, its errors naming the file and the field's JSON path.
-pub fn read_study<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, StudyError> {
+pub fn read_study<T: serde::de::DeserializeOwned + Serialize>(
+    path: &Path,
+) -> Result<T, StudyError> {
     let text = crate::io::read_input_text(path).map_err(|error| StudyError::Io {
         file: path.into(),
         error,
@@ -500,7 +502,7 @@ pub fn read_study<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Stud
 }
 
 /// Parse study JSON (one object); `origin` names it in errors.
-pub fn parse_study<T: serde::de::DeserializeOwned>(
+pub fn parse_study<T: serde::de::DeserializeOwned + Serialize>(
     text: &str,
     origin: &str,
 ) -> Result<T, StudyError> {
@@ -1339,6 +1341,10 @@ mod tests {
         assert!(r.contains("below 1") && r.contains("1e308"), "{r}");
         let (f, _) = field_error(r#"{"tolerances": {"optim_constraint_tolerance": 1}}"#);
         assert_eq!(f, "tolerances.optim_constraint_tolerance");
+        // Fields by name only: serde would fill a struct from an array.
+        let (f, r) = field_error(r#"{"mesh": [8, "trapezoidal", "explicit"]}"#);
+        assert_eq!(f, "mesh");
+        assert!(r.contains("expected an object with named fields"), "{r}");
         let (f, r) = field_error(r#"{"hessian": "newton"}"#);
         assert_eq!(f, "hessian");
         assert!(r.contains("exact-block-diagonal"), "{r}");

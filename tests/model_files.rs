@@ -290,6 +290,33 @@ fn a_model_file_is_one_json_object() {
             "{e}"
         );
     }
+    // Inside the object too, no struct is read from an array by position,
+    // which serde would accept, filling the fields in order: a body as
+    // [name, mass, mass_center, inertia].
+    let v = jumper_json();
+    let mut w = v.clone();
+    let b = w["bodies"][1].clone();
+    w["bodies"][1] = serde_json::json!([b["name"], b["mass"], b["mass_center"], b["inertia"]]);
+    let e = Model::from_json_str(&w.to_string(), "m.json").unwrap_err();
+    assert_eq!(e.field(), "bodies[1]", "{e}");
+    assert!(
+        e.to_string()
+            .contains("expected an object with named fields, got an array"),
+        "{e}"
+    );
+    // A joint (a tagged enum), a path point and the contact as arrays of
+    // their values (in serde_json's key order) are refused at or in them.
+    for (place, field) in [
+        ("/joints/2", "joints[2]"),
+        ("/forces/muscles/10/path/2", "forces.muscles[10].path[2]"),
+        ("/forces/contact", "forces.contact"),
+    ] {
+        let mut w = v.clone();
+        let obj = w.pointer(place).unwrap().as_object().unwrap().clone();
+        *w.pointer_mut(place).unwrap() = obj.into_iter().map(|(_, x)| x).collect();
+        let e = Model::from_json_str(&w.to_string(), "m.json").unwrap_err();
+        assert!(e.field().starts_with(field), "{e}");
+    }
 }
 
 /// `leap eval` reports contact forces per sphere name.
