@@ -751,7 +751,11 @@ impl Model {
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
                 return Err(err(
                     p("range"),
-                    format!("range must be finite with min < max, got [{lo}, {hi}]"),
+                    format!(
+                        "range must be finite with min < max, got [{}, {}]",
+                        crate::io::readable(lo),
+                        crate::io::readable(hi)
+                    ),
                 ));
             }
             if !(c.default_value.is_finite() && lo <= c.default_value && c.default_value <= hi) {
@@ -759,7 +763,7 @@ impl Model {
                     p("default_value"),
                     format!(
                         "default_value {} is outside the range [{lo}, {hi}]",
-                        c.default_value
+                        crate::io::readable(c.default_value)
                     ),
                 ));
             }
@@ -1111,6 +1115,10 @@ impl Model {
                 [(l.k1, l.k2, l.theta2, "k2"), (l.k3, l.k4, l.theta1, "k4")]
             {
                 for q in coordinates[c].range {
+                    // A term switched off (k = 0) is nothing, not 0·inf.
+                    if k == 0.0 {
+                        break;
+                    }
                     let term = k * (kexp * (q - theta)).exp();
                     if !(term * kexp.abs().max(1.0).powi(2)).is_finite() {
                         return Err(err(
@@ -1476,12 +1484,12 @@ impl MuscleSpec {
     }
 }
 
-/// Gravity of a model standing on the ground, whose half-space has the
-/// normal +y: `[0, -g, 0]` with g > 0. (A model without contact, a
-/// pendulum say, may point it anywhere.)
 /// The magnitude of gravity a contact model may have (m/s²).
 const GRAVITY_RANGE: (f64, f64) = (1.0, 100.0);
 
+/// Gravity of a model standing on the ground, whose half-space has the
+/// normal +y: `[0, -g, 0]` with g in [`GRAVITY_RANGE`]. (A model without
+/// contact, a pendulum say, may point it anywhere.)
 fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
     if !(g[1] < 0.0 && g[0] == 0.0 && g[2] == 0.0) {
         return Err(format!(
@@ -1505,9 +1513,9 @@ fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
 /// With a `symmetry` section the symmetric system carries each left muscle
 /// (`<stem>_l`) by its right partner (`<stem>_r`), doubling its force: every
 /// sided muscle needs its partner, with equal parameters. (A muscle without
-/// a side suffix is a midline muscle, carried once; `StateEquation::new`
-/// checks that partners' paths are mirror images.) Returns the JSON path
-/// and the reason.
+/// a side suffix is a midline muscle, carried once.) Partners' paths must
+/// be mirror images, point by point ([`path_mirror_problem`]). Returns the
+/// JSON path and the reason.
 fn check_muscle_pairs(
     muscles: &[MuscleSpec],
     symmetry: &[[String; 2]],
@@ -1597,6 +1605,8 @@ fn path_mirror_problem(
             .map_or(c.to_string(), |[_, l]| l.clone())
     };
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
+    let same_knots =
+        |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| close(*x, *y));
     let mirrored =
         |a: &[f64; 3], b: &[f64; 3]| close(a[0], b[0]) && close(a[1], b[1]) && close(a[2], -b[2]);
     for (k, (r, l)) in right.iter().zip(left).enumerate() {
@@ -1687,13 +1697,17 @@ fn path_mirror_problem(
                 }
                 let zb_mirrored: Vec<f64> = zb.y.iter().map(|v| -v).collect();
                 for (f, same) in [
-                    ("x_location", xa.x == xb.x && xa.y == xb.y),
-                    ("y_location", ya.x == yb.x && ya.y == yb.y),
+                    (
+                        "x_location",
+                        same_knots(&xa.x, &xb.x) && same_knots(&xa.y, &xb.y),
+                    ),
+                    (
+                        "y_location",
+                        same_knots(&ya.x, &yb.x) && same_knots(&ya.y, &yb.y),
+                    ),
                     (
                         "z_location",
-                        za.x == zb.x
-                            && za.y.iter().zip(&zb_mirrored).all(|(a, b)| close(*a, *b))
-                            && za.y.len() == zb.y.len(),
+                        same_knots(&za.x, &zb.x) && same_knots(&za.y, &zb_mirrored),
                     ),
                 ] {
                     if !same {

@@ -640,18 +640,21 @@ pub struct Outputs<'a, S> {
 /// below the ground at the standing pose (m). The jump height is the apex
 /// of the centre of mass above its height at that pose, so feet off the
 /// ground there shift every height reported; resting on Hunt–Crossley
-/// spheres the shipped models sink by under a millimetre.
+/// spheres the shipped models sink by under a millimetre (their standing
+/// poses put the lowest sphere 7e-7 m into the ground).
 pub const STANDING_GROUND_TOLERANCE: f64 = 0.005;
 
 /// A jump model's standing pose (`poses.standing`, else the coordinates'
 /// default values) must put its feet on the ground: its lowest contact
-/// sphere within [`STANDING_GROUND_TOLERANCE`] of it.
+/// sphere within [`STANDING_GROUND_TOLERANCE`] of it. Checked for
+/// `HuntCrossleyForce` only: `SmoothSphereHalfSpaceForce` pushes before
+/// touching (its constant_contact_force), so its spheres rest above the
+/// ground by an amount of its constants.
 fn check_standing_pose(model: &Model, system: &SystemSpec, mb: &Multibody) -> Result<(), OdeError> {
-    let Some(contact) = model
-        .contact
-        .as_ref()
-        .filter(|_| model.poses.contains_key("squat"))
-    else {
+    let Some(contact) = model.contact.as_ref().filter(|c| {
+        model.poses.contains_key("squat")
+            && c.spec.law == crate::model::ContactLaw::HuntCrossleyForce
+    }) else {
         return Ok(());
     };
     let defaults: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();

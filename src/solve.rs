@@ -448,8 +448,12 @@ pub fn run(
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
             let (mut v, s) = tr.bang_bang_guess().map_err(|e| of_model(&model, e))?;
-            let m = integrate_guess_on_mesh(&mut tr, &mut v, progress)
-                .map_err(|e| of_model(&model, e))?;
+            let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
+                of_model(
+                    &model,
+                    format!("the bang-bang guess integrated on the mesh: {e}"),
+                )
+            })?;
             mesh_integration = Some(m);
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }

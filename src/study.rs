@@ -1089,11 +1089,13 @@ fn check_tolerance(v: f64) -> Result<Option<f64>, String> {
         Ok(Some(v))
     } else if v >= 1.0 {
         Err(format!(
-            "must be below 1 (or -1 for the default), got {v:e}: at 1 or more the solve ends at iterates far from optimal or feasible (defects of a metre or radian)"
+            "must be below 1 (or -1 for the default), got {}: at 1 or more the solve ends at iterates far from optimal or feasible (defects of a metre or radian)",
+            crate::io::readable(v)
         ))
     } else {
         Err(format!(
-            "must be positive (or -1 for the default), got {v:e}"
+            "must be positive (or -1 for the default), got {}",
+            crate::io::readable(v)
         ))
     }
 }

@@ -902,10 +902,12 @@ fn parameters_far_outside_human_ranges_are_refused() {
                 }
             }
             let got = Model::from_json_str(&m.to_string(), "m.json");
-            // Inside its range an exponent may still overflow its term
-            // over the coordinate's range (tested below), named alike.
+            // Inside its range an exponent beyond about 300 may still
+            // overflow its term over the knee's range (tested below),
+            // named alike.
             let overflows = |e: &ModelError| {
                 (name == "k2" || name == "k4")
+                    && value.abs() > 300.0
                     && e.field() == format!("{field}.{name}")
                     && e.to_string().contains("overflows at")
             };
@@ -980,6 +982,14 @@ fn parameters_far_outside_human_ranges_are_refused() {
             assert!(e.to_string().contains("overflows at -2.0944 rad"), "{e}");
         }
     }
+    // A term switched off (k1 = 0) does not overflow, whatever its k2.
+    let mut m = v.clone();
+    for k in [2, 3] {
+        m["forces"]["ligaments"][k]["k1"] = serde_json::json!(0.0);
+        m["forces"]["ligaments"][k]["k2"] = serde_json::json!(-1e3);
+    }
+    let got = Model::from_json_str(&m.to_string(), "m.json");
+    assert!(got.is_ok(), "{:?}", got.err());
     // Friction coefficients up to 10 (dynamic at most static).
     for (stat, dynamic, refused) in [
         (10.0, 10.0, None),

@@ -416,6 +416,15 @@ fn a_standing_pose_off_the_ground_is_refused_naming_it() {
         e.contains("default values") && e.contains("100.0 mm above"),
         "{e}"
     );
+    // SmoothSphereHalfSpaceForce pushes before touching, so its spheres
+    // rest above the ground: not checked.
+    let mut v = base.clone();
+    v["forces"]["contact"]["law"] = "SmoothSphereHalfSpaceForce".into();
+    v["poses"]["standing"]["pelvis_ty"] = (ty + 0.1).into();
+    let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    if let Err(e) = JumpOcp::new(&model, OcpOptions::default()) {
+        assert!(!e.to_string().contains("poses.standing"), "{e}");
+    }
     for file in [
         "models/jumper.json",
         "models/jumper_gait2392.json",
