@@ -670,6 +670,12 @@ pub const MAX_INTEGRATOR_STEPS: i32 = 100_000;
 /// The smallest fixed step of ExplicitEuler (s): about 70 µs a step on the
 /// jumper, so a million steps to a second of motion take over a minute.
 pub const MIN_FIXED_STEP: f64 = 1e-6;
+/// The largest fixed step of ExplicitEuler (s): the bang-bang jump is
+/// 25.7 cm at 1e-5 and 1e-4 s, fails at 0.344 s with 2e-4 s and lands at
+/// −13.8 cm with 5e-4 s and more (`leap simulate --integrator ExplicitEuler
+/// --accuracy A`, 2026-12-06): the contact and the tendons are stiffer than
+/// that.
+pub const MAX_FIXED_STEP: f64 = 1e-4;
 /// The most steps of ExplicitEuler's fixed step to `t_max`.
 pub const MAX_FIXED_STEPS: f64 = 1e6;
 /// The most rows a Simbody simulation reports (`t_max / report_interval`):
@@ -692,7 +698,7 @@ pub const MAX_REPORT_INTERVAL: f64 = 1e-2;
 /// Why `accuracy` is unusable for `integrator`, if it is: a relative error
 /// tolerance in [[`MIN_ACCURACY`], [`MAX_ACCURACY`]] (Simbody asserts
 /// accuracy < 1 and aborts the process otherwise), or for ExplicitEuler a fixed step of at
-/// least [`MIN_FIXED_STEP`] s and, where the end time `t_max` is known, at
+/// least [`MIN_FIXED_STEP`] s, at most [`MAX_FIXED_STEP`] s and, where the end time `t_max` is known, at
 /// most [`MAX_FIXED_STEPS`] steps to it.
 pub fn check_integrator_accuracy(
     accuracy: f64,
@@ -710,6 +716,12 @@ pub fn check_integrator_accuracy(
         if accuracy < MIN_FIXED_STEP {
             return Err(format!(
                 "ExplicitEuler's fixed step must be at least {MIN_FIXED_STEP:e} s, got {accuracy:e}: a million steps to each second of motion already take over a minute"
+            ));
+        }
+        if accuracy > MAX_FIXED_STEP {
+            return Err(format!(
+                "ExplicitEuler's fixed step must be at most {MAX_FIXED_STEP:e} s, got {}: the contact and the tendons are stiffer (the bang-bang jump fails at 2e-4 s and lands at -13.8 cm with 5e-4 s)",
+                crate::io::readable(accuracy)
             ));
         }
         if let Some(t_max) = t_max.filter(|t| t / accuracy > MAX_FIXED_STEPS) {

@@ -110,6 +110,8 @@ fn simulate_study_values_are_checked() {
         (r#"{"accuracy": 0}"#, "sim.json: accuracy: must be positive, got 0"),
         (r#"{"integrator": "DormandPrince", "accuracy": 2}"#, "sim.json: accuracy: must be a relative error tolerance"),
         (r#"{"integrator": "ExplicitEuler", "accuracy": 1e-12}"#, "sim.json: accuracy: ExplicitEuler's fixed step must be at least 1e-6 s"),
+        (r#"{"integrator": "ExplicitEuler", "accuracy": 1.01e-4}"#, "sim.json: accuracy: ExplicitEuler's fixed step must be at most 1e-4 s, got 0.000101"),
+        (r#"{"integrator": "ExplicitEuler", "accuracy": 100}"#, "sim.json: accuracy: ExplicitEuler's fixed step must be at most 1e-4 s, got 100"),
         (r#"{"integrator": "ExplicitEuler", "accuracy": 2e-6, "t_max": 10}"#, "sim.json: accuracy: ExplicitEuler's fixed step of 2e-6 s takes 5.0e6 steps to t_max = 10 s; at most 1e6"),
         (r#"{"report_interval": 1e-9}"#, "sim.json: report_interval: 1e-9 s over t_max = 1 s would report 1.0e9 rows; at most 1e5"),
         (r#"{"report_interval": 0}"#, "sim.json: report_interval: must be positive, got 0"),
