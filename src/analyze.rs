@@ -67,8 +67,10 @@ pub const NEWTON_MISMATCH_WARNING: f64 = 0.25;
 #[derive(Debug, Clone, Serialize)]
 pub struct JumpAnalysis {
     /// Whether the feet left the ground inside the file (else the window
-    /// runs to its end).
+    /// runs to its end). Not looked for in a given window.
     pub liftoff: bool,
+    /// Whether the window was given (`--window`), not the push-off found.
+    pub window_given: bool,
     pub budget: EnergyBudget,
     /// ∫ (F_y − m g) dt over the window and m · ΔẎ_C: equal by Newton's
     /// second law (N·s).
@@ -246,6 +248,7 @@ pub fn analyze(
     let v = last.com_vertical_velocity;
     Ok(JumpAnalysis {
         liftoff,
+        window_given: window.is_some(),
         budget: EnergyBudget {
             start_s: first.t,
             end_s: last.t,
@@ -295,10 +298,21 @@ impl JumpAnalysis {
     pub fn to_text(&self) -> String {
         let b = &self.budget;
         let mut s = format!(
-            "{} from {:.3} s to {:.3} s: jump height {:.2} cm (COM {:+.2} cm from standing, rising at {:.3} m/s), peak vertical ground force {:.2} BW\n",
-            if self.liftoff { "push-off" } else { "window (no lift-off in the file)" },
+            "{} from {:.3} s to {:.3} s: {} {:.2} cm (COM {:+.2} cm from standing, rising at {:.3} m/s), peak vertical ground force {:.2} BW\n",
+            if self.window_given {
+                "given window"
+            } else if self.liftoff {
+                "push-off"
+            } else {
+                "window (no lift-off in the file)"
+            },
             b.start_s,
             b.end_s,
+            if self.liftoff {
+                "jump height"
+            } else {
+                "apex if it flew from its end"
+            },
             100.0 * self.jump_height_m,
             100.0 * self.end_com_height_above_standing_m,
             self.end_com_vertical_velocity_mps,

@@ -103,6 +103,20 @@ fn push_off_impulse_equals_the_momentum_change_and_the_jump_matches_the_simulati
         a.budget.end_s
     );
     assert_push_off_consistent(&a, 2e-3, s.jump_height_m, "simulation");
+    assert!(
+        a.to_text().starts_with("push-off from 0.000 s"),
+        "{}",
+        a.to_text()
+    );
+    // A window given inside the push-off is named as given, and its height
+    // is the apex a flight from its end would reach, not the jump's.
+    let w = analyze(&eq, &laws, &traj.time, &traj.states, Some((0.1, 0.2))).unwrap();
+    assert!(w.window_given && !w.liftoff);
+    let text = w.to_text();
+    assert!(
+        text.starts_with("given window from 0.1") && text.contains("apex if it flew from its end"),
+        "{text}"
+    );
     // The push-off is driven by the muscles: their net work is most of
     // the energy gained.
     let b = &a.budget;
