@@ -469,6 +469,8 @@ pub struct JsonError {
 pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
     text: &str,
 ) -> Result<T, JsonError> {
+    // A byte-order mark, as some Windows editors write, is no content.
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let document = |reason: String| JsonError {
         path: "(document)".into(),
         reason,

@@ -290,6 +290,9 @@ fn a_model_file_is_one_json_object() {
             "{e}"
         );
     }
+    // A byte-order mark before the object is no content.
+    let m = Model::from_json_str(&format!("\u{feff}{text}"), "m.json");
+    assert!(m.is_ok(), "{:?}", m.err());
     // Inside the object too, no struct is read from an array by position,
     // which serde would accept, filling the fields in order: a body as
     // [name, mass, mass_center, inertia].
