@@ -826,9 +826,10 @@ impl Controls {
                         file: path.into(),
                         column: t.labels[k].clone(),
                         reason: format!(
-                            "row {} (t = {}): excitation {v} is not a number in [0, 1]",
+                            "row {} (t = {}): excitation {} is not a number in [0, 1]",
                             r + 1,
-                            t.time[r]
+                            readable(t.time[r]),
+                            readable(v)
                         ),
                     });
                 }

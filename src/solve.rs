@@ -736,7 +736,8 @@ fn shooting_guess_from_file(sh: &Shooting, path: &Path) -> Result<Vec<f64>, Solv
         return Err(SolveError::Guess {
             file: path.into(),
             reason: format!(
-                "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)"
+                "time: ends at {} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)",
+                crate::io::readable(tf)
             ),
         });
     }
@@ -1111,7 +1112,8 @@ fn guess_from_file_with(
     let [t_min, t_max] = tr.ocp.options.final_time_bounds;
     if !(t_min..=t_max).contains(&tf) {
         return Err(bad(format!(
-            "time: ends at {tf} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)"
+            "time: ends at {} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)",
+                crate::io::readable(tf)
         )));
     }
     tr.guess_from_trajectory(&t.time, &states, &controls, tf)
