@@ -537,9 +537,18 @@ fn min1<S: Scalar>(x: S) -> S {
     }
 }
 
-/// Anderson & Pandy's exponential passive torque with damping (§5.3).
+/// Anderson & Pandy's exponential passive torque with damping (§5.3). A
+/// term with k = 0 is switched off: zero, not 0·exp(…), which is NaN where
+/// the exponential overflows.
 pub fn passive_torque<S: Scalar>(l: &crate::model::LigamentSpec, q: S, qd: S) -> S {
-    ((q - l.theta2) * l.k2).exp() * l.k1 + ((q - l.theta1) * l.k4).exp() * l.k3 - qd * l.damping
+    let term = |k: f64, rate: f64, theta: f64| {
+        if k == 0.0 {
+            S::zero()
+        } else {
+            ((q - theta) * rate).exp() * k
+        }
+    };
+    term(l.k1, l.k2, l.theta2) + term(l.k3, l.k4, l.theta1) - qd * l.damping
 }
 
 /// DeGrooteFregly2016Muscle's curves (De Groote et al., Ann. Biomed. Eng.

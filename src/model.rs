@@ -764,8 +764,10 @@ impl Model {
                 return Err(err(
                     p("default_value"),
                     format!(
-                        "default_value {} is outside the range [{lo}, {hi}]",
-                        crate::io::readable(c.default_value)
+                        "default_value {} is outside the range [{}, {}]",
+                        crate::io::readable(c.default_value),
+                        crate::io::readable(lo),
+                        crate::io::readable(hi)
                     ),
                 ));
             }

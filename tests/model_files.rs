@@ -993,6 +993,17 @@ fn parameters_far_outside_human_ranges_are_refused() {
     }
     let got = Model::from_json_str(&m.to_string(), "m.json");
     assert!(got.is_ok(), "{:?}", got.err());
+    // ... and its torque is the other term alone, finite at the squat's knee
+    // (−1.396 rad), where exp(−1e3·(q − 0.13)) overflows.
+    let l = &m["forces"]["ligaments"][2];
+    let spec: leap::model::LigamentSpec = serde_json::from_value(l.clone()).unwrap();
+    let q = -1.3962634;
+    let tau = leap::laws::passive_torque(&spec, q, 0.0);
+    let other = 11.03 * (-11.33 * (q + 2.4f64)).exp();
+    assert!(
+        (tau - other).abs() <= 1e-12 * other.abs(),
+        "{tau} against {other}"
+    );
     // Friction coefficients up to 10 (dynamic at most static).
     for (stat, dynamic, refused) in [
         (10.0, 10.0, None),

@@ -422,9 +422,7 @@ fn a_standing_pose_off_the_ground_is_refused_naming_it() {
     v["forces"]["contact"]["law"] = "SmoothSphereHalfSpaceForce".into();
     v["poses"]["standing"]["pelvis_ty"] = (ty + 0.1).into();
     let model = Model::from_json_str(&v.to_string(), "m.json").unwrap();
-    if let Err(e) = JumpOcp::new(&model, OcpOptions::default()) {
-        assert!(!e.to_string().contains("poses.standing"), "{e}");
-    }
+    JumpOcp::new(&model, OcpOptions::default()).unwrap();
     for file in [
         "models/jumper.json",
         "models/jumper_gait2392.json",
