@@ -998,8 +998,10 @@ impl Model {
                     return Err(err(
                         path,
                         format!(
-                            "value {} is outside the range [{lo}, {hi}]",
-                            crate::io::readable(v)
+                            "value {} is outside the range [{}, {}]",
+                            crate::io::readable(v),
+                            crate::io::readable(lo),
+                            crate::io::readable(hi)
                         ),
                     ));
                 }
@@ -1114,24 +1116,25 @@ impl Model {
             }
             // Each exponential term, with its first and second derivatives
             // (the collocation's Hessian), finite over the coordinate's
-            // range: a term is monotonic, so its ends bound it.
+            // range: a term is monotonic, so its ends bound it. A term
+            // switched off (k = 0) is zero (`laws::passive_torque`).
             for (k, kexp, theta, field) in
                 [(l.k1, l.k2, l.theta2, "k2"), (l.k3, l.k4, l.theta1, "k4")]
             {
+                if k == 0.0 {
+                    continue;
+                }
                 for q in coordinates[c].range {
-                    // A term switched off (k = 0) is nothing, not 0·inf.
-                    if k == 0.0 {
-                        break;
-                    }
                     let term = k * (kexp * (q - theta)).exp();
                     if !(term * kexp.abs().max(1.0).powi(2)).is_finite() {
                         return Err(err(
                             p(field),
                             format!(
-                                "the passive torque's term {} · exp({} · (q − {})) overflows at {q} rad, an end of '{}''s range: it must stay finite over the range",
+                                "the passive torque's term {} · exp({} · (q − {})) overflows at {} rad, an end of '{}''s range: it must stay finite over the range",
                                 crate::io::readable(k),
                                 crate::io::readable(kexp),
                                 crate::io::readable(theta),
+                                crate::io::readable(q),
                                 l.coordinate
                             ),
                         ));

@@ -521,6 +521,18 @@ impl Multibody {
         [r[0], r[1], v[2]]
     }
 
+    /// Position (ground) of a point `loc` given in model body `body`'s
+    /// frame, wherever that body sits in its composite body.
+    pub fn model_point_position<S: Scalar>(
+        &self,
+        ws: &Workspace<S>,
+        body: usize,
+        loc: [f64; 3],
+    ) -> [S; 3] {
+        let (ci, off) = self.frame_of_model_body(body);
+        self.point_position(ws, ci, [loc[0] + off[0], loc[1] + off[1], loc[2] + off[2]])
+    }
+
     /// The composite body and frame offset of a model body.
     #[inline]
     pub fn frame_of_model_body(&self, model_body: usize) -> (usize, [f64; 3]) {

@@ -665,19 +665,7 @@ fn check_standing_pose(model: &Model, system: &SystemSpec, mb: &Multibody) -> Re
     let q = system.q_from_model(pose);
     let mut ws = mb.workspace::<f64>();
     mb.set_state(&mut ws, &q, &vec![0.0; q.len()]);
-    let lowest = contact
-        .spheres
-        .iter()
-        .map(|sp| {
-            let (ci, off) = mb.frame_of_model_body(sp.body);
-            let loc = [
-                sp.location[0] + off[0],
-                sp.location[1] + off[1],
-                sp.location[2] + off[2],
-            ];
-            mb.point_position(&ws, ci, loc)[1] - sp.radius
-        })
-        .fold(f64::INFINITY, f64::min);
+    let lowest = lowest_sphere_bottom(mb, &ws, contact);
     if lowest.is_finite() && lowest.abs() <= STANDING_GROUND_TOLERANCE {
         return Ok(());
     }
@@ -701,6 +689,21 @@ fn check_standing_pose(model: &Model, system: &SystemSpec, mb: &Multibody) -> Re
             STANDING_GROUND_TOLERANCE * 1e3
         ),
     }))
+}
+
+/// The height above the ground of the lowest contact sphere's bottom at
+/// the state set in `ws` (negative: into the ground; infinite without
+/// spheres).
+pub fn lowest_sphere_bottom(
+    mb: &Multibody,
+    ws: &Workspace<f64>,
+    contact: &crate::model::Contact,
+) -> f64 {
+    contact
+        .spheres
+        .iter()
+        .map(|sp| mb.model_point_position(ws, sp.body, sp.location)[1] - sp.radius)
+        .fold(f64::INFINITY, f64::min)
 }
 
 /// Every muscle path has a positive finite length at the coordinates'

@@ -181,16 +181,9 @@ pub fn grf_of(eq: &StateEquation, ws: &StateWorkspace<f64>, x: &[f64]) -> [f64; 
         } else {
             0
         };
-        let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
-        let p = eq.multibody.point_position(
-            &mbw,
-            ci,
-            [
-                sp.location[0] + off[0],
-                sp.location[1] + off[1],
-                sp.location[2] + off[2],
-            ],
-        );
+        let p = eq
+            .multibody
+            .model_point_position(&mbw, sp.body, sp.location);
         for d in 0..3 {
             out[6 * side + d] += f[d];
         }

@@ -498,23 +498,7 @@ fn place_feet(ocp: &JumpOcp, x: &mut [f64], depth: f64) {
     let mut ws = eq.multibody.workspace::<f64>();
     for _ in 0..3 {
         eq.multibody.set_state(&mut ws, &x[..n], &x[n..2 * n]);
-        let lowest = contact
-            .spheres
-            .iter()
-            .map(|sp| {
-                let (ci, off) = eq.multibody.frame_of_model_body(sp.body);
-                let p: [f64; 3] = eq.multibody.point_position(
-                    &ws,
-                    ci,
-                    [
-                        sp.location[0] + off[0],
-                        sp.location[1] + off[1],
-                        sp.location[2] + off[2],
-                    ],
-                );
-                p[1] - sp.radius
-            })
-            .fold(f64::INFINITY, f64::min);
+        let lowest = crate::ode::lowest_sphere_bottom(&eq.multibody, &ws, contact);
         if !lowest.is_finite() {
             return;
         }
@@ -3629,16 +3613,29 @@ impl Transcription {
         lambda: &[f64],
         h: &mut [f64],
     ) -> Result<(), EvalError> {
-        check_len("hessian", "x", x.len(), self.num_variables())?;
-        check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
-        if self
+        // A COM-velocity element needs no point data.
+        let refresh = self
             .hess_elements
             .get(e)
-            .is_some_and(|k| !matches!(k, HessElement::ComVelocity(_)))
-        {
+            .is_some_and(|k| !matches!(k, HessElement::ComVelocity(_)));
+        self.prepare_hessian(x, lambda, refresh)?;
+        self.hessian_of_fresh_element(x, e, sigma, lambda, h)
+    }
+
+    /// Check the lengths of x and λ and, if `refresh`, bring the point
+    /// derivatives to x.
+    fn prepare_hessian(
+        &mut self,
+        x: &[f64],
+        lambda: &[f64],
+        refresh: bool,
+    ) -> Result<(), EvalError> {
+        check_len("hessian", "x", x.len(), self.num_variables())?;
+        check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
+        if refresh {
             self.refresh_hessian(x)?;
         }
-        self.hessian_of_fresh_element(x, e, sigma, lambda, h)
+        Ok(())
     }
 
     /// Every element's Hessian, the point derivatives refreshed (and x
@@ -3650,15 +3647,8 @@ impl Transcription {
         lambda: &[f64],
         blocks: &mut [Vec<f64>],
     ) -> Result<(), EvalError> {
-        check_len("hessian", "x", x.len(), self.num_variables())?;
-        check_len("hessian", "lambda", lambda.len(), self.num_constraints())?;
-        if self
-            .hess_elements
-            .iter()
-            .any(|k| !matches!(k, HessElement::ComVelocity(_)))
-        {
-            self.refresh_hessian(x)?;
-        }
+        // Every transcription has defect elements, which need point data.
+        self.prepare_hessian(x, lambda, true)?;
         for (e, h) in blocks.iter_mut().enumerate() {
             self.hessian_of_fresh_element(x, e, sigma, lambda, h)?;
         }
