@@ -225,7 +225,7 @@ pub struct BodySpec {
 /// frame's origin sits at `location_in_parent` (plus the joint's
 /// translations) in the parent frame; frames carry no fixed rotation.
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case", try_from = "JointFields")]
 pub enum JointSpec {
     /// Planar base: rotation about z, then translation along ground x and y.
     /// `coordinates` = [rotation, x translation, y translation].
@@ -263,6 +263,98 @@ pub enum JointSpec {
         child: String,
         location_in_parent: [f64; 3],
     },
+}
+
+/// A joint as a file gives it: the fields of every joint type, each read
+/// with its own JSON path (serde's internally tagged enums lose the path of
+/// an error inside a variant), then checked against the joint's `type`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointFields {
+    #[serde(rename = "type")]
+    kind: JointType,
+    name: String,
+    parent: String,
+    child: String,
+    location_in_parent: [f64; 3],
+    #[serde(default, deserialize_with = "crate::model::present")]
+    coordinates: Option<[String; 3]>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    coordinate: Option<String>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    translation_x: Option<SplineData>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    translation_y: Option<SplineData>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum JointType {
+    Planar,
+    Pin,
+    TranslatingHinge,
+    Weld,
+}
+
+impl TryFrom<JointFields> for JointSpec {
+    type Error = String;
+    fn try_from(j: JointFields) -> Result<Self, String> {
+        let (kind, takes): (&str, &[&str]) = match j.kind {
+            JointType::Planar => ("planar", &["coordinates"]),
+            JointType::Pin => ("pin", &["coordinate"]),
+            JointType::TranslatingHinge => (
+                "translating_hinge",
+                &["coordinate", "translation_x", "translation_y"],
+            ),
+            JointType::Weld => ("weld", &[]),
+        };
+        crate::model::variant_fields(
+            &format!("a {kind} joint"),
+            &["type", "name", "parent", "child", "location_in_parent"],
+            takes,
+            &[
+                ("coordinates", j.coordinates.is_some()),
+                ("coordinate", j.coordinate.is_some()),
+                ("translation_x", j.translation_x.is_some()),
+                ("translation_y", j.translation_y.is_some()),
+            ],
+        )?;
+        let (name, parent, child, location_in_parent) =
+            (j.name, j.parent, j.child, j.location_in_parent);
+        // `variant_fields` has checked that each field taken is given.
+        let missing = || format!("a {kind} joint misses a field");
+        Ok(match j.kind {
+            JointType::Planar => JointSpec::Planar {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                coordinates: j.coordinates.ok_or_else(missing)?,
+            },
+            JointType::Pin => JointSpec::Pin {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                coordinate: j.coordinate.ok_or_else(missing)?,
+            },
+            JointType::TranslatingHinge => JointSpec::TranslatingHinge {
+                name,
+                parent,
+                child,
+                location_in_parent,
+                coordinate: j.coordinate.ok_or_else(missing)?,
+                translation_x: j.translation_x.ok_or_else(missing)?,
+                translation_y: j.translation_y.ok_or_else(missing)?,
+            },
+            JointType::Weld => JointSpec::Weld {
+                name,
+                parent,
+                child,
+                location_in_parent,
+            },
+        })
+    }
 }
 
 impl JointSpec {
@@ -524,6 +616,52 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
         }
     }
     Ok(value)
+}
+
+/// Read an optional field that, when given, must hold a value: `null` is
+/// a type error at the field, not an absent field.
+pub(crate) fn present<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    T::deserialize(d).map(Some)
+}
+
+/// Check the optional fields of a tagged object (`given`: name, present)
+/// against those its type `takes`: each taken must be present, no other
+/// may be. `what` names the type ("a pin joint"); `common` lists the fields
+/// every type has, for the message.
+pub(crate) fn variant_fields(
+    what: &str,
+    common: &[&str],
+    takes: &[&str],
+    given: &[(&str, bool)],
+) -> Result<(), String> {
+    let all = || {
+        common
+            .iter()
+            .chain(takes)
+            .map(|f| format!("`{f}`"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    for &(field, present) in given {
+        let taken = takes.contains(&field);
+        if present && !taken {
+            return Err(format!(
+                "unknown field `{field}`: {what} has fields {}",
+                all()
+            ));
+        }
+        if !present && taken {
+            return Err(format!(
+                "missing field `{field}`: {what} has fields {}",
+                all()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The JSON path (`forces.muscles[3].path[1]`) of the first place where

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 
 /// A path point as written in a model file (body and coordinate by name).
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+#[serde(tag = "type", rename_all = "snake_case", try_from = "PathPointFields")]
 pub enum PathPointSpec {
     /// OpenSim `PathPoint`: fixed in `body` at `location` (m).
     Fixed { body: String, location: [f64; 3] },
@@ -42,6 +42,86 @@ pub enum PathPointSpec {
         y_location: SplineData,
         z_location: SplineData,
     },
+}
+
+/// A path point as a file gives it: the fields of every point type, each
+/// read with its own JSON path (serde's internally tagged enums lose the
+/// path of an error inside a variant), then checked against its `type`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PathPointFields {
+    #[serde(rename = "type")]
+    kind: PathPointType,
+    body: String,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    location: Option<[f64; 3]>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    coordinate: Option<String>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    range: Option<[f64; 2]>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    x_location: Option<SplineData>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    y_location: Option<SplineData>,
+    #[serde(default, deserialize_with = "crate::model::present")]
+    z_location: Option<SplineData>,
+}
+
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum PathPointType {
+    Fixed,
+    Conditional,
+    Moving,
+}
+
+impl TryFrom<PathPointFields> for PathPointSpec {
+    type Error = String;
+    fn try_from(p: PathPointFields) -> Result<Self, String> {
+        let (kind, takes): (&str, &[&str]) = match p.kind {
+            PathPointType::Fixed => ("fixed", &["location"]),
+            PathPointType::Conditional => ("conditional", &["location", "coordinate", "range"]),
+            PathPointType::Moving => (
+                "moving",
+                &["coordinate", "x_location", "y_location", "z_location"],
+            ),
+        };
+        crate::model::variant_fields(
+            &format!("a {kind} path point"),
+            &["type", "body"],
+            takes,
+            &[
+                ("location", p.location.is_some()),
+                ("coordinate", p.coordinate.is_some()),
+                ("range", p.range.is_some()),
+                ("x_location", p.x_location.is_some()),
+                ("y_location", p.y_location.is_some()),
+                ("z_location", p.z_location.is_some()),
+            ],
+        )?;
+        // `variant_fields` has checked that each field taken is given.
+        let missing = || format!("a {kind} path point misses a field");
+        let body = p.body;
+        Ok(match p.kind {
+            PathPointType::Fixed => PathPointSpec::Fixed {
+                body,
+                location: p.location.ok_or_else(missing)?,
+            },
+            PathPointType::Conditional => PathPointSpec::Conditional {
+                body,
+                location: p.location.ok_or_else(missing)?,
+                coordinate: p.coordinate.ok_or_else(missing)?,
+                range: p.range.ok_or_else(missing)?,
+            },
+            PathPointType::Moving => PathPointSpec::Moving {
+                body,
+                coordinate: p.coordinate.ok_or_else(missing)?,
+                x_location: p.x_location.ok_or_else(missing)?,
+                y_location: p.y_location.ok_or_else(missing)?,
+                z_location: p.z_location.ok_or_else(missing)?,
+            },
+        })
+    }
 }
 
 /// What makes a validated path point move.

@@ -323,6 +323,106 @@ fn a_model_file_is_one_json_object() {
 }
 
 /// `leap eval` reports contact forces per sphere name.
+/// Joints and path points are objects tagged by `type`: a field is
+/// checked against the type (taken, not taken) and an error inside one
+/// names the field's own path.
+#[test]
+fn joint_and_path_point_fields_are_checked_against_their_type() {
+    let v = jumper_json();
+    let joint = |t: &str| {
+        v["joints"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|j| j["type"] == t)
+            .unwrap()
+    };
+    let (pin, knee) = (joint("pin"), joint("translating_hinge"));
+    let l = muscle_index(&v, "rect_fem_r");
+    let point = |t: &str| {
+        v["forces"]["muscles"][l]["path"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|p| p["type"] == t)
+            .unwrap()
+    };
+    let (fixed, moving) = (point("fixed"), point("moving"));
+    let pp = format!("/forces/muscles/{l}/path");
+    type Change = Box<dyn Fn(&mut serde_json::Value)>;
+    let set = |at: String, key: &'static str, x: serde_json::Value| -> Change {
+        Box::new(move |w| {
+            w.pointer_mut(&at).unwrap()[key] = x.clone();
+        })
+    };
+    let drop = |at: String, key: &'static str| -> Change {
+        Box::new(move |w| {
+            w.pointer_mut(&at)
+                .unwrap()
+                .as_object_mut()
+                .unwrap()
+                .remove(key);
+        })
+    };
+    let cases: Vec<(Change, String, &str)> = vec![
+        (
+            set(format!("/joints/{pin}"), "coordinates", serde_json::json!(["a", "b", "c"])),
+            format!("joints[{pin}]"),
+            "unknown field `coordinates`: a pin joint has fields `type`, `name`, `parent`, `child`, `location_in_parent`, `coordinate`",
+        ),
+        (
+            drop(format!("/joints/{knee}"), "translation_x"),
+            format!("joints[{knee}]"),
+            "missing field `translation_x`: a translating_hinge joint",
+        ),
+        (
+            set(format!("/joints/{knee}"), "coordinate", serde_json::Value::Null),
+            format!("joints[{knee}].coordinate"),
+            "invalid type: null, expected a string",
+        ),
+        (
+            set(format!("/joints/{knee}"), "translation_y", serde_json::json!({"x": [0.0, "1"], "y": [0.0, 1.0]})),
+            format!("joints[{knee}].translation_y.x[1]"),
+            "invalid type: string \"1\", expected f64",
+        ),
+        (
+            set(format!("{pp}/{fixed}"), "range", serde_json::json!([0.0, 1.0])),
+            format!("forces.muscles[{l}].path[{fixed}]"),
+            "unknown field `range`: a fixed path point has fields `type`, `body`, `location`",
+        ),
+        (
+            drop(format!("{pp}/{moving}"), "z_location"),
+            format!("forces.muscles[{l}].path[{moving}]"),
+            "missing field `z_location`: a moving path point",
+        ),
+        (
+            set(format!("{pp}/{moving}"), "body", serde_json::json!(3)),
+            format!("forces.muscles[{l}].path[{moving}].body"),
+            "expected a string",
+        ),
+        (
+            set(format!("{pp}/{moving}"), "type", serde_json::json!("sliding")),
+            format!("forces.muscles[{l}].path[{moving}].type"),
+            "unknown variant `sliding`, expected one of `fixed`, `conditional`, `moving`",
+        ),
+    ];
+    for (change, field, reason) in cases {
+        let mut w = v.clone();
+        change(&mut w);
+        let e = refused(&w);
+        assert_eq!(e.field(), field, "{e}");
+        assert!(e.to_string().contains(reason), "{e}");
+    }
+    // Written back, a model reads as itself.
+    let file: leap::model::ModelFile = serde_json::from_value(v.clone()).unwrap();
+    let back = serde_json::to_value(&file).unwrap();
+    assert_eq!(back["joints"], v["joints"]);
+    assert_eq!(
+        back["forces"]["muscles"][l]["path"],
+        v["forces"]["muscles"][l]["path"]
+    );
+}
+
 #[test]
 fn contact_spheres_need_distinct_names_and_at_least_one() {
     let mut v = jumper_json();

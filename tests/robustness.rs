@@ -239,7 +239,17 @@ fn every_mutated_field_is_refused_by_name_or_evaluates_finitely() {
                     })
                 };
                 match named_field(&e, "mutant.json") {
-                    Some(f) if resolves(&doc, f) || names_removed(f) => {}
+                    Some(f) if resolves(&doc, f) || names_removed(f) => {
+                        // A value of the wrong type is named exactly, also
+                        // inside joints and path points (tagged objects,
+                        // where serde's own enums lose the path).
+                        if e.contains("invalid type") && f != m.place.trim_start_matches('.') {
+                            failures.push(format!(
+                                "{} {}: type error named at {f}: {e}",
+                                m.place, m.what
+                            ));
+                        }
+                    }
                     _ => failures.push(format!(
                         "{} {}: error without the file and a field of it: {e}",
                         m.place, m.what
