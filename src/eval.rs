@@ -47,6 +47,11 @@ pub struct EvalReport {
     pub ligament_torques: BTreeMap<String, f64>,
     pub com_position: [f64; 3],
     pub com_velocity: [f64; 3],
+    /// What makes this state unusual, though OpenSim evaluates it too: a
+    /// coordinate outside its range (the passive torques grow
+    /// exponentially beyond it), a fibre shorter than its minimum length
+    /// (held there, as OpenSim's Thelen muscle holds it).
+    pub warnings: Vec<String>,
 }
 
 /// Bad `leap eval` input: names the file, the entry and the field.
@@ -364,6 +369,21 @@ pub fn evaluate(
     }
     let model = &eq.model;
     let coord_name = |k: usize| model.coordinates[eq.system.coordinates[k]].name.clone();
+    let mut warnings = Vec::new();
+    let rotational = crate::io::rotational_coordinates(eq);
+    for k in 0..n {
+        let [lo, hi] = model.coordinates[eq.system.coordinates[k]].range;
+        if !(lo..=hi).contains(&x[k]) {
+            let unit = if rotational.contains(&k) { "rad" } else { "m" };
+            warnings.push(format!(
+                "{} = {} {unit} lies outside its range [{}, {}] {unit}",
+                names[k],
+                crate::io::readable(x[k]),
+                crate::io::readable(lo),
+                crate::io::readable(hi)
+            ));
+        }
+    }
     let mut muscles = BTreeMap::new();
     let mbw = &ws.mb;
     for (k, &mi) in eq.muscles.iter().enumerate() {
@@ -409,6 +429,17 @@ pub fn evaluate(
                 activation_rate: info.activation_rate,
             },
         );
+        if let crate::laws::MuscleLaw::Thelen(t) = &laws.muscles[mi] {
+            let lm = x[2 * n + k];
+            if lm < t.min_fiber_length {
+                warnings.push(format!(
+                    "{} = {} m lies below the minimum fibre length {} m: the law holds the fibre there, as OpenSim's Thelen2003Muscle does",
+                    names[2 * n + k],
+                    crate::io::readable(lm),
+                    crate::io::readable(t.min_fiber_length)
+                ));
+            }
+        }
     }
     let contact_forces = match &model.contact {
         Some(c) => c
@@ -433,6 +464,7 @@ pub fn evaluate(
         ligament_torques,
         com_position: eq.multibody.com_position(mbw),
         com_velocity: eq.multibody.com_velocity(mbw),
+        warnings,
     })
 }
 

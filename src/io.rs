@@ -737,7 +737,7 @@ pub fn muscle_state_out_of_range(label: &str, v: f64) -> Option<String> {
 /// The system coordinates of `eq` that are angles: a pin's, a translating
 /// hinge's (its translation follows the angle) and a planar joint's
 /// rotation. Sorted, without repeats (symmetric sides share a q).
-fn rotational_coordinates(eq: &StateEquation) -> Vec<usize> {
+pub(crate) fn rotational_coordinates(eq: &StateEquation) -> Vec<usize> {
     let mut qs: Vec<usize> = eq
         .system
         .bodies

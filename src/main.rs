@@ -563,10 +563,12 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let inputs = leap::eval::read_inputs(&eq, &input).map_err(|e| full_hint(e, full))?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {
-                reports.push(
-                    leap::eval::evaluate(&eq, &laws, x, u)
-                        .with_context(|| format!("{}: evaluation {k}", input.display()))?,
-                );
+                let r = leap::eval::evaluate(&eq, &laws, x, u)
+                    .with_context(|| format!("{}: evaluation {k}", input.display()))?;
+                for w in &r.warnings {
+                    eprintln!("warning: {}: evaluation {k}: {w}", input.display());
+                }
+                reports.push(r);
             }
             if json {
                 let v = if reports.len() == 1 {

@@ -285,6 +285,66 @@ fn eval_refuses_inputs_outside_their_physical_range() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `leap eval` evaluates a state OpenSim would evaluate but warns of what
+/// makes it unusual: a coordinate outside its range (the knee bent 0.2 rad
+/// past the model's limit) and a fibre below its minimum length (held
+/// there), on stderr and in the JSON's `warnings`; the squat has none.
+#[test]
+fn eval_warns_of_coordinates_outside_their_range_and_clamped_fibres() {
+    let (dir, squat) = squat_input("eval-warn");
+    let model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    let range = model["coordinates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["name"] == "knee_angle_r")
+        .unwrap()["range"]
+        .clone();
+    let lo = range[0].as_f64().unwrap();
+    let eval = |name: &str, input: &serde_json::Value| {
+        let file = dir.join(format!("{name}.json"));
+        std::fs::write(&file, serde_json::to_vec(input).unwrap()).unwrap();
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--json", "--input"])
+            .arg(&file)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        (String::from_utf8_lossy(&o.stderr).to_string(), v)
+    };
+    let (err, v) = eval("squat", &squat);
+    assert!(!err.contains("warning"), "{err}");
+    assert_eq!(v["warnings"], serde_json::json!([]));
+    let mut s = squat.clone();
+    s["state"]["/jointset/knee_r/knee_angle_r/value"] = (lo - 0.2).into();
+    s["state"]["/forceset/soleus_r/fiber_length"] = 1e-4.into();
+    let (err, v) = eval("outside", &s);
+    let w = v["warnings"].as_array().unwrap();
+    assert_eq!(w.len(), 2, "{w:?}");
+    let knee = format!("lies outside its range [{lo}, {}] rad", range[1]);
+    for text in [w[0].as_str().unwrap(), &err] {
+        assert!(
+            text.contains("/jointset/knee_r/knee_angle_r/value") && text.contains(&knee),
+            "{text}"
+        );
+    }
+    let fibre = w[1].as_str().unwrap();
+    assert!(
+        fibre.starts_with(
+            "/forceset/soleus_r/fiber_length = 0.0001 m lies below the minimum fibre length"
+        ),
+        "{fibre}"
+    );
+    assert!(
+        err.contains(fibre) && err.contains("outside.json: evaluation 0"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Integrator accuracies Simbody cannot take (it asserts at 1 and above)
 /// or that never finish are refused before the simulation, negative ones
 /// read as numbers, not flags; exit code 2 naming the field.
