@@ -916,6 +916,22 @@ fn simulate(
                     unread[..unread.len().min(10)].join(", ")
                 );
             }
+            // A file that starts at or after the run's end gives the run
+            // nothing but its first row.
+            if let Some(&t0) = c.time.first() {
+                if t0 >= st.t_max {
+                    return Err(leap::io::StoError::Column {
+                        file: p.clone(),
+                        column: "time".into(),
+                        reason: format!(
+                            "starts at {} s, not before the simulation's end t_max = {} s: nothing of it would be read but its first row (OpenSim's files are in seconds)",
+                            leap::io::readable(t0),
+                            leap::io::readable(st.t_max)
+                        ),
+                    }
+                    .into());
+                }
+            }
             StudyExcitation::Controls(c)
         }
         None => {
@@ -1000,6 +1016,16 @@ fn simulate(
                             "warning: the controls file covers {a:.3}–{b:.3} s of a push-off to {push_off:.3} s: outside that range its first and last rows are held"
                         );
                     }
+                }
+                // Times in milliseconds stretch a push-off a thousandfold:
+                // the run reads a sliver of the file's first rows.
+                let run_end = summary.liftoff_time_s.unwrap_or(st.t_max);
+                if b - a > 10.0 * run_end {
+                    eprintln!(
+                        "warning: the controls file spans {}–{} s, more than ten times the run (to {run_end:.3} s), which read only its start; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
+                        leap::io::readable(a),
+                        leap::io::readable(b)
+                    );
                 }
             }
             v["files"] = serde_json::json!(files

@@ -405,6 +405,67 @@ fn a_controls_file_that_stops_early_is_warned_of() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A controls file in milliseconds stretches the push-off a thousandfold
+/// and the run reads a sliver of its first rows: `leap simulate` warns of
+/// it, naming the unit. A file that starts at or after t_max gives the run
+/// only its first row, and is refused naming the file and its time column.
+#[test]
+fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
+    use leap::io::StoTable;
+    let out = tmp("ms_controls");
+    let full = std::path::Path::new("tests/data/controls/jump_optimal.sto");
+    let t = StoTable::read(full).unwrap();
+    let mut ms = t.clone();
+    ms.time.iter_mut().for_each(|x| *x *= 1000.0);
+    let ms_file = out.join("ms.sto");
+    ms.write_sto(&ms_file).unwrap();
+    let mut late = t.clone();
+    late.time.iter_mut().for_each(|x| *x += 0.5);
+    let late_file = out.join("late.sto");
+    late.write_sto(&late_file).unwrap();
+    let run = |file: &std::path::Path| {
+        leap()
+            .args([
+                "simulate",
+                "--integrator",
+                "DormandPrince",
+                "--t-max",
+                "0.5",
+                "--controls",
+            ])
+            .arg(file)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    let o = run(&ms_file);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let last = leap::io::readable(*ms.time.last().unwrap());
+    assert!(
+        err.contains(&format!(
+            "warning: the controls file spans 0–{last} s, more than ten times the run"
+        )) && err.contains("milliseconds"),
+        "{err}"
+    );
+    // The solution's own file raises no such warning.
+    let o = run(full);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("warning"), "{err}");
+    let o = run(&late_file);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{}: column 'time': starts at 0.5 s, not before the simulation's end t_max = 0.5 s",
+            late_file.display()
+        )),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 /// Every command with a `--model` finds the default model as `leap solve`
 /// does: `models/jumper.json` in the working directory, else leap's own.
 /// Run from a directory without it, `leap squat` prints the jumper's squat
