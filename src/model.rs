@@ -1380,7 +1380,7 @@ impl Model {
             check_gravity_down(&spec.gravity).map_err(|r| err("gravity".into(), r))?;
         }
         if !symmetry.is_empty() {
-            check_muscle_pairs(&spec.forces.muscles, &spec.symmetry)
+            check_muscle_pairs(&spec.forces.muscles, &spec.symmetry, &spec.joints)
                 .map_err(|(path, r)| err(path, r))?;
         }
         let model = Model {
@@ -1664,6 +1664,7 @@ fn check_gravity_down(g: &[f64; 3]) -> Result<(), String> {
 fn check_muscle_pairs(
     muscles: &[MuscleSpec],
     symmetry: &[[String; 2]],
+    joints: &[JointSpec],
 ) -> Result<(), (String, String)> {
     let index = |name: &str| muscles.iter().position(|m| m.name == name);
     for (i, m) in muscles.iter().enumerate() {
@@ -1693,7 +1694,7 @@ fn check_muscle_pairs(
             continue; // compared from its right partner
         }
         let l = &muscles[j];
-        if let Some((field, why)) = path_mirror_problem(&m.path, &l.path, symmetry) {
+        if let Some((field, why)) = path_mirror_problem(&m.path, &l.path, symmetry, joints) {
             return Err((
                 format!("forces.muscles[{j}].path{field}"),
                 format!(
@@ -1719,8 +1720,9 @@ fn check_muscle_pairs(
 
 /// Where and why a left muscle's path `left` is not the mirror image of
 /// its right partner's `right`, if it is not: the same kinds of points in
-/// the same order, on mirrored bodies (`<stem>_r` ↔ `<stem>_l`, a midline
-/// body itself), at mirrored locations (z negated), switched or moved by
+/// the same order, on mirrored bodies (the children of symmetry partners'
+/// joints and the bodies welded onto them, else by name: `<stem>_r` ↔
+/// `<stem>_l`, a midline body itself), at mirrored locations (z negated), switched or moved by
 /// symmetry partners over the same ranges and splines. The symmetric
 /// system evaluates only the right path; sampled path lengths
 /// (`StateEquation::new`) cannot see a conditional point whose range
@@ -1730,6 +1732,7 @@ fn path_mirror_problem(
     right: &[crate::path::PathPointSpec],
     left: &[crate::path::PathPointSpec],
     symmetry: &[[String; 2]],
+    joints: &[JointSpec],
 ) -> Option<(String, String)> {
     use crate::path::PathPointSpec as P;
     if right.len() != left.len() {
@@ -1738,10 +1741,55 @@ fn path_mirror_problem(
             format!("{} path points against {}", left.len(), right.len()),
         ));
     }
-    let mirror_body = |r: &str| match (r.strip_suffix("_r"), r.strip_suffix("_l")) {
-        (Some(stem), _) => format!("{stem}_l"),
-        (_, Some(stem)) => format!("{stem}_r"),
-        _ => r.to_string(),
+    // Bodies moved by symmetry partners are partners (whatever their
+    // names); the others pair by OpenSim's names, `<stem>_r` ↔ `<stem>_l`,
+    // a midline body with itself.
+    let child_of = |c: &str| {
+        joints.iter().find_map(|j| match j {
+            JointSpec::Pin {
+                coordinate, child, ..
+            }
+            | JointSpec::TranslatingHinge {
+                coordinate, child, ..
+            } if coordinate == c => Some(child.as_str()),
+            _ => None,
+        })
+    };
+    let mut by_joints: Vec<(&str, &str)> = symmetry
+        .iter()
+        .filter_map(|[r, l]| Some((child_of(r)?, child_of(l)?)))
+        .collect();
+    // A body welded onto one of a pair (calcn on talus) pairs with the
+    // body welded onto the other, where each is the only one.
+    let welded_onto = |p: &str| {
+        let mut w = joints.iter().filter_map(|j| match j {
+            JointSpec::Weld { parent, child, .. } if parent == p => Some(child.as_str()),
+            _ => None,
+        });
+        match (w.next(), w.next()) {
+            (Some(c), None) => Some(c),
+            _ => None,
+        }
+    };
+    let mut k = 0;
+    while k < by_joints.len() {
+        let (r, l) = by_joints[k];
+        if let (Some(a), Some(b)) = (welded_onto(r), welded_onto(l)) {
+            if !by_joints.iter().any(|&(x, y)| x == a || y == b) {
+                by_joints.push((a, b));
+            }
+        }
+        k += 1;
+    }
+    let mirror_body = |b: &str| {
+        if let Some(&(r, l)) = by_joints.iter().find(|(r, l)| *r == b || *l == b) {
+            return if r == b { l.to_string() } else { r.to_string() };
+        }
+        match (b.strip_suffix("_r"), b.strip_suffix("_l")) {
+            (Some(stem), _) => format!("{stem}_l"),
+            (_, Some(stem)) => format!("{stem}_r"),
+            _ => b.to_string(),
+        }
     };
     let partner = |c: &str| {
         symmetry

@@ -678,6 +678,64 @@ fn mirror_muscles_must_have_mirror_paths_and_the_error_names_the_point() {
     }
 }
 
+/// Mirror bodies are the children of symmetry partners' joints (and the
+/// bodies welded onto them), whatever their names: the jumper with its
+/// bodies renamed `femur_right`/`femur_left` loads, its static squat is the
+/// jumper's, and a left muscle on the wrong calcaneus (welded to the talus)
+/// is still refused, naming the mirror body.
+#[test]
+fn mirror_bodies_pair_by_joints_not_only_by_names() {
+    let v = jumper_json();
+    let rename = |n: &str| match (n.strip_suffix("_r"), n.strip_suffix("_l")) {
+        (Some(stem), _) => format!("{stem}_right"),
+        (_, Some(stem)) => format!("{stem}_left"),
+        _ => n.to_string(),
+    };
+    let mut w = v.clone();
+    for b in w["bodies"].as_array_mut().unwrap() {
+        b["name"] = rename(b["name"].as_str().unwrap()).into();
+    }
+    for j in w["joints"].as_array_mut().unwrap() {
+        for k in ["parent", "child"] {
+            j[k] = rename(j[k].as_str().unwrap()).into();
+        }
+    }
+    for m in w["forces"]["muscles"].as_array_mut().unwrap() {
+        for p in m["path"].as_array_mut().unwrap() {
+            p["body"] = rename(p["body"].as_str().unwrap()).into();
+        }
+    }
+    for sp in w["forces"]["contact"]["spheres"].as_array_mut().unwrap() {
+        sp["body"] = rename(sp["body"].as_str().unwrap()).into();
+    }
+    for st in w["stations"].as_array_mut().into_iter().flatten() {
+        st["body"] = rename(st["body"].as_str().unwrap()).into();
+    }
+    let squat = |v: &serde_json::Value| {
+        let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+        let (laws, eq) = leap::ode::StateEquation::opensim(&m, true).unwrap();
+        leap::squat::static_squat(&eq, &laws, &m.squat_pose().unwrap())
+            .unwrap()
+            .x
+    };
+    assert_eq!(squat(&w), squat(&v));
+    let l = muscle_index(&w, "med_gas_l");
+    let k = w["forces"]["muscles"][l]["path"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|p| p["body"] == "calcn_left")
+        .unwrap();
+    w["forces"]["muscles"][l]["path"][k]["body"] = "calcn_right".into();
+    let e = refused(&w);
+    assert_eq!(e.field(), format!("forces.muscles[{l}].path[{k}].body"));
+    assert!(
+        e.to_string()
+            .contains("body 'calcn_right' where the mirror of 'calcn_right' is 'calcn_left'"),
+        "{e}"
+    );
+}
+
 /// What OpenSim refuses or what the symmetric jump would drop unseen.
 #[test]
 fn flen_paths_of_conditional_points_duplicate_passive_torques_and_asymmetric_poses_are_refused() {
