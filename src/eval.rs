@@ -227,6 +227,12 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             e.to_string(),
         )
     })?;
+    if let Some((at, key)) = crate::model::duplicate_key(text) {
+        return Err(err(
+            at,
+            format!("key '{key}' given twice; a key may appear once in an object"),
+        ));
+    }
     let items: Vec<&serde_json::Value> = match &v {
         serde_json::Value::Array(a) => a.iter().collect(),
         other => vec![other],
@@ -243,6 +249,27 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             return Err(err(
                 place("(evaluation)"),
                 format!("expected an object with 'state' (or 'x') and 'excitation' (or 'u'), got {item}"),
+            ));
+        }
+        // `leap squat` prints its squat's residuals beside the state; they
+        // are not read. Any other key is a mistake (a misspelt 'state').
+        const SQUAT_KEYS: [&str; 3] = ["max_abs_qdd", "qp_iterations", "vertical_grf_bw"];
+        if let Some(k) = item
+            .as_object()
+            .into_iter()
+            .flatten()
+            .map(|(k, _)| k)
+            .find(|k| {
+                !["state", "x", "excitation", "u"].contains(&k.as_str())
+                    && !SQUAT_KEYS.contains(&k.as_str())
+            })
+        {
+            return Err(err(
+                place(k),
+                format!(
+                    "unknown key: an evaluation has 'state' (or 'x') and 'excitation' (or 'u'), and may keep {} from `leap squat`, which are not read",
+                    SQUAT_KEYS.join(", ")
+                ),
             ));
         }
         let mut given = Vec::new();

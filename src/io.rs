@@ -819,6 +819,17 @@ impl Controls {
                     column: format!("/forceset/{m}"),
                     reason: format!("missing: no excitation column for muscle '{m}'"),
                 })?;
+            // Two spellings of one muscle's column: one would be lost.
+            let given: Vec<&String> = names.iter().filter(|n| t.labels.contains(n)).collect();
+            if let [first, second, ..] = given[..] {
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: second.clone(),
+                    reason: format!(
+                        "holds the excitation of muscle '{m}', as column '{first}' does: keep one of them"
+                    ),
+                });
+            }
             for (r, row) in t.rows.iter().enumerate() {
                 let v = row[k];
                 if !v.is_finite() || !(0.0..=1.0).contains(&v) {

@@ -868,6 +868,18 @@ fn simulate(
     let out_dir = out
         .or_else(|| st.out.as_deref().map(rel))
         .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_OUTPUT_DIRECTORY));
+    let origin = study
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| "command line".into());
+    let where_ = format!("{origin}: ");
+    // The study's own values are checked as the file gives them, so that
+    // a bad value on the command line is not blamed on the file.
+    let overridden = integrator.is_some() || accuracy.is_some() || t_max.is_some();
+    if overridden && study.is_some() {
+        st.check(&origin)?;
+    }
+    let integrator_given = integrator.is_some();
     if let Some(i) = integrator {
         st.integrator = i;
     }
@@ -877,12 +889,23 @@ fn simulate(
     if let Some(t) = t_max {
         st.t_max = t;
     }
-    let origin = study
-        .as_ref()
-        .map(|p| p.display().to_string())
-        .unwrap_or_else(|| "command line".into());
-    let where_ = format!("{origin}: ");
-    let choice = st.check(&origin)?;
+    // A field the command line set is the command line's: its option.
+    let given = |field: &str| match field {
+        "integrator" => integrator_given,
+        "accuracy" => accuracy.is_some(),
+        "t_max" => t_max.is_some(),
+        _ => false,
+    };
+    let choice = st.check(&origin).map_err(|e| match e {
+        leap::study::StudyError::Field { field, reason, .. } if given(&field) => {
+            leap::study::StudyError::Field {
+                origin: "command line".into(),
+                field: format!("--{}", field.replace('_', "-")),
+                reason,
+            }
+        }
+        e => e,
+    })?;
     let mut files = leap::simulate::trajectory_files("jump").to_vec();
     files.push("jump_summary.json".into());
     leap::solve::check_result_files(&out_dir, &files)
@@ -916,18 +939,30 @@ fn simulate(
                     unread[..unread.len().min(10)].join(", ")
                 );
             }
-            // A file that starts at or after the run's end gives the run
-            // nothing but its first row.
-            if let Some(&t0) = c.time.first() {
-                if t0 >= st.t_max {
+            // A file of several rows that starts at or after the run's end,
+            // or ends at or before its start, gives the run nothing but one
+            // of its rows.
+            if let (Some(&t0), Some(&t1), true) = (c.time.first(), c.time.last(), c.time.len() > 1)
+            {
+                let reason = if t0 >= st.t_max {
+                    Some(format!(
+                        "starts at {} s, not before the simulation's end t_max = {} s: nothing of it would be read but its first row (OpenSim's files are in seconds)",
+                        leap::io::readable(t0),
+                        leap::io::readable(st.t_max)
+                    ))
+                } else if t1 <= 0.0 {
+                    Some(format!(
+                        "ends at {} s, not after the simulation's start at 0 s (the static squat): nothing of it would be read but its last row",
+                        leap::io::readable(t1)
+                    ))
+                } else {
+                    None
+                };
+                if let Some(reason) = reason {
                     return Err(leap::io::StoError::Column {
                         file: p.clone(),
                         column: "time".into(),
-                        reason: format!(
-                            "starts at {} s, not before the simulation's end t_max = {} s: nothing of it would be read but its first row (OpenSim's files are in seconds)",
-                            leap::io::readable(t0),
-                            leap::io::readable(st.t_max)
-                        ),
+                        reason,
                     }
                     .into());
                 }
@@ -1018,14 +1053,17 @@ fn simulate(
                     }
                 }
                 // Times in milliseconds stretch a push-off a thousandfold:
-                // the run reads a sliver of the file's first rows.
+                // the run ends before the file's second row.
                 let run_end = summary.liftoff_time_s.unwrap_or(st.t_max);
-                if b - a > 10.0 * run_end {
-                    eprintln!(
-                        "warning: the controls file spans {}–{} s, more than ten times the run (to {run_end:.3} s), which read only its start; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
-                        leap::io::readable(a),
-                        leap::io::readable(b)
-                    );
+                if let StudyExcitation::Controls(c) = &exc {
+                    if c.time.len() > 1 && c.time[0] <= 0.0 && c.time[1] >= run_end {
+                        eprintln!(
+                            "warning: the run ended at {run_end:.3} s, before the controls file's second row (t = {} s; the file spans {}–{} s): it read only the line between the first two rows; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
+                            leap::io::readable(c.time[1]),
+                            leap::io::readable(a),
+                            leap::io::readable(b)
+                        );
+                    }
                 }
             }
             v["files"] = serde_json::json!(files

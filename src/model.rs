@@ -287,13 +287,27 @@ struct JointFields {
     translation_y: Option<SplineData>,
 }
 
+/// Read from a string only: serde's enums also take `{"planar": null}`.
 #[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(try_from = "String")]
 enum JointType {
     Planar,
     Pin,
     TranslatingHinge,
     Weld,
+}
+
+impl TryFrom<String> for JointType {
+    type Error = String;
+    fn try_from(s: String) -> Result<Self, String> {
+        match s.as_str() {
+            "planar" => Ok(JointType::Planar),
+            "pin" => Ok(JointType::Pin),
+            "translating_hinge" => Ok(JointType::TranslatingHinge),
+            "weld" => Ok(JointType::Weld),
+            _ => Err(format!("unknown variant `{s}`, expected one of `planar`, `pin`, `translating_hinge`, `weld`")),
+        }
+    }
 }
 
 impl TryFrom<JointFields> for JointSpec {
@@ -601,6 +615,14 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
         }
     })?;
     de.end().map_err(|e| document(e.to_string()))?;
+    // serde refuses a struct's field given twice, but keeps the last key
+    // of a map (a pose's coordinate) without a word.
+    if let Some((path, key)) = duplicate_key(text) {
+        return Err(JsonError {
+            path,
+            reason: format!("key '{key}' given twice; a key may appear once in an object"),
+        });
+    }
     // serde fills a struct's fields by position from an array too
     // (`"mesh": [28, "trapezoidal"]`): where the parsed value is an object
     // and the text held an array, refuse it.
@@ -616,6 +638,97 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
         }
     }
     Ok(value)
+}
+
+/// The first key given twice in one object of the JSON document `text`:
+/// (the JSON path of the object, as serde_path_to_error writes it, or
+/// `(document)`; the key). serde_json keeps the last of them in a map (a
+/// pose, an evaluation's states) without a word. None also when `text` is
+/// not JSON (its parser says why).
+pub fn duplicate_key(text: &str) -> Option<(String, String)> {
+    use serde::de::{DeserializeSeed, MapAccess, SeqAccess, Visitor};
+    use std::cell::RefCell;
+    struct Walk<'a> {
+        path: String,
+        found: &'a RefCell<Option<(String, String)>>,
+    }
+    impl Walk<'_> {
+        fn at(&self, path: String) -> Self {
+            Walk {
+                path,
+                found: self.found,
+            }
+        }
+    }
+    impl<'de> DeserializeSeed<'de> for Walk<'_> {
+        type Value = ();
+        fn deserialize<D: serde::Deserializer<'de>>(self, d: D) -> Result<(), D::Error> {
+            d.deserialize_any(self)
+        }
+    }
+    impl<'de> Visitor<'de> for Walk<'_> {
+        type Value = ();
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("any JSON value")
+        }
+        fn visit_bool<E>(self, _: bool) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_i64<E>(self, _: i64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_u64<E>(self, _: u64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_f64<E>(self, _: f64) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_str<E>(self, _: &str) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_unit<E>(self) -> Result<(), E> {
+            Ok(())
+        }
+        fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<(), A::Error> {
+            let mut i = 0;
+            while seq
+                .next_element_seed(self.at(format!("{}[{i}]", self.path)))?
+                .is_some()
+            {
+                i += 1;
+            }
+            Ok(())
+        }
+        fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<(), A::Error> {
+            let mut seen = std::collections::HashSet::new();
+            while let Some(key) = map.next_key::<String>()? {
+                let path = if self.path.is_empty() {
+                    key.clone()
+                } else {
+                    format!("{}.{key}", self.path)
+                };
+                if !seen.insert(key.clone()) {
+                    let at = if self.path.is_empty() {
+                        "(document)".to_string()
+                    } else {
+                        self.path.clone()
+                    };
+                    *self.found.borrow_mut() = Some((at, key));
+                    return Err(serde::de::Error::custom("duplicate key"));
+                }
+                map.next_value_seed(self.at(path))?;
+            }
+            Ok(())
+        }
+    }
+    let found = RefCell::new(None);
+    let mut de = serde_json::Deserializer::from_str(text);
+    let _ = Walk {
+        path: String::new(),
+        found: &found,
+    }
+    .deserialize(&mut de);
+    found.into_inner()
 }
 
 /// Read an optional field that, when given, must hold a value: `null` is
@@ -1797,6 +1910,20 @@ fn path_mirror_problem(
             .find(|[r, _]| r == c)
             .map_or(c.to_string(), |[_, l]| l.clone())
     };
+    // Why a left point's coordinate `cb` is not the partner of the right
+    // one's `ca`: a midline coordinate (no pair in `symmetry`) drives both.
+    let coordinate_problem = |ca: &str, cb: &str| -> String {
+        if symmetry.iter().any(|[r, _]| r == ca) {
+            format!(
+                "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
+                partner(ca)
+            )
+        } else {
+            format!(
+                "coordinate '{cb}' where the right point's '{ca}' has no partner in `symmetry`, so both points would follow '{ca}' (if '{cb}' mirrors it, add [\"{ca}\", \"{cb}\"] to `symmetry`)"
+            )
+        }
+    };
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0);
     let same_knots =
         |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| close(*x, *y));
@@ -1851,13 +1978,7 @@ fn path_mirror_problem(
                     ));
                 }
                 if *cb != partner(ca) {
-                    return Some((
-                        at("coordinate"),
-                        format!(
-                            "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
-                            partner(ca)
-                        ),
-                    ));
+                    return Some((at("coordinate"), coordinate_problem(ca, cb)));
                 }
                 if ra != rb {
                     return Some((at("range"), format!("range {rb:?} against {ra:?}")));
@@ -1880,13 +2001,7 @@ fn path_mirror_problem(
                 },
             ) => {
                 if *cb != partner(ca) {
-                    return Some((
-                        at("coordinate"),
-                        format!(
-                            "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
-                            partner(ca)
-                        ),
-                    ));
+                    return Some((at("coordinate"), coordinate_problem(ca, cb)));
                 }
                 let zb_mirrored: Vec<f64> = zb.y.iter().map(|v| -v).collect();
                 for (f, same) in [

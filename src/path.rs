@@ -67,12 +67,27 @@ struct PathPointFields {
     z_location: Option<SplineData>,
 }
 
+/// Read from a string only: serde's enums also take `{"fixed": null}`.
 #[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(try_from = "String")]
 enum PathPointType {
     Fixed,
     Conditional,
     Moving,
+}
+
+impl TryFrom<String> for PathPointType {
+    type Error = String;
+    fn try_from(s: String) -> Result<Self, String> {
+        match s.as_str() {
+            "fixed" => Ok(PathPointType::Fixed),
+            "conditional" => Ok(PathPointType::Conditional),
+            "moving" => Ok(PathPointType::Moving),
+            _ => Err(format!(
+                "unknown variant `{s}`, expected one of `fixed`, `conditional`, `moving`"
+            )),
+        }
+    }
 }
 
 impl TryFrom<PathPointFields> for PathPointSpec {

@@ -898,8 +898,8 @@ impl SimulateStudy {
             return Err(err(
                 "t_max",
                 format!(
-                    "must be a time in (0, {MAX_T_MAX}] s (a jump lifts off and reaches its apex within about a second), got {:e}",
-                    self.t_max
+                    "must be a time in (0, {MAX_T_MAX}] s (a jump lifts off and reaches its apex within about a second), got {}",
+                    crate::io::readable(self.t_max)
                 ),
             ));
         }
@@ -914,6 +914,16 @@ impl SimulateStudy {
                     format!(
                         "must be a time ≥ 0 s (the simulation starts at 0), got {}",
                         bb.on_time
+                    ),
+                ));
+            }
+            if bb.on_time >= self.t_max {
+                return Err(err(
+                    "bang_bang.on_time",
+                    format!(
+                        "{} s is not before t_max = {} s: no muscle would switch on",
+                        crate::io::readable(bb.on_time),
+                        crate::io::readable(self.t_max)
                     ),
                 ));
             }

@@ -257,6 +257,11 @@ fn eval_refuses_inputs_outside_their_physical_range() {
             Box::new(|s| s["state"]["/jointset/knee_r/knee_angle_r/value"] = 1e6.into()),
             "at this state",
         ),
+        (
+            "misspelt",
+            Box::new(|s| s["states"] = s["state"].clone()),
+            "states: unknown key",
+        ),
     ];
     let eval = |name: &str, input: &serde_json::Value| {
         let file = dir.join(format!("{name}.json"));
@@ -282,6 +287,28 @@ fn eval_refuses_inputs_outside_their_physical_range() {
     // The squat itself is in range.
     let o = eval("ok", &squat);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // A key given twice (JSON readers keep one of them) is refused.
+    let text = serde_json::to_string(&squat).unwrap();
+    let twice = text.replacen(
+        "\"/forceset/add_long_r\":",
+        "\"/forceset/add_long_r\":5,\"/forceset/add_long_r\":",
+        1,
+    );
+    assert_ne!(twice, text);
+    let file = dir.join("twice.json");
+    std::fs::write(&file, twice).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["eval", "--input"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("twice.json: excitation: key '/forceset/add_long_r' given twice"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

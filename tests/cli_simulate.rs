@@ -267,6 +267,11 @@ fn nonsense_simulate_study_settings_name_the_field() {
         ),
         (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1e-2]"),
         (
+            r#"{"t_max": 0.5, "bang_bang": {"on_time": 0.5, "off_time": 0.6}}"#,
+            "bang_bang.on_time",
+            "0.5 s is not before t_max = 0.5 s: no muscle would switch on",
+        ),
+        (
             r#"{"controls": "tests/data/controls/jump_optimal.sto", "bang_bang": {"on_time": 0, "off_time": 0.3}}"#,
             "bang_bang",
             "given together with 'controls'",
@@ -280,6 +285,28 @@ fn nonsense_simulate_study_settings_name_the_field() {
         assert!(
             err.contains(&format!("{}: {field}: ", study.display())) && err.contains(reason),
             "{json}: {err}"
+        );
+    }
+    // A bad value on the command line is the command line's, not the
+    // (good) study's.
+    let study = out.join("study.json");
+    std::fs::write(
+        &study,
+        serde_json::json!({"model": model, "accuracy": 1e-5, "t_max": 1.0}).to_string(),
+    )
+    .unwrap();
+    for (option, value, reason) in [
+        ("--accuracy", "NaN", "must be positive, got NaN"),
+        ("--t-max", "0", "must be a time in (0, 10] s"),
+        ("--integrator", "Foo", "unknown integrator 'Foo'"),
+    ] {
+        let err = refused(
+            simulate_study(&study, &out.join("results")).args([option, value]),
+            option,
+        );
+        assert!(
+            err.contains(&format!("command line: {option}: {reason}")),
+            "{option}: {err}"
         );
     }
     std::fs::remove_dir_all(&out).ok();
@@ -405,10 +432,12 @@ fn a_controls_file_that_stops_early_is_warned_of() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// A controls file in milliseconds stretches the push-off a thousandfold
-/// and the run reads a sliver of its first rows: `leap simulate` warns of
-/// it, naming the unit. A file that starts at or after t_max gives the run
-/// only its first row, and is refused naming the file and its time column.
+/// A controls file in milliseconds stretches the push-off a thousandfold:
+/// the run ends before its second row, and `leap simulate` warns of it,
+/// naming the unit (a file in seconds with a long tail is not warned of).
+/// A file that starts at or after t_max, or ends at or before 0, gives the
+/// run one of its rows only, and is refused naming the file and its time
+/// column.
 #[test]
 fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
     use leap::io::StoTable;
@@ -442,27 +471,56 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
     let o = run(&ms_file);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    let last = leap::io::readable(*ms.time.last().unwrap());
+    // As written (16 significant digits) and read back.
+    let ms = StoTable::read(&ms_file).unwrap();
+    let (second, last) = (
+        leap::io::readable(ms.time[1]),
+        leap::io::readable(*ms.time.last().unwrap()),
+    );
     assert!(
         err.contains(&format!(
-            "warning: the controls file spans 0–{last} s, more than ten times the run"
+            "before the controls file's second row (t = {second} s; the file spans 0–{last} s)"
         )) && err.contains("milliseconds"),
         "{err}"
     );
-    // The solution's own file raises no such warning.
-    let o = run(full);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && !err.contains("warning"), "{err}");
-    let o = run(&late_file);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains(&format!(
-            "{}: column 'time': starts at 0.5 s, not before the simulation's end t_max = 0.5 s",
-            late_file.display()
-        )),
-        "{err}"
-    );
+    // The solution's own file raises no such warning, nor does it with a
+    // long tail in seconds (its last row held to 3.5 s).
+    let mut tail = t.clone();
+    tail.time.push(3.5);
+    tail.rows.push(t.rows.last().unwrap().clone());
+    let tail_file = out.join("tail.sto");
+    tail.write_sto(&tail_file).unwrap();
+    for file in [full, tail_file.as_path()] {
+        let o = run(file);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success() && !err.contains("warning"), "{err}");
+    }
+    // Files the run would read one row of: one starting at t_max, one
+    // ending before 0.
+    let mut early = t.clone();
+    let end = *t.time.last().unwrap();
+    early.time.iter_mut().for_each(|x| *x += -0.25 - end);
+    *early.time.last_mut().unwrap() = -0.25;
+    let early_file = out.join("early.sto");
+    early.write_sto(&early_file).unwrap();
+    for (file, reason) in [
+        (
+            &late_file,
+            "starts at 0.5 s, not before the simulation's end t_max = 0.5 s",
+        ),
+        (
+            &early_file,
+            "ends at -0.25 s, not after the simulation's start at 0 s",
+        ),
+    ] {
+        let o = run(file);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!("{}: column 'time': {reason}", file.display())),
+            "{err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&out);
 }
 

@@ -165,6 +165,25 @@ fn broken_controls_name_file_column_and_reason() {
             "{msg}"
         );
     }
+    // Two spellings of one muscle's column (Moco's and OpenSim 3's): one
+    // would be lost, whichever comes first.
+    for (a, b) in [
+        ("/forceset/soleus_r", "soleus_r"),
+        ("soleus_r.excitation", "/forceset/soleus_r"),
+    ] {
+        let text =
+            format!("endheader\ntime\t{a}\tvas_int_r\t{b}\n0\t0.5\t0.5\t1\n0.1\t0.5\t0.5\t1\n");
+        let t = StoTable::parse(&text, Path::new("two.sto")).unwrap();
+        let e =
+            Controls::from_table(&t, Path::new("two.sto"), &["soleus_r", "vas_int_r"]).unwrap_err();
+        // Named in the order of the spellings: Moco's first.
+        let other = if a == "/forceset/soleus_r" { b } else { a };
+        let msg = e.to_string();
+        assert!(
+            msg.contains(&format!("two.sto: column '{other}': holds the excitation of muscle 'soleus_r', as column '/forceset/soleus_r' does")),
+            "{msg}"
+        );
+    }
     let e = StoTable::parse("a=b\ntime\tx\n0\t1\n", Path::new("no_end.sto")).unwrap_err();
     assert!(e.to_string().contains("endheader"));
     let e = StoTable::parse("endheader\nt\tx\n0\t1\n", Path::new("bad.sto")).unwrap_err();

@@ -323,6 +323,54 @@ fn a_model_file_is_one_json_object() {
 }
 
 /// `leap eval` reports contact forces per sphere name.
+/// A key given twice in one object is refused where serde would keep the
+/// last one without a word (a map: a pose's coordinate), naming the object
+/// and the key.
+#[test]
+fn a_key_given_twice_is_refused() {
+    let text = std::fs::read_to_string("models/jumper.json").unwrap();
+    let v = jumper_json();
+    let tilt = v["poses"]["squat"]["pelvis_tilt"].to_string();
+    let at = text.find("\"pelvis_tilt\":").unwrap();
+    // The squat pose's pelvis_tilt, given again (0.9) before the first.
+    let (first, _) = text.split_at(at);
+    assert!(first.contains("\"squat\""), "the squat pose comes first");
+    let twice = format!("{first}\"pelvis_tilt\": 0.9, {}", &text[at..]);
+    let e = Model::from_json_str(&twice, "m.json").unwrap_err();
+    assert_eq!(e.field(), "poses.squat", "{e}");
+    assert!(
+        e.to_string().contains("key 'pelvis_tilt' given twice"),
+        "{e} ({tilt})"
+    );
+    assert_eq!(
+        leap::model::duplicate_key(r#"{"a": [{"b": 1, "c": {"d": 1, "d": 2}}], "e": 1}"#),
+        Some(("a[0].c".to_string(), "d".to_string()))
+    );
+    assert_eq!(
+        leap::model::duplicate_key(r#"{"a": 1, "b": {"a": 1}, "a": 2}"#),
+        Some(("(document)".to_string(), "a".to_string()))
+    );
+    assert_eq!(
+        leap::model::duplicate_key(r#"{"a": {"a": [1, {"a": 1}]}}"#),
+        None
+    );
+}
+
+/// A left path point that follows a coordinate without a pair in
+/// `symmetry` (the knee pair left out) is refused with that reason and
+/// the pair to add.
+#[test]
+fn a_missing_symmetry_pair_is_named_as_missing() {
+    let mut v = jumper_json();
+    let pairs = v["symmetry"].as_array_mut().unwrap();
+    pairs.retain(|p| p[0] != "knee_angle_r");
+    let e = refused(&v);
+    assert!(
+        e.to_string().contains("coordinate 'knee_angle_l' where the right point's 'knee_angle_r' has no partner in `symmetry`, so both points would follow 'knee_angle_r' (if 'knee_angle_l' mirrors it, add [\"knee_angle_r\", \"knee_angle_l\"] to `symmetry`)"),
+        "{e}"
+    );
+}
+
 /// Joints and path points are objects tagged by `type`: a field is
 /// checked against the type (taken, not taken) and an error inside one
 /// names the field's own path.
@@ -412,6 +460,31 @@ fn joint_and_path_point_fields_are_checked_against_their_type() {
         let e = refused(&w);
         assert_eq!(e.field(), field, "{e}");
         assert!(e.to_string().contains(reason), "{e}");
+    }
+    // A type is a string: not null, and not serde's map form of an enum
+    // (`{"pin": null}`), which serde's own enums take.
+    for (at, field) in [
+        (format!("/joints/{pin}"), format!("joints[{pin}].type")),
+        (
+            format!("{pp}/{fixed}"),
+            format!("forces.muscles[{l}].path[{fixed}].type"),
+        ),
+    ] {
+        let name = v.pointer(&at).unwrap()["type"].clone();
+        for (bad, kind) in [
+            (serde_json::Value::Null, "null"),
+            (serde_json::json!({ name.as_str().unwrap(): null }), "map"),
+        ] {
+            let mut w = v.clone();
+            w.pointer_mut(&at).unwrap()["type"] = bad;
+            let e = refused(&w);
+            assert_eq!(e.field(), field, "{e}");
+            assert!(
+                e.to_string()
+                    .contains(&format!("invalid type: {kind}, expected a string")),
+                "{e}"
+            );
+        }
     }
     // Written back, a model reads as itself.
     let file: leap::model::ModelFile = serde_json::from_value(v.clone()).unwrap();
