@@ -862,9 +862,26 @@ fn simulate(
             PathBuf::from(s)
         }
     };
+    // A file the study names (relative to it) is checked as the study's
+    // field, as `leap solve`'s study checks its model and guess.
+    let study_file = |field: &str, name: &Option<String>, what: &str| -> Result<Option<PathBuf>> {
+        let Some(p) = name.as_deref().map(rel) else {
+            return Ok(None);
+        };
+        if let (Some(s), Some(why)) = (&study, leap::io::input_file_problem(&p)) {
+            anyhow::bail!("{}: {field}: {what} '{}' {why}", s.display(), p.display());
+        }
+        Ok(Some(p))
+    };
     // What the study omits is relative to the working directory.
-    let model_path = model_file(model.or_else(|| st.model.as_deref().map(rel)));
-    let controls_path = controls.or_else(|| st.controls.as_deref().map(rel));
+    let model_path = model_file(match model {
+        Some(m) => Some(m),
+        None => study_file("model", &st.model, "model file")?,
+    });
+    let controls_path = match controls {
+        Some(c) => Some(c),
+        None => study_file("controls", &st.controls, "controls file")?,
+    };
     let out_dir = out
         .or_else(|| st.out.as_deref().map(rel))
         .unwrap_or_else(|| PathBuf::from(leap::study::DEFAULT_OUTPUT_DIRECTORY));

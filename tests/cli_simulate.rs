@@ -267,6 +267,11 @@ fn nonsense_simulate_study_settings_name_the_field() {
         ),
         (r#"{"accuracy": 1}"#, "accuracy", "[1e-12, 1e-2]"),
         (
+            r#"{"controls": "nope.sto"}"#,
+            "controls",
+            "nope.sto' not found",
+        ),
+        (
             r#"{"t_max": 0.5, "bang_bang": {"on_time": 0.5, "off_time": 0.6}}"#,
             "bang_bang.on_time",
             "0.5 s is not before t_max = 0.5 s: no muscle would switch on",
