@@ -944,7 +944,8 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
 /// A solve stopped before the body leaves the ground (the reduced jump by
 /// shooting after one iteration: the bang-bang guess still pushes at t_f)
 /// says so: `lifted_off` false in the JSON, the ground contact time t_f's,
-/// and a warning under the summary table.
+/// and a warning under the summary table, beside the one that its
+/// constraints are violated beyond the paper's 1e-3.
 #[test]
 fn a_solve_stopped_on_the_ground_says_so() {
     let out = fresh_dir("on_ground");
@@ -976,9 +977,17 @@ fn a_solve_stopped_on_the_ground_says_so() {
         "{v}"
     );
     assert_eq!(v["ground_contact_time_s"], v["final_time_s"], "{v}");
+    let violation = v["max_constraint_violation"].as_f64().unwrap();
     let o = run(false);
     let text = String::from_utf8_lossy(&o.stdout);
     assert!(text.contains("still on the ground at t_f"), "{text}");
+    // Its metrics are an infeasible iterate's, which the summary says.
+    assert!(
+        text.contains(&format!(
+            "warning: the returned iterate violates its constraints by {violation:.2e}, above the paper's 1e-3"
+        )),
+        "{text}"
+    );
     let _ = std::fs::remove_dir_all(&out);
 }
 
