@@ -606,6 +606,10 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
                 inner.line(),
                 inner.column()
             )
+        } else if inner.to_string().starts_with("duplicate field") {
+            // serde names a field given under two of its names (an alias)
+            // by its own name only.
+            format!("{inner} (a field is given once, under one of its names)")
         } else {
             inner.to_string()
         };

@@ -1690,6 +1690,16 @@ mod tests {
         // Moco's property name and leap's own both read.
         let c = resolved(r#"{"problem": {"final_time_bounds": [0.3, 0.35]}}"#);
         assert_eq!(c.problem.final_time_bounds, [0.3, 0.35]);
+        // Both names at once: the field is named with the reason.
+        let (field, reason) = field_error(
+            r#"{"problem": {"time_final_bounds": [0.3, 0.35], "final_time_bounds": [0.3, 0.35]}}"#,
+        );
+        assert_eq!(field, "problem");
+        assert!(
+            reason.starts_with("duplicate field `time_final_bounds`")
+                && reason.ends_with("(a field is given once, under one of its names)"),
+            "{reason}"
+        );
         // One value fixes t_f, as in Moco.
         let c = resolved(r#"{"problem": {"time_final_bounds": [0.3]}}"#);
         assert_eq!(c.problem.final_time_bounds, [0.3, 0.3]);
