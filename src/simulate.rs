@@ -708,7 +708,8 @@ pub fn check_integrator_accuracy(
     {
         if accuracy < MIN_FIXED_STEP {
             return Err(format!(
-                "ExplicitEuler's fixed step must be at least {MIN_FIXED_STEP:e} s, got {accuracy:e}: a million steps to each second of motion already take over a minute"
+                "ExplicitEuler's fixed step must be at least {MIN_FIXED_STEP:e} s, got {}: a million steps to each second of motion already take over a minute",
+                crate::io::readable(accuracy)
             ));
         }
         if accuracy > MAX_FIXED_STEP {
@@ -730,11 +731,13 @@ pub fn check_integrator_accuracy(
         )
     {
         return Err(format!(
-            "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {accuracy:e}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)"
+            "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)",
+            crate::io::readable(accuracy)
         ));
     } else if !(MIN_ACCURACY..=MAX_ACCURACY).contains(&accuracy) {
         return Err(format!(
-            "must be a relative error tolerance in [{MIN_ACCURACY:e}, {MAX_ACCURACY:e}], got {accuracy:e}: below {MIN_ACCURACY:e} the error control works on rounding error and the steps shrink without end; above {MAX_ACCURACY:e} the jump is off by centimetres (bang-bang at 1e-1: 16.1 cm instead of 23.5)"
+            "must be a relative error tolerance in [{MIN_ACCURACY:e}, {MAX_ACCURACY:e}], got {}: below {MIN_ACCURACY:e} the error control works on rounding error and the steps shrink without end; above {MAX_ACCURACY:e} the jump is off by centimetres (bang-bang at 1e-1: 16.1 cm instead of 23.5)",
+            crate::io::readable(accuracy)
         ));
     }
     Ok(())

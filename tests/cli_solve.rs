@@ -623,7 +623,7 @@ fn studies_that_would_abort_or_be_misread_are_refused_before_the_solve() {
             "fc_acc1",
             r#"{"model": "MODEL", "forward_check": {"accuracy": 1}}"#,
             "forward_check.accuracy",
-            "must be a relative error tolerance in [1e-12, 1e-2], got 1e0",
+            "must be a relative error tolerance in [1e-12, 1e-2], got 1",
         ),
         (
             "fc_acc_tiny",
