@@ -48,9 +48,10 @@ pub struct EvalReport {
     pub com_position: [f64; 3],
     pub com_velocity: [f64; 3],
     /// What makes this state unusual, though OpenSim evaluates it too: a
-    /// coordinate outside its range (the passive torques grow
-    /// exponentially beyond it), a fibre shorter than its minimum length
-    /// (held there, as OpenSim's Thelen muscle holds it).
+    /// coordinate outside its range (where no motion of the model goes,
+    /// and a passive torque's exponential may be far beyond its fitted
+    /// values), a fibre shorter than its minimum length (held there, as
+    /// OpenSim's Thelen muscle holds it).
     pub warnings: Vec<String>,
 }
 

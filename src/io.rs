@@ -799,7 +799,9 @@ impl Controls {
     /// have a column; values must be finite and in [0, 1]; time must
     /// increase strictly. A column of a left muscle `<stem>_l` not among
     /// `muscles`, whose right partner `<stem>_r` is (the symmetric system
-    /// carries both by the right one), must equal the right one's.
+    /// carries both by the right one), must equal the right one's. A
+    /// muscle's excitation in two columns (`/forceset/<m>` and `<m>`) is
+    /// refused: one of them would be lost.
     pub fn from_file(path: &Path, muscles: &[&str]) -> Result<Self, StoError> {
         let t = StoTable::read(path)?;
         Self::from_table(&t, path, muscles)

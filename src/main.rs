@@ -868,6 +868,10 @@ fn simulate(
         let Some(p) = name.as_deref().map(rel) else {
             return Ok(None);
         };
+        // An empty name is refused as such by the study's check.
+        if name.as_deref().is_some_and(|n| n.trim().is_empty()) {
+            return Ok(Some(p));
+        }
         if let (Some(s), Some(why)) = (&study, leap::io::input_file_problem(&p)) {
             anyhow::bail!("{}: {field}: {what} '{}' {why}", s.display(), p.display());
         }
@@ -906,19 +910,39 @@ fn simulate(
     if let Some(t) = t_max {
         st.t_max = t;
     }
-    // A field the command line set is the command line's: its option.
-    let given = |field: &str| match field {
-        "integrator" => integrator_given,
-        "accuracy" => accuracy.is_some(),
-        "t_max" => t_max.is_some(),
-        _ => false,
-    };
+    // A field the command line set is the command line's: its option. With
+    // a study whose own values passed, any error is the options' doing:
+    // named as theirs, with the study's field they clash with.
+    let options: Vec<&str> = [
+        ("integrator", integrator_given),
+        ("accuracy", accuracy.is_some()),
+        ("t_max", t_max.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(f, g)| g.then_some(f))
+    .collect();
+    let flag = |f: &str| format!("--{}", f.replace('_', "-"));
     let choice = st.check(&origin).map_err(|e| match e {
-        leap::study::StudyError::Field { field, reason, .. } if given(&field) => {
+        leap::study::StudyError::Field { field, reason, .. }
+            if options.contains(&field.as_str()) =>
+        {
             leap::study::StudyError::Field {
                 origin: "command line".into(),
-                field: format!("--{}", field.replace('_', "-")),
+                field: flag(&field),
                 reason,
+            }
+        }
+        leap::study::StudyError::Field { field, reason, .. }
+            if study.is_some() && !options.is_empty() =>
+        {
+            leap::study::StudyError::Field {
+                origin: "command line".into(),
+                field: options
+                    .iter()
+                    .map(|f| flag(f))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                reason: format!("with {origin}'s {field}: {reason}"),
             }
         }
         e => e,
@@ -1070,12 +1094,17 @@ fn simulate(
                     }
                 }
                 // Times in milliseconds stretch a push-off a thousandfold:
-                // the run ends before the file's second row.
-                let run_end = summary.liftoff_time_s.unwrap_or(st.t_max);
+                // the file spans more than any run, and the push-off ends
+                // before its second row.
                 if let StudyExcitation::Controls(c) = &exc {
-                    if c.time.len() > 1 && c.time[0] <= 0.0 && c.time[1] >= run_end {
+                    let (end, what) = match summary.liftoff_time_s {
+                        Some(t) => (t, "the push-off ended (lift-off)"),
+                        None => (st.t_max, "the run ended (t_max)"),
+                    };
+                    if c.time.len() > 1 && c.time[0] <= 0.0 && c.time[1] >= end && b - a > MAX_T_MAX
+                    {
                         eprintln!(
-                            "warning: the run ended at {run_end:.3} s, before the controls file's second row (t = {} s; the file spans {}–{} s): it read only the line between the first two rows; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
+                            "warning: {what} at {end:.3} s, before the controls file's second row (t = {} s; the file spans {}–{} s, longer than any jump): it read only the line between the first two rows; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
                             leap::io::readable(c.time[1]),
                             leap::io::readable(a),
                             leap::io::readable(b)

@@ -593,6 +593,14 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
             return Err(document(reason));
         }
     }
+    // serde keeps the last key of a map (a pose's coordinate) without a
+    // word; a struct's field given twice is refused here too, as a key.
+    if let Some((path, key)) = duplicate_key(text) {
+        return Err(JsonError {
+            path,
+            reason: format!("key '{key}' given twice; a key may appear once in an object"),
+        });
+    }
     let mut de = serde_json::Deserializer::from_str(text);
     let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let path = e.path().to_string();
@@ -607,9 +615,12 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
                 inner.column()
             )
         } else if inner.to_string().starts_with("duplicate field") {
-            // serde names a field given under two of its names (an alias)
-            // by its own name only.
-            format!("{inner} (a field is given once, under one of its names)")
+            // Each key is given once (`duplicate_key`): this is a field
+            // given under two of its names (an alias), which serde names by
+            // its own name only.
+            let text = inner.to_string();
+            let (what, at) = text.split_at(text.rfind(" at line ").unwrap_or(text.len()));
+            format!("{what}, under two of its names; give it once{at}")
         } else {
             inner.to_string()
         };
@@ -619,14 +630,6 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
         }
     })?;
     de.end().map_err(|e| document(e.to_string()))?;
-    // serde refuses a struct's field given twice, but keeps the last key
-    // of a map (a pose's coordinate) without a word.
-    if let Some((path, key)) = duplicate_key(text) {
-        return Err(JsonError {
-            path,
-            reason: format!("key '{key}' given twice; a key may appear once in an object"),
-        });
-    }
     // serde fills a struct's fields by position from an array too
     // (`"mesh": [28, "trapezoidal"]`): where the parsed value is an object
     // and the text held an array, refuse it.
@@ -1921,6 +1924,10 @@ fn path_mirror_problem(
             format!(
                 "coordinate '{cb}' where the right point's '{ca}' has the partner '{}'",
                 partner(ca)
+            )
+        } else if let Some([r, _]) = symmetry.iter().find(|[_, l]| l == ca) {
+            format!(
+                "coordinate '{cb}' where the right point follows the left coordinate '{ca}' (the partner of '{r}'): a right muscle's points follow right or midline coordinates"
             )
         } else {
             format!(

@@ -1697,7 +1697,7 @@ mod tests {
         assert_eq!(field, "problem");
         assert!(
             reason.starts_with("duplicate field `time_final_bounds`")
-                && reason.ends_with("(a field is given once, under one of its names)"),
+                && reason.contains(", under two of its names; give it once at line 1"),
             "{reason}"
         );
         // One value fixes t_f, as in Moco.

@@ -272,6 +272,11 @@ fn nonsense_simulate_study_settings_name_the_field() {
             "nope.sto' not found",
         ),
         (
+            r#"{"controls": " "}"#,
+            "controls",
+            "empty: name a controls file",
+        ),
+        (
             r#"{"t_max": 0.5, "bang_bang": {"on_time": 0.5, "off_time": 0.6}}"#,
             "bang_bang.on_time",
             "0.5 s is not before t_max = 0.5 s: no muscle would switch on",
@@ -314,6 +319,23 @@ fn nonsense_simulate_study_settings_name_the_field() {
             "{option}: {err}"
         );
     }
+    // An option that clashes with a (good) study field is named, with it.
+    std::fs::write(
+        &study,
+        serde_json::json!({"model": model, "t_max": 1.0, "bang_bang": {"on_time": 0.5, "off_time": 0.6}}).to_string(),
+    )
+    .unwrap();
+    let err = refused(
+        simulate_study(&study, &out.join("results")).args(["--t-max", "0.4"]),
+        "clash",
+    );
+    assert!(
+        err.contains(&format!(
+            "command line: --t-max: with {}'s bang_bang.on_time: 0.5 s is not before t_max = 0.4 s",
+            study.display()
+        )),
+        "{err}"
+    );
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -484,7 +506,7 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
     );
     assert!(
         err.contains(&format!(
-            "before the controls file's second row (t = {second} s; the file spans 0–{last} s)"
+            "before the controls file's second row (t = {second} s; the file spans 0–{last} s, longer than any jump)"
         )) && err.contains("milliseconds"),
         "{err}"
     );
@@ -495,10 +517,32 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
     tail.rows.push(t.rows.last().unwrap().clone());
     let tail_file = out.join("tail.sto");
     tail.write_sto(&tail_file).unwrap();
-    for file in [full, tail_file.as_path()] {
+    // Nor does a ramp of two rows in seconds, whose second row lies after
+    // lift-off.
+    let ramp_file = out.join("ramp.sto");
+    std::fs::write(
+        &ramp_file,
+        std::fs::read_to_string(full)
+            .unwrap()
+            .lines()
+            .take_while(|l| *l != "endheader")
+            .chain(["endheader".to_string().as_str()])
+            .map(|l| format!("{l}\n"))
+            .collect::<String>()
+            + &format!("time\t{}\n", t.labels.join("\t"))
+            + &format!("0\t{}\n", vec!["0.01"; t.labels.len()].join("\t"))
+            + &format!("0.5\t{}\n", vec!["1"; t.labels.len()].join("\t")),
+    )
+    .unwrap();
+    for file in [full, tail_file.as_path(), ramp_file.as_path()] {
         let o = run(file);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert!(o.status.success() && !err.contains("warning"), "{err}");
+        assert!(
+            o.status.success() && !err.contains("controls file"),
+            "{err}"
+        );
+        // (The ramp does not lift off by t_max, which is warned of.)
+        assert_eq!(err.contains("warning"), file == ramp_file, "{err}");
     }
     // Files the run would read one row of: one starting at t_max, one
     // ending before 0.

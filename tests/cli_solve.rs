@@ -984,7 +984,7 @@ fn a_solve_stopped_on_the_ground_says_so() {
     // Its metrics are an infeasible iterate's, which the summary says.
     assert!(
         text.contains(&format!(
-            "warning: the returned iterate violates its constraints by {violation:.2e}, above the paper's 1e-3"
+            "warning: the returned iterate violates a constraint by {violation:.2e}, above the paper's 1e-3"
         )),
         "{text}"
     );

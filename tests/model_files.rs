@@ -322,7 +322,6 @@ fn a_model_file_is_one_json_object() {
     }
 }
 
-/// `leap eval` reports contact forces per sphere name.
 /// A key given twice in one object is refused where serde would keep the
 /// last one without a word (a map: a pose's coordinate), naming the object
 /// and the key.
@@ -358,9 +357,28 @@ fn a_key_given_twice_is_refused() {
 
 /// A left path point that follows a coordinate without a pair in
 /// `symmetry` (the knee pair left out) is refused with that reason and
-/// the pair to add.
+/// the pair to add; a right point that follows a left coordinate is
+/// refused as such.
 #[test]
 fn a_missing_symmetry_pair_is_named_as_missing() {
+    // A right point on the left knee (and its mirror on the right one).
+    let mut v = jumper_json();
+    let (r, l) = (
+        muscle_index(&v, "rect_fem_r"),
+        muscle_index(&v, "rect_fem_l"),
+    );
+    assert_eq!(
+        v["forces"]["muscles"][r]["path"][1]["coordinate"],
+        "knee_angle_r"
+    );
+    v["forces"]["muscles"][r]["path"][1]["coordinate"] = "knee_angle_l".into();
+    v["forces"]["muscles"][l]["path"][1]["coordinate"] = "knee_angle_r".into();
+    let e = refused(&v);
+    assert_eq!(e.field(), format!("forces.muscles[{l}].path[1].coordinate"));
+    assert!(
+        e.to_string().contains("the right point follows the left coordinate 'knee_angle_l' (the partner of 'knee_angle_r')"),
+        "{e}"
+    );
     let mut v = jumper_json();
     let pairs = v["symmetry"].as_array_mut().unwrap();
     pairs.retain(|p| p[0] != "knee_angle_r");
@@ -496,6 +514,7 @@ fn joint_and_path_point_fields_are_checked_against_their_type() {
     );
 }
 
+/// `leap eval` reports contact forces per sphere name.
 #[test]
 fn contact_spheres_need_distinct_names_and_at_least_one() {
     let mut v = jumper_json();
