@@ -288,7 +288,7 @@ struct JointFields {
 }
 
 /// Read from a string only: serde's enums also take `{"planar": null}`.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(try_from = "String")]
 enum JointType {
     Planar,
@@ -297,30 +297,29 @@ enum JointType {
     Weld,
 }
 
+const JOINT_TYPES: [(&str, JointType); 4] = [
+    ("planar", JointType::Planar),
+    ("pin", JointType::Pin),
+    ("translating_hinge", JointType::TranslatingHinge),
+    ("weld", JointType::Weld),
+];
+
 impl TryFrom<String> for JointType {
     type Error = String;
     fn try_from(s: String) -> Result<Self, String> {
-        match s.as_str() {
-            "planar" => Ok(JointType::Planar),
-            "pin" => Ok(JointType::Pin),
-            "translating_hinge" => Ok(JointType::TranslatingHinge),
-            "weld" => Ok(JointType::Weld),
-            _ => Err(format!("unknown variant `{s}`, expected one of `planar`, `pin`, `translating_hinge`, `weld`")),
-        }
+        variant_named(&s, &JOINT_TYPES)
     }
 }
 
 impl TryFrom<JointFields> for JointSpec {
     type Error = String;
     fn try_from(j: JointFields) -> Result<Self, String> {
-        let (kind, takes): (&str, &[&str]) = match j.kind {
-            JointType::Planar => ("planar", &["coordinates"]),
-            JointType::Pin => ("pin", &["coordinate"]),
-            JointType::TranslatingHinge => (
-                "translating_hinge",
-                &["coordinate", "translation_x", "translation_y"],
-            ),
-            JointType::Weld => ("weld", &[]),
+        let kind = variant_name(j.kind, &JOINT_TYPES);
+        let takes: &[&str] = match j.kind {
+            JointType::Planar => &["coordinates"],
+            JointType::Pin => &["coordinate"],
+            JointType::TranslatingHinge => &["coordinate", "translation_x", "translation_y"],
+            JointType::Weld => &[],
         };
         crate::model::variant_fields(
             &format!("a {kind} joint"),
@@ -736,6 +735,33 @@ pub fn duplicate_key(text: &str) -> Option<(String, String)> {
     }
     .deserialize(&mut de);
     found.into_inner()
+}
+
+/// The variant of a `type` tag named `s`, from the (name, variant) table
+/// of its enum, with serde's message for an unknown one.
+pub(crate) fn variant_named<T: Copy>(s: &str, variants: &[(&str, T)]) -> Result<T, String> {
+    variants
+        .iter()
+        .find(|(n, _)| *n == s)
+        .map(|&(_, v)| v)
+        .ok_or_else(|| {
+            let names: Vec<String> = variants.iter().map(|(n, _)| format!("`{n}`")).collect();
+            format!(
+                "unknown variant `{s}`, expected one of {}",
+                names.join(", ")
+            )
+        })
+}
+
+/// The name of `variant` in its enum's (name, variant) table.
+pub(crate) fn variant_name<T: PartialEq>(
+    variant: T,
+    variants: &[(&'static str, T)],
+) -> &'static str {
+    variants
+        .iter()
+        .find(|(_, v)| *v == variant)
+        .map_or("?", |(n, _)| n)
 }
 
 /// Read an optional field that, when given, must hold a value: `null` is

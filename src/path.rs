@@ -68,7 +68,7 @@ struct PathPointFields {
 }
 
 /// Read from a string only: serde's enums also take `{"fixed": null}`.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(try_from = "String")]
 enum PathPointType {
     Fixed,
@@ -76,30 +76,27 @@ enum PathPointType {
     Moving,
 }
 
+const PATH_POINT_TYPES: [(&str, PathPointType); 3] = [
+    ("fixed", PathPointType::Fixed),
+    ("conditional", PathPointType::Conditional),
+    ("moving", PathPointType::Moving),
+];
+
 impl TryFrom<String> for PathPointType {
     type Error = String;
     fn try_from(s: String) -> Result<Self, String> {
-        match s.as_str() {
-            "fixed" => Ok(PathPointType::Fixed),
-            "conditional" => Ok(PathPointType::Conditional),
-            "moving" => Ok(PathPointType::Moving),
-            _ => Err(format!(
-                "unknown variant `{s}`, expected one of `fixed`, `conditional`, `moving`"
-            )),
-        }
+        crate::model::variant_named(&s, &PATH_POINT_TYPES)
     }
 }
 
 impl TryFrom<PathPointFields> for PathPointSpec {
     type Error = String;
     fn try_from(p: PathPointFields) -> Result<Self, String> {
-        let (kind, takes): (&str, &[&str]) = match p.kind {
-            PathPointType::Fixed => ("fixed", &["location"]),
-            PathPointType::Conditional => ("conditional", &["location", "coordinate", "range"]),
-            PathPointType::Moving => (
-                "moving",
-                &["coordinate", "x_location", "y_location", "z_location"],
-            ),
+        let kind = crate::model::variant_name(p.kind, &PATH_POINT_TYPES);
+        let takes: &[&str] = match p.kind {
+            PathPointType::Fixed => &["location"],
+            PathPointType::Conditional => &["location", "coordinate", "range"],
+            PathPointType::Moving => &["coordinate", "x_location", "y_location", "z_location"],
         };
         crate::model::variant_fields(
             &format!("a {kind} path point"),
