@@ -876,6 +876,37 @@ impl Controls {
         })
     }
 
+    /// Check that a run from 0 to `t_max` reads more than one row of a file
+    /// of several rows (read from `path`): it must not start at or after
+    /// `t_max`, nor end at or before 0. A single row is a constant, held
+    /// throughout.
+    pub fn check_run(&self, path: &Path, t_max: f64) -> Result<(), StoError> {
+        let (Some(&t0), Some(&t1)) = (self.time.first(), self.time.last()) else {
+            return Ok(());
+        };
+        let reason = if self.time.len() < 2 {
+            return Ok(());
+        } else if t0 >= t_max {
+            format!(
+                "starts at {} s, not before the simulation's end t_max = {} s: nothing of it would be read but its first row (OpenSim's files are in seconds)",
+                readable(t0),
+                readable(t_max)
+            )
+        } else if t1 <= 0.0 {
+            format!(
+                "ends at {} s, not after the simulation's start at 0 s (the static squat): nothing of it would be read but its last row",
+                readable(t1)
+            )
+        } else {
+            return Ok(());
+        };
+        Err(StoError::Column {
+            file: path.into(),
+            column: "time".into(),
+            reason,
+        })
+    }
+
     /// Excitations at time `t` into `out`.
     pub fn at(&self, t: f64, out: &mut [f64]) {
         let n = self.time.len();

@@ -980,34 +980,7 @@ fn simulate(
                     unread[..unread.len().min(10)].join(", ")
                 );
             }
-            // A file of several rows that starts at or after the run's end,
-            // or ends at or before its start, gives the run nothing but one
-            // of its rows.
-            if let (Some(&t0), Some(&t1), true) = (c.time.first(), c.time.last(), c.time.len() > 1)
-            {
-                let reason = if t0 >= st.t_max {
-                    Some(format!(
-                        "starts at {} s, not before the simulation's end t_max = {} s: nothing of it would be read but its first row (OpenSim's files are in seconds)",
-                        leap::io::readable(t0),
-                        leap::io::readable(st.t_max)
-                    ))
-                } else if t1 <= 0.0 {
-                    Some(format!(
-                        "ends at {} s, not after the simulation's start at 0 s (the static squat): nothing of it would be read but its last row",
-                        leap::io::readable(t1)
-                    ))
-                } else {
-                    None
-                };
-                if let Some(reason) = reason {
-                    return Err(leap::io::StoError::Column {
-                        file: p.clone(),
-                        column: "time".into(),
-                        reason,
-                    }
-                    .into());
-                }
-            }
+            c.check_run(p, st.t_max)?;
             StudyExcitation::Controls(c)
         }
         None => {
