@@ -105,6 +105,22 @@ fn of_model(model: &Model, e: impl std::fmt::Display) -> SolveError {
     }
 }
 
+/// The bang-bang guess's integration failed: for a DeGrooteFregly2016Muscle
+/// model, say why it fails and what works instead.
+fn bang_bang_failure(model: &Model, method: Method, e: impl std::fmt::Display) -> SolveError {
+    if model.muscle_model != crate::model::MuscleModel::DeGrooteFregly2016Muscle {
+        return of_model(model, e);
+    }
+    let instead = match method {
+        Method::Collocation => "collocation states them as implicit force balances and solves from a guess file (--guess FILE: a solution of the same model with Thelen2003Muscle, say)",
+        Method::Shooting => "direct shooting integrates them at every evaluation; solve by collocation from a guess file instead (--method collocation --guess FILE: a solution of the same model with Thelen2003Muscle, say)",
+    };
+    of_model(
+        model,
+        format!("{e}: DeGrooteFregly2016Muscle's explicit fibre dynamics are too stiff to integrate through the jump (a tendon below its slack length pushes, and the inverted force-velocity curve grows exponentially; OpenSim 4.6's own explicit integration of this model stops too); {instead}"),
+    )
+}
+
 /// Create the results directory `dir` (and its parents), with an error
 /// that says what stands in the way (the OS's own, "File exists", does not
 /// say that a regular file has the directory's name).
@@ -447,7 +463,9 @@ pub fn run(
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
-            let (mut v, s) = tr.bang_bang_guess().map_err(|e| of_model(&model, e))?;
+            let (mut v, s) = tr
+                .bang_bang_guess()
+                .map_err(|e| bang_bang_failure(&model, Method::Collocation, e))?;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 of_model(
                     &model,
@@ -459,7 +477,9 @@ pub fn run(
         }
         GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang jump, resampled onto the mesh");
-            let (v, s) = tr.bang_bang_guess().map_err(|e| of_model(&model, e))?;
+            let (v, s) = tr
+                .bang_bang_guess()
+                .map_err(|e| bang_bang_failure(&model, Method::Collocation, e))?;
             (v, "bang-bang-resampled".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) if config.integrate_guess => {
@@ -591,7 +611,9 @@ fn run_shooting(
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang | GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang excitations at the nodes");
-            let (v, s) = sh.bang_bang_guess().map_err(|e| of_model(model, e))?;
+            let (v, s) = sh
+                .bang_bang_guess()
+                .map_err(|e| bang_bang_failure(model, Method::Shooting, e))?;
             (v, "bang-bang".to_string(), Some(s.jump_height_m))
         }
         GuessChoice::File(p) => {

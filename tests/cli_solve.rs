@@ -1196,12 +1196,21 @@ fn activation_smoothing_is_refused_for_de_groote_muscles() {
     );
     // Without the field the model is read and the solve goes on to its
     // guess (where, in leap's fibre-length state, the bang-bang jump's
-    // inverted force–velocity curve overflows; README, "The model").
+    // inverted force–velocity curve overflows; README, "The model"): the
+    // error says why and names what works, for each method.
     std::fs::write(&study, r#"{"model": "dg.json"}"#).unwrap();
-    let err = refused(&["solve", study.to_str().unwrap()]);
-    assert!(
-        err.contains("initial guess") && !err.contains("activation_dynamics_smoothing"),
-        "{err}"
-    );
+    for (method, instead) in [
+        ("collocation", "collocation states them as implicit force balances and solves from a guess file (--guess FILE"),
+        ("shooting", "direct shooting integrates them at every evaluation; solve by collocation from a guess file instead (--method collocation --guess FILE"),
+    ] {
+        let err = refused(&["solve", study.to_str().unwrap(), "--method", method]);
+        assert!(
+            err.contains("initial guess")
+                && !err.contains("activation_dynamics_smoothing")
+                && err.contains("DeGrooteFregly2016Muscle's explicit fibre dynamics are too stiff to integrate through the jump")
+                && err.contains(instead),
+            "{method}: {err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
