@@ -267,7 +267,7 @@ enum BenchCommand {
     /// at the published optimum, iterations, median wall time and its split.
     Sqp {
         /// Runs of the whole set per mode (the median is reported).
-        #[arg(long, default_value_t = 5, value_parser = at_least_one)]
+        #[arg(long, default_value_t = 5, value_parser = bench_repeats)]
         repeats: usize,
         #[arg(long)]
         json: bool,
@@ -278,7 +278,7 @@ enum BenchCommand {
     SqpJump {
         #[command(flatten)]
         model: ModelFile,
-        #[arg(long, default_value_t = 3, value_parser = at_least_one)]
+        #[arg(long, default_value_t = 3, value_parser = bench_iterations)]
         iterations: usize,
         /// "exact" (the jump's default) or "bfgs".
         #[arg(long, default_value = "exact")]
@@ -297,7 +297,7 @@ enum BenchCommand {
         model: ModelFile,
         /// SQP iterations per method (a shooting iteration takes about 1 s
         /// with forward sensitivities, 23 s with central differences).
-        #[arg(long, default_value_t = 3, value_parser = at_least_one)]
+        #[arg(long, default_value_t = 3, value_parser = bench_iterations)]
         iterations: usize,
         #[arg(long)]
         json: bool,
@@ -309,7 +309,7 @@ enum BenchCommand {
         /// Study file (as `leap solve`).
         study: Option<PathBuf>,
         /// Solves per mesh (the medians over all runs are reported).
-        #[arg(long, default_value_t = 1, value_parser = at_least_one)]
+        #[arg(long, default_value_t = 1, value_parser = bench_repeats)]
         repeats: usize,
         /// Hessian mode (as `leap solve --hessian`; default: the study's).
         #[arg(long)]
@@ -831,6 +831,29 @@ fn at_least_one(s: &str) -> Result<usize, String> {
         Ok(n) if n >= 1 => Ok(n),
         Ok(_) => Err("must be at least 1".into()),
         Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The most runs a benchmark repeats (`--repeats`): a median needs a few;
+/// a thousand default solves take about six hours.
+const MAX_BENCH_REPEATS: usize = 1000;
+/// The most SQP iterations a benchmark times (`--iterations`): a shooting
+/// iteration takes about a second, 23 s with central differences.
+const MAX_BENCH_ITERATIONS: usize = 10_000;
+
+fn bench_repeats(s: &str) -> Result<usize, String> {
+    at_most(at_least_one(s)?, MAX_BENCH_REPEATS)
+}
+
+fn bench_iterations(s: &str) -> Result<usize, String> {
+    at_most(at_least_one(s)?, MAX_BENCH_ITERATIONS)
+}
+
+fn at_most(n: usize, limit: usize) -> Result<usize, String> {
+    if n > limit {
+        Err(format!("at most {limit}, got {n}"))
+    } else {
+        Ok(n)
     }
 }
 

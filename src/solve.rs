@@ -158,6 +158,78 @@ pub fn result_files(name: &str) -> Vec<String> {
     files
 }
 
+/// Remove the result files of a solve named `name` in `dir` that this run
+/// did not write (`written`): an earlier run's forward check beside a
+/// solution without one would be read as this solution's. Returns the
+/// files removed.
+fn remove_stale_results(
+    dir: &Path,
+    name: &str,
+    written: &[PathBuf],
+) -> Result<Vec<String>, SolveError> {
+    let mut removed = Vec::new();
+    for f in result_files(name) {
+        let p = dir.join(&f);
+        if written.contains(&p) || !p.is_file() {
+            continue;
+        }
+        std::fs::remove_file(&p).map_err(|e| SolveError::Io {
+            file: p.clone(),
+            error: std::io::Error::new(
+                e.kind(),
+                format!("cannot remove this result file of an earlier run, which this run did not write: {e}"),
+            ),
+        })?;
+        removed.push(p.display().to_string());
+    }
+    Ok(removed)
+}
+
+/// Remove the QPs an earlier run dumped into `dir` (`qp_iter*.json`), so
+/// that the directory holds this run's only. Returns how many.
+fn remove_stale_qp_dumps(dir: &Path) -> Result<usize, SolveError> {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Ok(0);
+    };
+    let mut n = 0;
+    for e in entries.flatten() {
+        let p = e.path();
+        let is_dump = p
+            .file_name()
+            .and_then(|f| f.to_str())
+            .is_some_and(|f| f.starts_with("qp_iter") && f.ends_with(".json"));
+        if is_dump && p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| SolveError::Io {
+                file: p.clone(),
+                error: std::io::Error::new(
+                    e.kind(),
+                    format!("--dump-qps: cannot remove this QP of an earlier run: {e}"),
+                ),
+            })?;
+            n += 1;
+        }
+    }
+    Ok(n)
+}
+
+/// With `--dump-qps`, remove an earlier run's QPs before the SQP dumps
+/// this run's, and say so.
+fn clear_qp_dumps(
+    settings: &crate::sqp::SqpSettings,
+    progress: &mut dyn FnMut(&str),
+) -> Result<(), SolveError> {
+    if let Some(q) = &settings.qp_dump_dir {
+        let n = remove_stale_qp_dumps(q)?;
+        if n > 0 {
+            progress(&format!(
+                "--dump-qps: removed {n} QPs of an earlier run from {}",
+                q.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Whether a directory stands where one of `files` should be written in
 /// `dir` (an error naming it), found before anything is computed: a result
 /// file that cannot be written had lost the summary after a whole solve.
@@ -355,6 +427,10 @@ pub struct SolveReport {
     pub shooting: Option<ShootingSummary>,
     pub model: String,
     pub output_files: Vec<String>,
+    /// Result files of this study's name that an earlier run left in the
+    /// results directory and this run did not write (the forward check's,
+    /// with the check off), removed so that none is read as this run's.
+    pub removed_stale_files: Vec<String>,
 }
 
 /// IPOPT's return status for an SQP status (what Moco writes as `status`).
@@ -519,6 +595,7 @@ pub fn run(
         tr.num_constraints(),
         settings.max_iterations
     ));
+    clear_qp_dumps(&settings, progress)?;
     let result = crate::sqp::solve_from(&mut tr, &guess, &settings);
     let mut report = evaluate(&mut tr, &result);
     report.guess = guess_name;
@@ -641,6 +718,7 @@ fn run_shooting(
         sh.jacobian_structure().len(),
         settings.max_iterations
     ));
+    clear_qp_dumps(&settings, progress)?;
     let result = crate::sqp::solve_from(&mut sh, &guess, &settings);
     let violation = match crate::nlp::constraint_violations(&mut sh, &result.x) {
         Ok(v) => v.into_iter().fold(0.0, f64::max),
@@ -735,6 +813,7 @@ fn finish(
     }
     let p = dir.join(format!("{name}_summary.json"));
     files.push(p.clone());
+    report.removed_stale_files = remove_stale_results(dir, name, &files)?;
     report.output_files = files.iter().map(|f| f.display().to_string()).collect();
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
     crate::io::write_output(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
@@ -1011,6 +1090,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         shooting: None,
         model: String::new(),
         output_files: Vec::new(),
+        removed_stale_files: Vec::new(),
     }
 }
 
@@ -1561,6 +1641,12 @@ impl SolveReport {
                 "  initial guess {}: jump height {:.2} cm\n",
                 self.guess,
                 100.0 * g
+            ));
+        }
+        if !self.removed_stale_files.is_empty() {
+            s.push_str(&format!(
+                "  removed result files of an earlier run that this run did not write: {}\n",
+                self.removed_stale_files.join(", ")
             ));
         }
         s

@@ -105,6 +105,24 @@ fn bad_command_line_values_name_the_option() {
             "--backend",
         ),
         (vec!["solve", "no_such_study.json"], "no_such_study.json"),
+        // A benchmark's runs and iterations are bounded (an unbounded
+        // count ran for hours without a word).
+        (
+            vec!["bench", "solve", "--repeats", "99999999999"],
+            "--repeats <REPEATS>': at most 1000, got 99999999999",
+        ),
+        (
+            vec!["bench", "sqp", "--repeats", "1001"],
+            "--repeats <REPEATS>': at most 1000, got 1001",
+        ),
+        (
+            vec!["bench", "methods", "--iterations", "10001"],
+            "--iterations <ITERATIONS>': at most 10000, got 10001",
+        ),
+        (
+            vec!["bench", "sqp-jump", "--iterations", "0"],
+            "--iterations <ITERATIONS>': must be at least 1",
+        ),
     ] {
         let err = refused(&args);
         assert!(err.contains(what), "{args:?}: {err}");
@@ -599,6 +617,63 @@ fn dump_qps_writes_each_iteration_qp_into_out() {
     assert!(
         matches!(status, SolverStatus::Solved | SolverStatus::AlmostSolved),
         "{status:?}"
+    );
+    let _ = std::fs::remove_dir_all(&cwd);
+    let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A solve into a results directory an earlier solve of the same name
+/// wrote removes the earlier result files it does not write itself (the
+/// forward check's, with the check off; the QPs of iterations it did not
+/// reach) and names them: none may be read as this run's.
+#[test]
+fn a_reused_results_directory_keeps_no_stale_result_files() {
+    let (cwd, out, _) =
+        small_solve_in_fresh_dirs("stale", &["--max-iterations", "2", "--dump-qps"]);
+    let forward = [
+        "jump_forward_states.sto",
+        "jump_forward_controls.sto",
+        "jump_forward_grf.mot",
+    ];
+    let before = files_in(&out);
+    for f in forward {
+        assert!(before.contains(&f.to_string()), "{f} not in {before:?}");
+    }
+    assert!(files_in(&out.join("qps")).contains(&"qp_iter1_qp.json".to_string()));
+    let (_, v) = small_solve(
+        &cwd,
+        &out,
+        &["--max-iterations", "1", "--no-forward-check", "--dump-qps"],
+    );
+    let after = files_in(&out);
+    let removed: Vec<String> = v["removed_stale_files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap().to_string())
+        .collect();
+    for f in forward {
+        assert!(!after.contains(&f.to_string()), "{f} still in {after:?}");
+        assert!(
+            removed.contains(&out.join(f).display().to_string()),
+            "{f} not named in {removed:?}"
+        );
+    }
+    assert_eq!(removed.len(), forward.len(), "{removed:?}");
+    for f in [
+        "jump_solution.sto",
+        "jump_grf.mot",
+        "jump_history.csv",
+        "jump_summary.json",
+    ] {
+        assert!(after.contains(&f.to_string()), "{f} not in {after:?}");
+    }
+    // The second solve takes one iteration: iteration 0's QPs only.
+    let qps = files_in(&out.join("qps"));
+    assert!(
+        qps.contains(&"qp_iter0_qp.json".to_string())
+            && qps.iter().all(|f| f.starts_with("qp_iter0_")),
+        "{qps:?}"
     );
     let _ = std::fs::remove_dir_all(&cwd);
     let _ = std::fs::remove_dir_all(&out);
