@@ -431,6 +431,9 @@ pub struct SolveReport {
     /// results directory and this run did not write (the forward check's,
     /// with the check off), removed so that none is read as this run's.
     pub removed_stale_files: Vec<String>,
+    /// Columns of the guess file that look like excitations but name no
+    /// muscle of the model (a misspelt muscle): not read.
+    pub unread_guess_columns: Vec<String>,
 }
 
 /// IPOPT's return status for an SQP status (what Moco writes as `status`).
@@ -536,6 +539,7 @@ pub fn run(
     ));
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
+    let mut unread_guess = Vec::new();
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
@@ -563,7 +567,8 @@ pub fn run(
                 "initial guess: {}, its excitations integrated on the mesh",
                 p.display()
             ));
-            let mut v = guess_from_excitations_file(&tr, p)?;
+            let (mut v, unread) = guess_from_file_with(&tr, p, false)?;
+            unread_guess = unread;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 SolveError::Guess {
                     file: p.clone(),
@@ -575,7 +580,9 @@ pub fn run(
         }
         GuessChoice::File(p) => {
             progress(&format!("initial guess: {}", p.display()));
-            (guess_from_file(&tr, p)?, p.display().to_string(), None)
+            let (v, unread) = guess_from_file_with(&tr, p, true)?;
+            unread_guess = unread;
+            (v, p.display().to_string(), None)
         }
     };
     // The results directory only once the problem is set up.
@@ -601,6 +608,7 @@ pub fn run(
     report.guess = guess_name;
     report.guess_jump_height_m = guess_jump;
     report.guess_mesh_integration = mesh_integration;
+    report.unread_guess_columns = unread_guess;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
 
@@ -685,6 +693,7 @@ fn run_shooting(
             config.ignored.join(", ")
         ));
     }
+    let mut unread_guess = Vec::new();
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang | GuessChoice::BangBangResampled => {
             progress("initial guess: the bang-bang excitations at the nodes");
@@ -698,11 +707,9 @@ fn run_shooting(
                 "initial guess: the excitations of {}",
                 p.display()
             ));
-            (
-                shooting_guess_from_file(&sh, p)?,
-                p.display().to_string(),
-                None,
-            )
+            let (v, unread) = shooting_guess_from_file(&sh, p)?;
+            unread_guess = unread;
+            (v, p.display().to_string(), None)
         }
     };
     create_results_dir(dir).map_err(|error| SolveError::Io {
@@ -738,6 +745,7 @@ fn run_shooting(
     };
     let mut report = shooting_report(&ocp, &sh, &result, &nodes, &traj, violation);
     report.guess = guess_name;
+    report.unread_guess_columns = unread_guess;
     report.guess_jump_height_m = guess_jump;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
@@ -823,30 +831,26 @@ fn finish(
 /// A shooting guess from a controls or solution file: its excitations
 /// sampled at the nodes, t_f its last time (within the final time's
 /// bounds).
-fn shooting_guess_from_file(sh: &Shooting, path: &Path) -> Result<Vec<f64>, SolveError> {
+fn shooting_guess_from_file(
+    sh: &Shooting,
+    path: &Path,
+) -> Result<(Vec<f64>, Vec<String>), SolveError> {
     let eq = &sh.ocp.eq;
     let muscles: Vec<&str> = eq
         .muscles
         .iter()
         .map(|&m| eq.model.muscles[m].spec.name.as_str())
         .collect();
-    let controls = Controls::from_file(path, &muscles)?;
-    let tf = *controls.time.last().unwrap_or(&0.0);
-    let [t_min, t_max] = sh.ocp.options.final_time_bounds;
-    if !(t_min..=t_max).contains(&tf) {
-        return Err(SolveError::Guess {
-            file: path.into(),
-            reason: format!(
-                "time: ends at {} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)",
-                crate::io::readable(tf)
-            ),
-        });
-    }
-    sh.point_from_source(&controls, tf)
+    let t = StoTable::read(path)?;
+    let controls = Controls::from_table(&t, path, &muscles)?;
+    let tf = guess_final_time(path, &controls.time, sh.ocp.options.final_time_bounds)?;
+    let v = sh
+        .point_from_source(&controls, tf)
         .map_err(|e| SolveError::Guess {
             file: path.into(),
             reason: e.to_string(),
-        })
+        })?;
+    Ok((v, unread_guess_columns(&eq.model, &t)))
 }
 
 /// The report of a shooting solve, from its last iterate integrated with
@@ -1091,6 +1095,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         model: String::new(),
         output_files: Vec::new(),
         removed_stale_files: Vec::new(),
+        unread_guess_columns: Vec::new(),
     }
 }
 
@@ -1164,7 +1169,7 @@ pub fn solution_table(
 /// and strictly increasing over at least 2 rows, every value used finite,
 /// activations in [0, 1] and fibre lengths positive.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, true)
+    guess_from_file_with(tr, path, true).map(|(v, _)| v)
 }
 
 /// The guess of a file's excitations alone (a solution, or a controls file
@@ -1174,14 +1179,16 @@ pub fn guess_from_excitations_file(
     tr: &Transcription,
     path: &Path,
 ) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, false)
+    guess_from_file_with(tr, path, false).map(|(v, _)| v)
 }
 
+/// The guess and the file's excitation-like columns that name no muscle of
+/// the model (not read; [`crate::io::unread_excitation_columns`]).
 fn guess_from_file_with(
     tr: &Transcription,
     path: &Path,
     with_states: bool,
-) -> Result<Vec<f64>, SolveError> {
+) -> Result<(Vec<f64>, Vec<String>), SolveError> {
     // Without states, the file's state columns are not read, nor checked.
     let t = if with_states {
         crate::io::read_states(&tr.ocp.eq, path)?
@@ -1194,12 +1201,7 @@ fn guess_from_file_with(
         file: path.into(),
         reason,
     };
-    if t.time[0].abs() > 1e-9 {
-        return Err(bad(format!(
-            "time: starts at {} s; a guess must start at 0 (the squat)",
-            t.time[0]
-        )));
-    }
+    let tf = guess_final_time(path, &t.time, tr.ocp.options.final_time_bounds)?;
     let eq = &tr.ocp.eq;
     let missing = "missing (a guess needs every state and control column; with integrate_guess (--integrate-guess) the control columns alone)";
     let states = if with_states {
@@ -1214,16 +1216,43 @@ fn guess_from_file_with(
         .map(|&m| eq.model.muscles[m].spec.name.as_str())
         .collect();
     let controls = Controls::from_table(&t, path, &muscles)?.values;
-    let tf = *t.time.last().unwrap_or(&0.0);
-    let [t_min, t_max] = tr.ocp.options.final_time_bounds;
+    let v = tr
+        .guess_from_trajectory(&t.time, &states, &controls, tf)
+        .map_err(|e| bad(e.to_string()))?;
+    Ok((v, unread_guess_columns(&eq.model, &t)))
+}
+
+/// A guess file's t_f, its last time: the file must start at 0 (the
+/// squat) and end within the final time's `bounds`.
+fn guess_final_time(path: &Path, time: &[f64], bounds: [f64; 2]) -> Result<f64, SolveError> {
+    let bad = |reason: String| SolveError::Guess {
+        file: path.into(),
+        reason,
+    };
+    let (Some(&t0), Some(&tf)) = (time.first(), time.last()) else {
+        return Err(bad("time: no rows".into()));
+    };
+    if t0.abs() > 1e-9 {
+        return Err(bad(format!(
+            "time: starts at {} s; a guess must start at 0 (the squat)",
+            crate::io::readable(t0)
+        )));
+    }
+    let [t_min, t_max] = bounds;
     if !(t_min..=t_max).contains(&tf) {
         return Err(bad(format!(
             "time: ends at {} s, outside the final time's bounds [{t_min}, {t_max}] s (the study's problem.time_final_bounds; the guess's last time is its t_f)",
-                crate::io::readable(tf)
+            crate::io::readable(tf)
         )));
     }
-    tr.guess_from_trajectory(&t.time, &states, &controls, tf)
-        .map_err(|e| bad(e.to_string()))
+    Ok(tf)
+}
+
+/// The columns of a guess file that look like excitations but name no
+/// muscle of the model (either leg): a misspelt muscle, read by nothing.
+fn unread_guess_columns(model: &Model, t: &StoTable) -> Vec<String> {
+    let all: Vec<&str> = model.muscles.iter().map(|m| m.spec.name.as_str()).collect();
+    crate::io::unread_excitation_columns(t, &all)
 }
 
 /// Integrate the node excitations (linear between nodes, held after t_f)
@@ -1641,6 +1670,14 @@ impl SolveReport {
                 "  initial guess {}: jump height {:.2} cm\n",
                 self.guess,
                 100.0 * g
+            ));
+        }
+        if !self.unread_guess_columns.is_empty() {
+            s.push_str(&format!(
+                "  warning: {}: {} column(s) name no muscle of the model and are not read: {}\n",
+                self.guess,
+                self.unread_guess_columns.len(),
+                self.unread_guess_columns.join(", ")
             ));
         }
         if !self.removed_stale_files.is_empty() {

@@ -679,6 +679,73 @@ fn a_reused_results_directory_keeps_no_stale_result_files() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A guess file's column that looks like an excitation but names no muscle
+/// of the model (a misspelt muscle) is named as not read, in the JSON and
+/// the text summary, by both methods (as `leap simulate` warns of it); a
+/// shooting guess, like a collocation one, must start at 0 (the squat).
+#[test]
+fn a_guess_files_unread_columns_are_named_and_shooting_guesses_start_at_zero() {
+    let misspelt = "tests/data/controls/jumper_misspelt.sto";
+    for (tag, method, extra) in [
+        ("unread_colloc", "collocation", vec!["--integrate-guess"]),
+        ("unread_shoot", "shooting", vec![]),
+    ] {
+        let out = fresh_dir(tag);
+        let mut a = vec!["--method", method, "--guess", misspelt];
+        a.extend(extra);
+        a.extend(["--num-mesh-intervals", "2", "--max-iterations", "1"]);
+        let v = solve_json(&args(&a), &out);
+        assert_eq!(
+            v["unread_guess_columns"],
+            serde_json::json!(["/forceset/solues_r"]),
+            "{method}: {v}"
+        );
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .arg("solve")
+            .args(&a)
+            .args(["--no-forward-check", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            text.contains(&format!("warning: {misspelt}: 1 column(s) name no muscle of the model and are not read: /forceset/solues_r")),
+            "{method}: {text}"
+        );
+        let _ = std::fs::remove_dir_all(&out);
+    }
+    let dir = fresh_dir("shifted_guess");
+    let shifted = dir.join("shifted.sto");
+    let text = std::fs::read_to_string(misspelt).unwrap();
+    let (head, body) = text.split_once("endheader\n").unwrap();
+    let mut lines = body.lines();
+    let mut shifted_text = format!("{head}endheader\n{}\n", lines.next().unwrap());
+    for l in lines {
+        let (t, rest) = l.split_once('\t').unwrap();
+        let t: f64 = t.parse().unwrap();
+        shifted_text.push_str(&format!("{}\t{rest}\n", t + 0.1));
+    }
+    std::fs::write(&shifted, shifted_text).unwrap();
+    let err = refused(&[
+        "solve",
+        "--method",
+        "shooting",
+        "--guess",
+        shifted.to_str().unwrap(),
+        "--num-mesh-intervals",
+        "2",
+    ]);
+    assert!(
+        err.contains(&format!(
+            "{}: time: starts at 0.1 s; a guess must start at 0 (the squat)",
+            shifted.display()
+        )),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// A study file in a fresh directory, with the default model's absolute
 /// path in place of `MODEL`.
 fn study_file(tag: &str, json: &str) -> PathBuf {
