@@ -1075,6 +1075,12 @@ fn simulate(
         Ok((summary, traj)) => {
             let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
             let mut v = serde_json::to_value(&summary)?;
+            // Without a lift-off there is no jump: the JSON says so as the
+            // text does ("-"), and keeps the COM's change apart.
+            if summary.liftoff_time_s.is_none() {
+                v["jump_height_m"] = serde_json::Value::Null;
+                v["final_com_height_change_m"] = serde_json::json!(summary.jump_height_m);
+            }
             if let Some((a, b)) = controls_range {
                 v["controls_time_range"] = serde_json::json!([a, b]);
                 v["unread_controls_columns"] = serde_json::json!(unread);
@@ -1092,16 +1098,25 @@ fn simulate(
                 // Times in milliseconds stretch a push-off a thousandfold:
                 // the file spans more than any run, and the push-off ends
                 // before its second row.
+                // Without a lift-off, such a file's push-off was read a
+                // thousandfold slowed: the same hint.
                 if let StudyExcitation::Controls(c) = &exc {
                     let (end, what) = match summary.liftoff_time_s {
                         Some(t) => (t, "the push-off ended (lift-off)"),
                         None => (st.t_max, "the run ended (t_max)"),
                     };
-                    if c.time.len() > 1 && c.time[0] <= 0.0 && c.time[1] >= end && b - a > MAX_T_MAX
-                    {
+                    let long = c.time.len() > 1 && c.time[0] <= 0.0 && b - a > MAX_T_MAX;
+                    if long && c.time[1] >= end {
                         eprintln!(
                             "warning: {what} at {end:.3} s, before the controls file's second row (t = {} s; the file spans {}–{} s, longer than any jump): it read only the line between the first two rows; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
                             leap::io::readable(c.time[1]),
+                            leap::io::readable(a),
+                            leap::io::readable(b)
+                        );
+                    } else if long && summary.liftoff_time_s.is_none() {
+                        eprintln!(
+                            "warning: no lift-off before t_max = {} s, and the controls file spans {}–{} s, longer than any jump: OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
+                            leap::io::readable(st.t_max),
                             leap::io::readable(a),
                             leap::io::readable(b)
                         );

@@ -510,6 +510,34 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
         )) && err.contains("milliseconds"),
         "{err}"
     );
+    // Rows dense enough in milliseconds that the run ends after the
+    // second: no lift-off, and the same hint.
+    let mut dense = ms.clone();
+    dense.time.clear();
+    dense.rows.clear();
+    for k in 0..ms.time.len() - 1 {
+        for j in 0..100 {
+            dense
+                .time
+                .push(ms.time[k] + (ms.time[k + 1] - ms.time[k]) * j as f64 / 100.0);
+            dense.rows.push(ms.rows[k].clone());
+        }
+    }
+    dense.time.push(*ms.time.last().unwrap());
+    dense.rows.push(ms.rows.last().unwrap().clone());
+    let dense_file = out.join("ms_dense.sto");
+    dense.write_sto(&dense_file).unwrap();
+    let o = run(&dense_file);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let dense = StoTable::read(&dense_file).unwrap();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "warning: no lift-off before t_max = 0.5 s, and the controls file spans 0–{} s, longer than any jump",
+            leap::io::readable(*dense.time.last().unwrap())
+        )) && err.contains("milliseconds"),
+        "{err}"
+    );
     // The solution's own file raises no such warning, nor does it with a
     // long tail in seconds (its last row held to 3.5 s).
     let mut tail = t.clone();
@@ -544,6 +572,30 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
         // (The ramp does not lift off by t_max, which is warned of.)
         assert_eq!(err.contains("warning"), file == ramp_file, "{err}");
     }
+    // Without a lift-off the JSON gives no jump height, as the text gives
+    // "-", and the COM's change apart.
+    let o = leap()
+        .args([
+            "simulate",
+            "--integrator",
+            "DormandPrince",
+            "--t-max",
+            "0.5",
+            "--json",
+            "--controls",
+        ])
+        .arg(&ramp_file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(
+        v["liftoff_time_s"].is_null()
+            && v["jump_height_m"].is_null()
+            && v["final_com_height_change_m"].as_f64().is_some(),
+        "{v}"
+    );
     // Files the run would read one row of: one starting at t_max, one
     // ending before 0.
     let mut early = t.clone();
