@@ -85,6 +85,9 @@ pub struct JumpAnalysis {
     pub peak_vertical_grf_bw: f64,
     /// By net work, largest first.
     pub muscles: Vec<MuscleWork>,
+    /// Coordinates outside their ranges in the model file (the first row
+    /// of each): states no motion of the model reaches.
+    pub warnings: Vec<String>,
 }
 
 /// The states of `eq` over time from an OpenSim storage file: its columns
@@ -107,8 +110,12 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec
 pub enum AnalysisError {
     #[error(transparent)]
     Ode(#[from] crate::ode::OdeError),
-    #[error("no rows between {0} s and {1} s")]
+    #[error("no rows between {} s and {} s", crate::io::readable(*.0), crate::io::readable(*.1))]
     EmptyWindow(f64, f64),
+    #[error("one row between {} s and {} s (t = {} s): a window needs two rows or more to integrate over", crate::io::readable(*.0), crate::io::readable(*.1), crate::io::readable(*.2))]
+    OneRow(f64, f64, f64),
+    #[error("row at t = {t} s: its states give a non-finite {what}: a state of that row lies far outside what the model can do", t = crate::io::readable(*.0), what = .1)]
+    NotFinite(f64, &'static str),
 }
 
 /// Per row: what the analysis integrates.
@@ -132,7 +139,7 @@ fn sample(
     ws: &mut crate::ode::StateWorkspace<f64>,
     t: f64,
     x: &[f64],
-) -> Result<Sample, crate::ode::OdeError> {
+) -> Result<Sample, AnalysisError> {
     let (n, nm) = (eq.nq(), eq.nm());
     // Excitation = activation: only the activation rate depends on it,
     // which the analysis does not use.
@@ -148,6 +155,28 @@ fn sample(
         .sum();
     let com = eq.multibody.com_position(&ws.mb);
     let vcom = eq.multibody.com_velocity(&ws.mb);
+    let energy = eq.multibody.energy(&ws.mb);
+    let vertical_grf: f64 = ws.sphere_force.iter().map(|f| f[1]).sum();
+    // Finite states far outside the model's reach (a speed of 1e300)
+    // overflow here: refused, not reported as an infinite jump.
+    let power: f64 = ws
+        .tendon_force
+        .iter()
+        .zip(&ws.mtu_speed)
+        .map(|(f, v)| f * v)
+        .sum();
+    for (value, what) in [
+        (energy, "kinetic plus potential energy"),
+        (com[1], "centre-of-mass height"),
+        (vcom[1], "centre-of-mass velocity"),
+        (vertical_grf, "ground force"),
+        (passive_power, "passive joint torque power"),
+        (power, "muscle power"),
+    ] {
+        if !value.is_finite() {
+            return Err(AnalysisError::NotFinite(t, what));
+        }
+    }
     Ok(Sample {
         t,
         activation: u,
@@ -155,8 +184,8 @@ fn sample(
         shortening_speed: ws.mtu_speed.iter().map(|v| -v).collect(),
         fiber_velocity: xdot[2 * n..2 * n + nm].to_vec(),
         passive_power,
-        vertical_grf: ws.sphere_force.iter().map(|f| f[1]).sum(),
-        energy: eq.multibody.energy(&ws.mb),
+        vertical_grf,
+        energy,
         com_height: com[1],
         com_vertical_velocity: vcom[1],
     })
@@ -181,12 +210,22 @@ pub fn analyze(
     let mut samples = Vec::new();
     let mut liftoff = false;
     let mut in_contact = false;
+    let mut warnings = Vec::new();
+    let mut warned = vec![false; eq.nq()];
     for (t, x) in time.iter().zip(states) {
         if *t < t0 {
             continue;
         }
         if *t > t1 {
             break;
+        }
+        for (k, w) in crate::eval::coordinates_outside_range(eq, x) {
+            if !std::mem::replace(&mut warned[k], true) {
+                warnings.push(format!(
+                    "at t = {} s, its first row outside: {w}",
+                    crate::io::readable(*t)
+                ));
+            }
         }
         let s = sample(eq, laws, &mut ws, *t, x)?;
         let fy = s.vertical_grf;
@@ -201,6 +240,7 @@ pub fn analyze(
         }
     }
     let (first, last) = match (samples.first(), samples.last()) {
+        (Some(f), _) if samples.len() == 1 => return Err(AnalysisError::OneRow(t0, t1, f.t)),
         (Some(f), Some(l)) => (f, l),
         _ => return Err(AnalysisError::EmptyWindow(t0, t1)),
     };
@@ -270,6 +310,7 @@ pub fn analyze(
             .fold(f64::MIN, f64::max)
             / weight,
         muscles,
+        warnings,
     })
 }
 

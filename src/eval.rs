@@ -397,21 +397,10 @@ pub fn evaluate(
     }
     let model = &eq.model;
     let coord_name = |k: usize| model.coordinates[eq.system.coordinates[k]].name.clone();
-    let mut warnings = Vec::new();
-    let rotational = crate::io::rotational_coordinates(eq);
-    for k in 0..n {
-        let [lo, hi] = model.coordinates[eq.system.coordinates[k]].range;
-        if !(lo..=hi).contains(&x[k]) {
-            let unit = if rotational.contains(&k) { "rad" } else { "m" };
-            warnings.push(format!(
-                "{} = {} {unit} lies outside its range [{}, {}] {unit}",
-                names[k],
-                crate::io::readable(x[k]),
-                crate::io::readable(lo),
-                crate::io::readable(hi)
-            ));
-        }
-    }
+    let mut warnings: Vec<String> = coordinates_outside_range(eq, x)
+        .into_iter()
+        .map(|(_, w)| w)
+        .collect();
     let mut muscles = BTreeMap::new();
     let mbw = &ws.mb;
     for (k, &mi) in eq.muscles.iter().enumerate() {
@@ -546,4 +535,32 @@ pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
         }
     }
     out
+}
+
+/// The coordinates of state `x` outside their ranges in the model file
+/// (where no motion of the model goes): (index, "name = value unit lies
+/// outside its range [lo, hi] unit") of each.
+pub(crate) fn coordinates_outside_range(eq: &StateEquation, x: &[f64]) -> Vec<(usize, String)> {
+    let model = &eq.model;
+    let names = eq.state_names();
+    let rotational = crate::io::rotational_coordinates(eq);
+    (0..eq.nq())
+        .filter_map(|k| {
+            let [lo, hi] = model.coordinates[eq.system.coordinates[k]].range;
+            if (lo..=hi).contains(&x[k]) {
+                return None;
+            }
+            let unit = if rotational.contains(&k) { "rad" } else { "m" };
+            Some((
+                k,
+                format!(
+                    "{} = {} {unit} lies outside its range [{}, {}] {unit}",
+                    names[k],
+                    crate::io::readable(x[k]),
+                    crate::io::readable(lo),
+                    crate::io::readable(hi)
+                ),
+            ))
+        })
+        .collect()
 }

@@ -534,8 +534,18 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let (time, xs) =
                 leap::analyze::read_states(&eq, &states).map_err(|e| full_hint(e, full))?;
             let window = match window.as_deref() {
+                Some(&[a, b]) if !a.is_finite() || !b.is_finite() => anyhow::bail!(
+                    "command line: --window: START and END must be finite times (s), got {} and {}",
+                    leap::io::readable(a),
+                    leap::io::readable(b)
+                ),
                 Some(&[a, b]) if a < b => Some((a, b)),
-                Some(w) => anyhow::bail!("--window: START must be below END, got {w:?}"),
+                Some(&[a, b]) => anyhow::bail!(
+                    "command line: --window: START must be below END, got {} and {}",
+                    leap::io::readable(a),
+                    leap::io::readable(b)
+                ),
+                Some(w) => anyhow::bail!("command line: --window: takes START and END, got {w:?}"),
                 None => None,
             };
             let a = leap::analyze::analyze(&eq, &laws, &time, &xs, window)
@@ -546,6 +556,9 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             } else {
                 out!("{}", a.to_text());
+            }
+            for w in &a.warnings {
+                eprintln!("warning: {}: {w}", states.display());
             }
             if let Some(w) = a.newton_warning() {
                 eprintln!("{w}");

@@ -195,3 +195,49 @@ fn broken_states_files_name_file_column_and_row_once() {
     assert_eq!(xs, raw.rows);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// States a file can hold but no motion of the model reaches: a coordinate
+/// outside its range is warned of (its first row, as `leap eval` words it);
+/// a speed so large that the energy overflows is refused naming the row,
+/// not reported as an infinite jump; a window holding one row is refused,
+/// not integrated over nothing.
+#[test]
+fn absurd_states_are_warned_of_or_refused_and_one_row_windows_refused() {
+    let (_, eq, laws, x0) = jumper();
+    let names = eq.state_names();
+    let col = |name: &str| names.iter().position(|l| l == name).unwrap();
+    let time = vec![0.0, 0.01, 0.02];
+    let mut knee = vec![x0.clone(); 3];
+    let k = col("/jointset/knee_r/knee_angle_r/value");
+    knee[1][k] = 5.0;
+    knee[2][k] = 4.0;
+    let a = analyze(&eq, &laws, &time, &knee, None).unwrap();
+    assert_eq!(
+        a.warnings,
+        vec!["at t = 0.01 s, its first row outside: /jointset/knee_r/knee_angle_r/value = 5 rad lies outside its range [-2.0944, 0.174533] rad".to_string()],
+    );
+    let fine = analyze(&eq, &laws, &time, &vec![x0.clone(); 3], None).unwrap();
+    assert!(fine.warnings.is_empty(), "{:?}", fine.warnings);
+    let mut fast = vec![x0.clone(); 3];
+    fast[1][col("/jointset/ground_pelvis/pelvis_ty/speed")] = 1e300;
+    let e = analyze(&eq, &laws, &time, &fast, None)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "row at t = 0.01 s: its states give a non-finite kinetic plus potential energy: a state of that row lies far outside what the model can do"
+    );
+    let e = analyze(
+        &eq,
+        &laws,
+        &time,
+        &vec![x0.clone(); 3],
+        Some((0.005, 0.015)),
+    )
+    .unwrap_err()
+    .to_string();
+    assert_eq!(
+        e,
+        "one row between 0.005 s and 0.015 s (t = 0.01 s): a window needs two rows or more to integrate over"
+    );
+}

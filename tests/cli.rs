@@ -592,6 +592,35 @@ fn analyze_warns_when_impulse_and_momentum_disagree() {
             }
         }
     }
+    // A window must be two finite times, the first below the second.
+    for (window, want) in [
+        (
+            ["0", "inf"],
+            "command line: --window: START and END must be finite times (s), got 0 and inf",
+        ),
+        (
+            ["1e308", "1e309"],
+            "command line: --window: START and END must be finite times (s), got 1e308 and inf",
+        ),
+        (
+            ["0.2", "0.1"],
+            "command line: --window: START must be below END, got 0.2 and 0.1",
+        ),
+    ] {
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .arg("analyze")
+            .arg(&states)
+            .arg("--window")
+            .args(window)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(want),
+            "{window:?}: {err}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
