@@ -203,11 +203,12 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
         crate::path::PathSmoothing::Smooth { delta: 0.02 },
     )?);
     let laws = Arc::new(crate::laws::OpenSimLaws::new(model)?);
-    let pose = model
-        .poses
-        .get("squat")
-        .cloned()
-        .unwrap_or_else(|| model.coordinates.iter().map(|c| c.default_value).collect());
+    // The states are perturbations of the static squat: a jump model's.
+    let pose = model.squat_pose().map_err(|e| {
+        crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input(
+            e.to_string(),
+        ))
+    })?;
     let sq = crate::squat::static_squat(&eq, &laws, &pose).map_err(|e| {
         crate::crosscheck::CrosscheckError::Simbody(crate::simbody::SimbodyError::Input(
             e.to_string(),

@@ -225,7 +225,14 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
     let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         err(
             format!("line {}, column {}", e.line(), e.column()),
-            e.to_string(),
+            if path
+                .extension()
+                .is_some_and(|x| x.eq_ignore_ascii_case("json"))
+            {
+                e.to_string()
+            } else {
+                format!("{e} (read as JSON: only a file whose name ends in .csv is read as CSV)")
+            },
         )
     })?;
     if let Some((at, key)) = crate::model::duplicate_key(text) {

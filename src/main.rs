@@ -645,11 +645,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let m = leap::model::Model::from_file(&model)?;
             let eq = leap::ode::StateEquation::new(&m, true, leap::path::PathSmoothing::Exact)?;
             let q = m.poses.get(&pose).cloned().ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{}: poses: no pose '{pose}' (have: {})",
-                    model.display(),
-                    m.poses.keys().cloned().collect::<Vec<_>>().join(", ")
-                )
+                let have = if m.poses.is_empty() {
+                    "the model has no poses".to_string()
+                } else {
+                    format!(
+                        "have: {}",
+                        m.poses.keys().cloned().collect::<Vec<_>>().join(", ")
+                    )
+                };
+                anyhow::anyhow!("{}: poses: no pose '{pose}' ({have})", model.display())
             })?;
             let jumps = leap::eval::switch_jumps(&eq, &q);
             let largest = jumps.iter().map(|j| j.jump_m.abs()).fold(0.0, f64::max);
@@ -1013,7 +1017,7 @@ fn simulate(
                     "warning: {}: {} column(s) name no muscle of the model and are not read: {}{more}",
                     p.display(),
                     unread.len(),
-                    unread[..unread.len().min(10)].join(", ")
+                    leap::solve::label_list(&unread[..unread.len().min(10)])
                 );
             }
             c.check_run(p, st.t_max)?;

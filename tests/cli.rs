@@ -749,3 +749,72 @@ fn an_error_echoing_a_huge_input_is_bounded() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Messages the second fuzzing round found unclear: CSV content in a file
+/// not named .csv is read as JSON, and the error says so (a .json file's
+/// does not); a model without poses says it has none; `leap bench
+/// state-equation` on a model without a squat says so, as the other
+/// commands do, not that it misses the jumper's pelvis coordinate.
+#[test]
+fn unclear_messages_of_the_second_fuzzing_round_say_what_happened() {
+    let dir = std::env::temp_dir().join(format!("leap-cli-fuzz2-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let txt = dir.join("input.txt");
+    std::fs::write(&txt, "a,b\n1,2\n").unwrap();
+    let json = dir.join("input.json");
+    std::fs::write(&json, "a,b\n1,2\n").unwrap();
+    let err = refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&txt),
+        "csv as txt",
+    );
+    assert!(
+        err.contains(&format!("{}: line 1, column 1: ", txt.display()))
+            && err.contains("(read as JSON: only a file whose name ends in .csv is read as CSV)"),
+        "{err}"
+    );
+    let err = refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&json),
+        "csv as json",
+    );
+    assert!(
+        err.contains(&format!("{}: line 1, column 1: ", json.display()))
+            && !err.contains("read as JSON"),
+        "{err}"
+    );
+    let err = refused(
+        Command::cargo_bin("leap").unwrap().args([
+            "paths",
+            "--model",
+            "models/double_pendulum.json",
+        ]),
+        "paths",
+    );
+    assert!(
+        err.contains(
+            "models/double_pendulum.json: poses: no pose 'squat' (the model has no poses)"
+        ),
+        "{err}"
+    );
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "bench",
+            "state-equation",
+            "--model",
+            "models/double_pendulum.json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("the model has no 'squat' pose to start from"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
