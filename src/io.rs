@@ -165,7 +165,8 @@ impl StoTable {
 
     /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF;
     /// a UTF-8 byte-order mark). Values are as in the file: see
-    /// [`read_states`] for degrees.
+    /// [`read_states`] for degrees. A header's `nRows` and `nColumns`
+    /// (time included) must count the file's data rows and columns.
     pub fn read(path: &Path) -> Result<Self, StoError> {
         let bytes = read_input(path).map_err(|error| StoError::Io {
             file: path.into(),
@@ -196,9 +197,10 @@ impl StoTable {
         let mut table = StoTable::default();
         let mut lines = text.lines().enumerate();
         let mut found_end = false;
-        // The header line of each key, to name both lines of a key given
-        // twice with different values (which one holds is anyone's guess).
-        let mut key_line: BTreeMap<String, usize> = BTreeMap::new();
+        // The value and header line of each key, to name both lines of a
+        // key given twice with different values (which one holds is
+        // anyone's guess).
+        let mut header: BTreeMap<String, (String, usize)> = BTreeMap::new();
         for (i, raw) in lines.by_ref() {
             let line = raw.trim_end_matches('\r').trim();
             if line == "endheader" {
@@ -207,21 +209,21 @@ impl StoTable {
             }
             if let Some((k, v)) = line.split_once('=') {
                 let (k, v) = (k.trim(), v.trim());
-                if !matches!(
-                    k,
-                    "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns"
-                ) {
-                    if let Some(old) = table.metadata.get(k).filter(|old| *old != v) {
+                if !matches!(k, "DataType" | "version" | "OpenSimVersion") {
+                    if let Some((old, line)) = header.get(k).filter(|(old, _)| *old != v) {
                         return Err(perr(
                             i + 1,
                             format!(
-                                "header key '{k}' given twice: '{old}' on line {}, '{v}' here",
-                                key_line.get(k).copied().unwrap_or(0)
+                                "header key '{k}' given twice: '{old}' on line {line}, '{v}' here"
                             ),
                         ));
                     }
-                    key_line.insert(k.to_string(), i + 1);
-                    table.metadata.insert(k.to_string(), v.to_string());
+                    header.insert(k.to_string(), (v.to_string(), i + 1));
+                    // The counts are the file's, checked below, not kept:
+                    // the writers count the table they write.
+                    if !matches!(k, "nRows" | "nColumns") {
+                        table.metadata.insert(k.to_string(), v.to_string());
+                    }
                 }
             } else if i == 0 && !line.is_empty() {
                 table.name = Some(line.to_string());
@@ -274,6 +276,34 @@ impl StoTable {
                 ),
             ));
         }
+        // A count the header declares (OpenSim's Storage writes `nRows`
+        // and `nColumns`, time a column, as `write_mot` does) must be the
+        // file's: a file cut at a line boundary reads as whole otherwise.
+        let declared = |key: &str| -> Result<Option<usize>, StoError> {
+            let Some((v, _)) = header.get(key) else {
+                return Ok(None);
+            };
+            v.parse().map(Some).map_err(|_| StoError::Header {
+                file: path.into(),
+                key: key.into(),
+                reason: format!("'{v}' is not a count"),
+            })
+        };
+        let count_err = |key: &str, reason: String| StoError::Header {
+            file: path.into(),
+            key: key.into(),
+            reason,
+        };
+        let declared_rows = declared("nRows")?;
+        if let Some(n) = declared("nColumns")?.filter(|&n| n != labels.len()) {
+            return Err(count_err(
+                "nColumns",
+                format!(
+                    "declares {n} columns (time included), the file has {}",
+                    labels.len()
+                ),
+            ));
+        }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
             let line = raw.trim_end_matches('\r').trim();
@@ -308,6 +338,12 @@ impl StoTable {
             }
             table.time.push(vals[0]);
             table.rows.push(vals[1..].to_vec());
+        }
+        if let Some(n) = declared_rows.filter(|&n| n != table.time.len()) {
+            return Err(count_err(
+                "nRows",
+                format!("declares {n} data rows, the file has {}", table.time.len()),
+            ));
         }
         Ok(table)
     }

@@ -549,3 +549,59 @@ fn a_header_key_given_twice_with_different_values_is_refused() {
     assert_eq!(t.metadata["inDegrees"], "yes");
     assert_eq!(t.rows.len(), 2);
 }
+
+/// `nRows` and `nColumns`, as `write_mot` writes them (time is a column),
+/// are checked against the file: a file cut at a line boundary had read as
+/// complete.
+#[test]
+fn header_row_and_column_counts_that_disagree_with_the_file_are_refused() {
+    let p = Path::new("counts.mot");
+    let body = "endheader\ntime\ta\tb\n0\t1\t2\n0.1\t3\t4\n";
+    let t = StoTable::parse(&format!("m\nversion=1\nnRows=2\nnColumns=3\n{body}"), p).unwrap();
+    assert_eq!((t.labels.len(), t.time.len()), (2, 2));
+    assert!(!t.metadata.contains_key("nRows") && !t.metadata.contains_key("nColumns"));
+    for (header, want) in [
+        (
+            "nRows=3\nnColumns=3",
+            "counts.mot: header 'nRows': declares 3 data rows, the file has 2",
+        ),
+        (
+            "nRows=2\nnColumns=2",
+            "counts.mot: header 'nColumns': declares 2 columns (time included), the file has 3",
+        ),
+        (
+            "nRows=two",
+            "counts.mot: header 'nRows': 'two' is not a count",
+        ),
+    ] {
+        let e = StoTable::parse(&format!("m\nversion=1\n{header}\n{body}"), p)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, want, "{header}");
+    }
+    // A file leap wrote, cut after its third data row.
+    let dir = scratch("counts");
+    let full = dir.join("full.mot");
+    let t = StoTable {
+        name: Some("grf".into()),
+        labels: vec!["a".into()],
+        time: vec![0.0, 0.1, 0.2, 0.3, 0.4],
+        rows: vec![vec![1.0]; 5],
+        ..Default::default()
+    };
+    t.write_mot(&full).unwrap();
+    assert_eq!(StoTable::read(&full).unwrap().time.len(), 5);
+    let text = std::fs::read_to_string(&full).unwrap();
+    let cut = dir.join("cut.mot");
+    let keep = text.find("0.3\t").unwrap();
+    std::fs::write(&cut, &text[..keep]).unwrap();
+    let e = StoTable::read(&cut).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: header 'nRows': declares 5 data rows, the file has 3",
+            cut.display()
+        )
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
