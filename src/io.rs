@@ -163,7 +163,8 @@ impl StoTable {
         }
     }
 
-    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF;
+    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces, a tab
+    /// ending the label line and the data lines making no column; CRLF;
     /// a UTF-8 byte-order mark). Values are as in the file: see
     /// [`read_states`] for degrees. A header's `nRows` and `nColumns`
     /// (time included) must count the file's data rows and columns.
@@ -239,7 +240,9 @@ impl StoTable {
                     let _ = i;
                     continue;
                 }
-                Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r')),
+                // Trimmed as a data line is: a tab at the end of every
+                // line is no column.
+                Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r').trim()),
                 None => {
                     return Err(perr(
                         text.lines().count(),
@@ -263,6 +266,12 @@ impl StoTable {
                     "the first column must be 'time', got '{}'",
                     labels.first().cloned().unwrap_or_default()
                 ),
+            ));
+        }
+        if let Some(k) = labels.iter().position(String::is_empty) {
+            return Err(perr(
+                label_line,
+                format!("column {} has no label (time is column 1)", k + 1),
             ));
         }
         if let Some((first, k)) = first_repeat(&labels) {

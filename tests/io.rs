@@ -605,3 +605,27 @@ fn header_row_and_column_counts_that_disagree_with_the_file_are_refused() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A tab at the end of every line, the label line's and the data lines',
+/// makes no column: the label line kept an empty last label and every row
+/// was one value short. An empty label between two others is refused.
+#[test]
+fn a_trailing_tab_makes_no_column_and_an_empty_label_inside_is_refused() {
+    let p = Path::new("tabs.sto");
+    let want = StoTable::parse("endheader\ntime\ta\tb\n0\t1\t2\n0.1\t3\t4\n", p).unwrap();
+    for text in [
+        "endheader\ntime\ta\tb\t\n0\t1\t2\t\n0.1\t3\t4\t\n",
+        "endheader\r\ntime\ta\tb\t\r\n0\t1\t2\t\r\n0.1\t3\t4\t\r\n",
+        // On the label line alone.
+        "endheader\ntime\ta\tb\t\n0\t1\t2\n0.1\t3\t4\n",
+    ] {
+        assert_eq!(StoTable::parse(text, p).unwrap(), want, "{text:?}");
+    }
+    let e = StoTable::parse("endheader\ntime\t\tb\n0\t1\t2\n", p)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "tabs.sto: line 2: column 2 has no label (time is column 1)"
+    );
+}
