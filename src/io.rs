@@ -72,6 +72,39 @@ pub enum StoError {
     },
 }
 
+/// The lines of `text`, each ended by LF, CRLF or a CR alone (old Mac OS
+/// files), as [`str::lines`] gives them for the first two: without their
+/// ends, and no empty line after a last end.
+fn text_lines(text: &str) -> impl Iterator<Item = &str> {
+    let mut rest = Some(text);
+    std::iter::from_fn(move || {
+        let s = rest.take().filter(|s| !s.is_empty())?;
+        let b = s.as_bytes();
+        match b.iter().position(|&c| c == b'\n' || c == b'\r') {
+            Some(k) => {
+                let end = if b[k] == b'\r' && b.get(k + 1) == Some(&b'\n') {
+                    k + 2
+                } else {
+                    k + 1
+                };
+                rest = Some(&s[end..]);
+                Some(&s[..k])
+            }
+            None => Some(s),
+        }
+    })
+}
+
+/// How many line ends (LF, CRLF or CR alone, as [`text_lines`] reads
+/// them) `bytes` holds.
+fn line_ends(bytes: &[u8]) -> usize {
+    bytes
+        .iter()
+        .enumerate()
+        .filter(|&(k, &c)| c == b'\n' || (c == b'\r' && bytes.get(k + 1) != Some(&b'\n')))
+        .count()
+}
+
 fn fmt_value(v: f64) -> String {
     if v.is_nan() {
         "NaN".into()
@@ -164,8 +197,8 @@ impl StoTable {
     }
 
     /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces, a tab
-    /// ending the label line and the data lines making no column; CRLF;
-    /// a UTF-8 byte-order mark). Values are as in the file: see
+    /// ending the label line and the data lines making no column; lines
+    /// ended by LF, CRLF or CR alone (old Mac OS); a UTF-8 byte-order mark). Values are as in the file: see
     /// [`read_states`] for degrees. A header's `nRows` and `nColumns`
     /// (time included) must count the file's data rows and columns.
     pub fn read(path: &Path) -> Result<Self, StoError> {
@@ -177,7 +210,7 @@ impl StoTable {
             let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
             StoError::Parse {
                 file: path.into(),
-                line: good.iter().filter(|&&b| b == b'\n').count() + 1,
+                line: line_ends(good) + 1,
                 reason: "not UTF-8 text (a binary file?)".into(),
             }
         })?;
@@ -196,14 +229,14 @@ impl StoTable {
             return Err(perr(1, "the file is empty".into()));
         }
         let mut table = StoTable::default();
-        let mut lines = text.lines().enumerate();
+        let mut lines = text_lines(text).enumerate();
         let mut found_end = false;
         // The value and header line of each key, to name both lines of a
         // key given twice with different values (which one holds is
         // anyone's guess).
         let mut header: BTreeMap<String, (String, usize)> = BTreeMap::new();
         for (i, raw) in lines.by_ref() {
-            let line = raw.trim_end_matches('\r').trim();
+            let line = raw.trim();
             if line == "endheader" {
                 found_end = true;
                 break;
@@ -231,7 +264,7 @@ impl StoTable {
             }
         }
         if !found_end {
-            return Err(perr(text.lines().count(), "no 'endheader' line".into()));
+            return Err(perr(text_lines(text).count(), "no 'endheader' line".into()));
         }
         table.in_degrees(path)?;
         let (label_line, labels_raw) = loop {
@@ -242,10 +275,10 @@ impl StoTable {
                 }
                 // Trimmed as a data line is: a tab at the end of every
                 // line is no column.
-                Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r').trim()),
+                Some((i, raw)) => break (i + 1, raw.trim()),
                 None => {
                     return Err(perr(
-                        text.lines().count(),
+                        text_lines(text).count(),
                         "no column labels after 'endheader'".into(),
                     ))
                 }
@@ -315,7 +348,7 @@ impl StoTable {
         }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
-            let line = raw.trim_end_matches('\r').trim();
+            let line = raw.trim();
             if line.is_empty() {
                 continue;
             }

@@ -629,3 +629,30 @@ fn a_trailing_tab_makes_no_column_and_an_empty_label_inside_is_refused() {
         "tabs.sto: line 2: column 2 has no label (time is column 1)"
     );
 }
+
+/// Old Mac OS line ends, a carriage return alone, end lines as a newline
+/// does: such a file was one line without 'endheader'.
+#[test]
+fn carriage_return_line_ends_are_read() {
+    let p = Path::new("cr.sto");
+    let lf = "states\ninDegrees=no\nendheader\ntime\ta\n0\t1\n0.1\t2\n";
+    let want = StoTable::parse(lf, p).unwrap();
+    assert_eq!(StoTable::parse(&lf.replace('\n', "\r"), p).unwrap(), want);
+    // Mixed with LF and CRLF (files pasted together), a blank line kept.
+    let mixed = "states\r\ninDegrees=no\rendheader\ntime\ta\r\r0\t1\n0.1\t2";
+    assert_eq!(StoTable::parse(mixed, p).unwrap(), want);
+    // Lines are counted by them.
+    let e = StoTable::parse("endheader\rtime\ta\r0\t1\r0.1\tabc\r", p)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "cr.sto: line 4: column 'a': 'abc' is not a number");
+    let dir = scratch("cr");
+    let f = dir.join("bin.sto");
+    std::fs::write(&f, b"name\rendheader\rtime\tx\r0\t\xff\r").unwrap();
+    let e = StoTable::read(&f).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!("{}: line 4: not UTF-8 text (a binary file?)", f.display())
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
