@@ -369,12 +369,26 @@ impl StoTable {
                     "NaN" | "nan" => f64::NAN,
                     "Inf" | "inf" => f64::INFINITY,
                     "-Inf" | "-inf" => f64::NEG_INFINITY,
-                    s => s.parse().map_err(|_| {
-                        perr(
-                            i + 1,
-                            format!("column '{}': '{s}' is not a number", labels[c]),
-                        )
-                    })?,
+                    s => match s.parse::<f64>() {
+                        // Digits that parse to an infinity: too large for
+                        // a double, to be named as written.
+                        Ok(v) if v.is_infinite() && s.bytes().any(|b| b.is_ascii_digit()) => {
+                            return Err(perr(
+                                i + 1,
+                                format!(
+                                    "column '{}': '{s}' is not a finite number (it overflows)",
+                                    labels[c]
+                                ),
+                            ))
+                        }
+                        Ok(v) => v,
+                        Err(_) => {
+                            return Err(perr(
+                                i + 1,
+                                format!("column '{}': '{s}' is not a number", labels[c]),
+                            ))
+                        }
+                    },
                 };
                 vals.push(v);
             }

@@ -656,3 +656,31 @@ fn carriage_return_line_ends_are_read() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A number too large for a double is named as written, not as the
+/// infinity it parses to.
+#[test]
+fn a_number_that_overflows_is_named_as_written() {
+    let p = Path::new("big.sto");
+    for (text, want) in [
+        (
+            "endheader\ntime\ta\n0\t1\n1e400\t2\n",
+            "big.sto: line 4: column 'time': '1e400' is not a finite number (it overflows)",
+        ),
+        (
+            "endheader\ntime\ta\n0\t-1.5E+999\n",
+            "big.sto: line 3: column 'a': '-1.5E+999' is not a finite number (it overflows)",
+        ),
+    ] {
+        let e = StoTable::parse(text, p).unwrap_err().to_string();
+        assert_eq!(e, want);
+    }
+    // The largest double is a number; Inf, written as such, is read (and
+    // refused by the readers that use the table).
+    let t = StoTable::parse(
+        "endheader\ntime\ta\n0\t1.7976931348623157e308\n0.1\tInf\n",
+        p,
+    )
+    .unwrap();
+    assert_eq!(t.rows, [[f64::MAX], [f64::INFINITY]]);
+}
