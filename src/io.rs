@@ -456,8 +456,32 @@ impl StoTable {
         Ok(())
     }
 
-    /// The columns `names`, row by row, all finite. A missing column is an
-    /// error whose reason is `missing` (what the caller needed it for).
+    /// Check that every value of every column but time (which
+    /// [`Self::check_time`] checks) is finite, also in the columns the
+    /// caller does not read: a NaN or infinity is refused naming its row,
+    /// time and column, as [`Self::finite_columns`] (which runs it) does.
+    pub fn check_finite(&self, path: &Path) -> Result<(), StoError> {
+        for (r, row) in self.rows.iter().enumerate() {
+            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: self.labels[k].clone(),
+                    reason: format!(
+                        "row {} (t = {}): {} is not a finite number",
+                        r + 1,
+                        self.time[r],
+                        row[k]
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The columns `names`, row by row, all finite; then the other columns
+    /// must be finite too ([`Self::check_finite`]): a file's NaN is refused
+    /// wherever it is. A missing column is an error whose reason is
+    /// `missing` (what the caller needed it for), before any of these.
     pub fn finite_columns(
         &self,
         path: &Path,
@@ -494,6 +518,7 @@ impl StoTable {
             }
             out.push(x);
         }
+        self.check_finite(path)?;
         Ok(out)
     }
 }
@@ -733,7 +758,9 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// must be finite and strictly increasing over at least 2 rows;
 /// activations in [0, 1] and fibre lengths positive; a left leg's column,
 /// where the symmetric system carries it by its right partner's, equal to
-/// that one ([`StoTable::check_copied_columns`]).
+/// that one ([`StoTable::check_copied_columns`]). The values are checked
+/// finite by [`StoTable::finite_columns`], which takes the states out
+/// (after the check of a missing column, which is the more telling).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
@@ -888,8 +915,9 @@ impl Controls {
     /// Read excitations for `muscles` from an OpenSim controls or Moco
     /// solution file. A muscle's column may be named `/forceset/<m>` (Moco),
     /// `<m>` or `<m>.excitation` (OpenSim 3 controls). Every muscle must
-    /// have a column; values must be finite and in [0, 1]; time must
-    /// increase strictly. A column of a left muscle `<stem>_l` not among
+    /// have a column; values must be finite and in [0, 1], and every other
+    /// column's finite too ([`StoTable::check_finite`]); time must increase
+    /// strictly. A column of a left muscle `<stem>_l` not among
     /// `muscles`, whose right partner `<stem>_r` is (the symmetric system
     /// carries both by the right one), must equal the right one's. A
     /// muscle's excitation in two columns (`/forceset/<m>` and `<m>`) is
@@ -941,6 +969,9 @@ impl Controls {
             }
             cols.push(k);
         }
+        // The columns not read (a solution's states): after the read ones,
+        // which say why their values matter.
+        t.check_finite(path)?;
         // A left muscle's column, where its right partner's excitation is
         // read for both, must agree with it.
         let mut pairs = Vec::new();

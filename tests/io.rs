@@ -359,10 +359,11 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
             .to_string();
         assert_eq!(e, format!("{}: {want}", p.display()), "{name}");
         // Integrated on the mesh (integrate_guess), only the excitations
-        // and times are read: the activation of 7 is no error there.
+        // and times are read: the activation of 7 is no error there. A NaN
+        // is, in any column.
         let e = leap::solve::guess_from_excitations_file(&tr, &p).map_err(|e| e.to_string());
         match name {
-            "active" | "nan" | "bent" => assert!(e.is_ok(), "{name}: {e:?}"),
+            "active" | "bent" => assert!(e.is_ok(), "{name}: {e:?}"),
             _ => assert_eq!(e.unwrap_err(), format!("{}: {want}", p.display()), "{name}"),
         }
     }
@@ -683,4 +684,68 @@ fn a_number_that_overflows_is_named_as_written() {
     )
     .unwrap();
     assert_eq!(t.rows, [[f64::MAX], [f64::INFINITY]]);
+}
+
+/// A value that is not finite is refused in any column, not only in the
+/// columns a command reads: `leap analyze` read a NaN excitation, `leap
+/// simulate --controls` a NaN state.
+#[test]
+fn a_non_finite_value_in_a_column_not_read_is_refused() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("non_finite");
+    let rad = states_table(eq, ocp.x0());
+    let column = |l: &str| rad.labels.iter().position(|x| x == l).unwrap();
+    let (soleus, hip) = ("/forceset/soleus_r", "/jointset/hip_r/hip_flexion_r/value");
+    let muscles: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&m| eq.model.muscles[m].spec.name.as_str())
+        .collect();
+    // States: an excitation (and an extra column) nobody reads.
+    let mut t = rad.clone();
+    t.rows[1][column(soleus)] = f64::NAN;
+    let p = dir.join("exc_nan.sto");
+    t.write_sto(&p).unwrap();
+    let want = format!(
+        "{}: column '{soleus}': row 2 (t = 0.05): NaN is not a finite number",
+        p.display()
+    );
+    let e = leap::analyze::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(e, want);
+    let mut t = rad.clone();
+    t.labels.push("/extra".into());
+    for (r, row) in t.rows.iter_mut().enumerate() {
+        row.push(if r == 2 { f64::NEG_INFINITY } else { 0.0 });
+    }
+    t.write_sto(&p).unwrap();
+    let e = leap::analyze::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: column '/extra': row 3 (t = 0.1): -inf is not a finite number",
+            p.display()
+        )
+    );
+    // Controls: a state column nobody reads.
+    let mut t = rad.clone();
+    t.rows[2][column(hip)] = f64::NAN;
+    t.write_sto(&p).unwrap();
+    let e = Controls::from_file(&p, &muscles).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: column '{hip}': row 3 (t = 0.1): NaN is not a finite number",
+            p.display()
+        )
+    );
+    // An excitation that is read keeps its own reason.
+    let e = Controls::from_file(Path::new("tests/data/controls/jumper_nan.sto"), &muscles)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("row 2 (t = 0.1): excitation NaN is not a number in [0, 1]"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
