@@ -535,6 +535,18 @@ impl StoTable {
         path: &Path,
         pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
     ) -> Result<(), StoError> {
+        self.check_copies(path, pairs.into_iter().map(|(c, o)| (c, o, false)))
+    }
+
+    /// [`Self::check_copied_columns`] of pairs each flagged whether its
+    /// columns hold degrees: compared as the radians [`read_states`]
+    /// converts them to, named with the file's own values, and said to be
+    /// in degrees.
+    fn check_copies<'a>(
+        &self,
+        path: &Path,
+        pairs: impl IntoIterator<Item = (&'a str, &'a str, bool)>,
+    ) -> Result<(), StoError> {
         let index: std::collections::HashMap<&str, usize> = self
             .labels
             .iter()
@@ -542,19 +554,32 @@ impl StoTable {
             .map(|(k, l)| (l.as_str(), k))
             .collect();
         let col = |l: &str| index.get(l).copied();
-        for (copy, original) in pairs {
+        for (copy, original, degrees) in pairs {
             let (Some(c), Some(o)) = (col(copy), col(original)) else {
                 continue;
             };
             if c == o {
                 continue;
             }
+            let radians = |v: f64| if degrees { v.to_radians() } else { v };
+            let units = if degrees {
+                " (the file's values, in degrees)"
+            } else {
+                ""
+            };
             for (r, row) in self.rows.iter().enumerate() {
-                if let Some(reason) = copy_mismatch(row[c], row[o], original) {
+                let (vc, vo) = (row[c], row[o]);
+                if copies_differ(radians(vc), radians(vo)) {
                     return Err(StoError::Column {
                         file: path.into(),
                         column: copy.into(),
-                        reason: format!("row {} (t = {}): {reason}", r + 1, self.time[r]),
+                        reason: format!(
+                            "row {} (t = {}): {} differs from {original} ({}){units}: {COPY_MISMATCH_REASON}; give both columns the same values, or leave out the left leg's columns",
+                            r + 1,
+                            self.time[r],
+                            readable(vc),
+                            readable(vo)
+                        ),
                     });
                 }
             }
@@ -573,14 +598,21 @@ pub const COPY_MISMATCH_REASON: &str =
 /// carries for both, if it does: by more than 1e-6 relative. A non-finite
 /// original is its own reader's to name.
 pub fn copy_mismatch(copy: f64, original: f64, original_label: &str) -> Option<String> {
-    let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
-    (original.is_finite() && !agree).then(|| {
+    copies_differ(copy, original).then(|| {
         format!(
             "{} differs from {original_label} ({}): {COPY_MISMATCH_REASON}; give both columns the same values, or leave out the left leg's columns",
             readable(copy),
             readable(original)
         )
     })
+}
+
+/// Whether a left leg's value `copy` differs from `original`, its right
+/// partner's, by more than 1e-6 relative; a non-finite original is its
+/// own reader's to name.
+fn copies_differ(copy: f64, original: f64) -> bool {
+    let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
+    original.is_finite() && !agree
 }
 
 /// The first label that repeats one before it: (its first index, its
@@ -765,21 +797,11 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
     let columns = eq.model_state_columns();
-    if t.in_degrees(path)? {
-        let nq = eq.nq();
-        let rotational = rotational_coordinates(eq);
-        for (name, i) in &columns {
-            if *i >= 2 * nq || !rotational.contains(&(i % nq)) {
-                continue;
-            }
-            if let Some(k) = t.labels.iter().position(|l| l == name) {
-                for row in &mut t.rows {
-                    row[k] = row[k].to_radians();
-                }
-            }
-        }
-        t.metadata.insert("inDegrees".into(), "no".into());
-    }
+    let nq = eq.nq();
+    let rotational = rotational_coordinates(eq);
+    let degrees = t.in_degrees(path)?;
+    // A column in degrees: the value or speed of a rotational coordinate.
+    let in_degrees = |i: usize| degrees && i < 2 * nq && rotational.contains(&(i % nq));
     // The physical range of the muscle states, as `leap eval` checks it.
     for (k, label) in t.labels.iter().enumerate() {
         if !(label.ends_with("/activation") || label.ends_with("/fiber_length")) {
@@ -795,13 +817,28 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
+    // The left leg's columns against their right partners', before the
+    // conversion, to name the file's values.
     let names = eq.state_names();
-    t.check_copied_columns(
+    t.check_copies(
         path,
         columns
             .iter()
-            .map(|(l, i)| (l.as_str(), names[*i].as_str())),
+            .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(*i))),
     )?;
+    if degrees {
+        for (name, i) in &columns {
+            if !in_degrees(*i) {
+                continue;
+            }
+            if let Some(k) = t.labels.iter().position(|l| l == name) {
+                for row in &mut t.rows {
+                    row[k] = row[k].to_radians();
+                }
+            }
+        }
+        t.metadata.insert("inDegrees".into(), "no".into());
+    }
     Ok(t)
 }
 

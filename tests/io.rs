@@ -749,3 +749,35 @@ fn a_non_finite_value_in_a_column_not_read_is_refused() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// With `inDegrees=yes`, a left column that differs from its right
+/// partner is shown with the file's own values, in degrees, and said to
+/// be: they had been shown converted to radians, without a word.
+#[test]
+fn a_left_right_mismatch_in_degrees_shows_the_files_values() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("mismatch_degrees");
+    let mut deg = in_degrees(&states_table(eq, ocp.x0()), "yes");
+    let (knee_l, knee_r) = (
+        "/jointset/knee_l/knee_angle_l/value",
+        "/jointset/knee_r/knee_angle_r/value",
+    );
+    let column = |l: &str| deg.labels.iter().position(|x| x == l).unwrap();
+    let (kl, kr) = (column(knee_l), column(knee_r));
+    deg.rows[2][kr] = -80.0;
+    deg.rows[2][kl] = -70.0;
+    let p = dir.join("deg.sto");
+    deg.write_sto(&p).unwrap();
+    let e = leap::io::read_states(eq, &p).unwrap_err().to_string();
+    assert!(
+        e.contains(knee_l)
+            && e.contains(knee_r)
+            && e.contains("row 3 (t = 0.1)")
+            && e.contains("-70")
+            && e.contains("-80")
+            && e.contains("(the file's values, in degrees)"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
