@@ -59,6 +59,18 @@ pub enum StoError {
         key: String,
         reason: String,
     },
+    /// A left leg's column and its right partner's, which the symmetric
+    /// system carries as one, differ: named alike, as either may be the
+    /// wrong one.
+    #[error("{file}: columns '{left}' and '{right}' differ at row {row} (t = {time}): {reason}")]
+    Copies {
+        file: PathBuf,
+        left: String,
+        right: String,
+        row: usize,
+        time: f64,
+        reason: String,
+    },
     /// Too few data rows.
     #[error(
         "{file}: {rows} data row{s}; at least {needed} {are} needed",
@@ -529,7 +541,8 @@ impl StoTable {
     /// left leg's column and its right partner's, which the symmetric
     /// system carries as one. They agree within 1e-6 relative (leap
     /// writes both from one value); a row whose original is not finite is
-    /// left to the reader of the original to refuse.
+    /// left to the reader of the original to refuse. The refusal
+    /// ([`StoError::Copies`]) names both columns and values alike.
     pub fn check_copied_columns<'a>(
         &self,
         path: &Path,
@@ -570,13 +583,14 @@ impl StoTable {
             for (r, row) in self.rows.iter().enumerate() {
                 let (vc, vo) = (row[c], row[o]);
                 if copies_differ(radians(vc), radians(vo)) {
-                    return Err(StoError::Column {
+                    return Err(StoError::Copies {
                         file: path.into(),
-                        column: copy.into(),
+                        left: copy.into(),
+                        right: original.into(),
+                        row: r + 1,
+                        time: self.time[r],
                         reason: format!(
-                            "row {} (t = {}): {} differs from {original} ({}){units}: {COPY_MISMATCH_REASON}; give both columns the same values, or leave out the left leg's columns",
-                            r + 1,
-                            self.time[r],
+                            "{} and {}{units}; {COPY_MISMATCH_REASON}: give both columns the same values, or leave out the left leg's columns",
                             readable(vc),
                             readable(vo)
                         ),
@@ -588,7 +602,8 @@ impl StoTable {
     }
 }
 
-/// Why `copy_mismatch` refuses a left column; commands that can read both
+/// Why `copy_mismatch` refuses a left value, and a storage file's left
+/// column ([`StoError::Copies`]) is refused; commands that can read both
 /// legs (`--full`) recognise their refusal by it and say so.
 pub const COPY_MISMATCH_REASON: &str =
     "the symmetric model gives both legs one value, its right leg's";

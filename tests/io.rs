@@ -339,12 +339,12 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         (
             "bent",
             bent,
-            format!("column '{knee_l}': row 3 (t = 0.1): -1.25 differs from {knee_r} (-1.375): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
+            format!("columns '{knee_l}' and '{knee_r}' differ at row 3 (t = 0.1): -1.25 and -1.375; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "uneven",
             uneven,
-            format!("column '/forceset/soleus_l': row 2 (t = 0.05): 0.9 differs from {soleus} ({sr}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
+            format!("columns '/forceset/soleus_l' and '{soleus}' differ at row 2 (t = 0.05): 0.9 and {sr}; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "repeated",
@@ -770,14 +770,42 @@ fn a_left_right_mismatch_in_degrees_shows_the_files_values() {
     let p = dir.join("deg.sto");
     deg.write_sto(&p).unwrap();
     let e = leap::io::read_states(eq, &p).unwrap_err().to_string();
-    assert!(
-        e.contains(knee_l)
-            && e.contains(knee_r)
-            && e.contains("row 3 (t = 0.1)")
-            && e.contains("-70")
-            && e.contains("-80")
-            && e.contains("(the file's values, in degrees)"),
-        "{e}"
+    assert_eq!(
+        e,
+        format!(
+            "{}: columns '{knee_l}' and '{knee_r}' differ at row 3 (t = 0.1): -70 and -80 (the file's values, in degrees); the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns",
+            p.display()
+        )
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A left column that differs from its right partner is named with it,
+/// neither as the culprit: the right one may be the absurd one.
+#[test]
+fn a_left_right_mismatch_names_both_columns_alike() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("mismatch");
+    let mut t = states_table(eq, ocp.x0());
+    let (left, right) = (
+        "/forceset/soleus_l/fiber_length",
+        "/forceset/soleus_r/fiber_length",
+    );
+    let k = t.labels.iter().position(|x| x == right).unwrap();
+    t.rows[1][k] = 1e6;
+    let p = dir.join("huge.sto");
+    t.write_sto(&p).unwrap();
+    // The left value as the file gives it.
+    let kl = t.labels.iter().position(|x| x == left).unwrap();
+    let fibre = StoTable::read(&p).unwrap().rows[1][kl];
+    let e = leap::io::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: columns '{left}' and '{right}' differ at row 2 (t = 0.05): {fibre} and 1e6; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns",
+            p.display()
+        )
     );
     std::fs::remove_dir_all(&dir).ok();
 }
