@@ -59,6 +59,18 @@ pub enum StoError {
         key: String,
         reason: String,
     },
+    /// A left leg's column and its right partner's, which the symmetric
+    /// system carries as one, differ: named alike, as either may be the
+    /// wrong one.
+    #[error("{file}: columns '{left}' and '{right}' differ at row {row} (t = {time}): {reason}")]
+    Copies {
+        file: PathBuf,
+        left: String,
+        right: String,
+        row: usize,
+        time: f64,
+        reason: String,
+    },
     /// Too few data rows.
     #[error(
         "{file}: {rows} data row{s}; at least {needed} {are} needed",
@@ -70,6 +82,39 @@ pub enum StoError {
         rows: usize,
         needed: usize,
     },
+}
+
+/// The lines of `text`, each ended by LF, CRLF or a CR alone (old Mac OS
+/// files), as [`str::lines`] gives them for the first two: without their
+/// ends, and no empty line after a last end.
+fn text_lines(text: &str) -> impl Iterator<Item = &str> {
+    let mut rest = Some(text);
+    std::iter::from_fn(move || {
+        let s = rest.take().filter(|s| !s.is_empty())?;
+        let b = s.as_bytes();
+        match b.iter().position(|&c| c == b'\n' || c == b'\r') {
+            Some(k) => {
+                let end = if b[k] == b'\r' && b.get(k + 1) == Some(&b'\n') {
+                    k + 2
+                } else {
+                    k + 1
+                };
+                rest = Some(&s[end..]);
+                Some(&s[..k])
+            }
+            None => Some(s),
+        }
+    })
+}
+
+/// How many line ends (LF, CRLF or CR alone, as [`text_lines`] reads
+/// them) `bytes` holds.
+fn line_ends(bytes: &[u8]) -> usize {
+    bytes
+        .iter()
+        .enumerate()
+        .filter(|&(k, &c)| c == b'\n' || (c == b'\r' && bytes.get(k + 1) != Some(&b'\n')))
+        .count()
 }
 
 fn fmt_value(v: f64) -> String {
@@ -163,9 +208,11 @@ impl StoTable {
         }
     }
 
-    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces; CRLF;
-    /// a UTF-8 byte-order mark). Values are as in the file: see
-    /// [`read_states`] for degrees.
+    /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces, a tab
+    /// ending the label line and the data lines making no column; lines
+    /// ended by LF, CRLF or CR alone (old Mac OS); a UTF-8 byte-order mark). Values are as in the file: see
+    /// [`read_states`] for degrees. A header's `nRows` and `nColumns`
+    /// (time included) must count the file's data rows and columns.
     pub fn read(path: &Path) -> Result<Self, StoError> {
         let bytes = read_input(path).map_err(|error| StoError::Io {
             file: path.into(),
@@ -175,7 +222,7 @@ impl StoTable {
             let good = &e.as_bytes()[..e.utf8_error().valid_up_to()];
             StoError::Parse {
                 file: path.into(),
-                line: good.iter().filter(|&&b| b == b'\n').count() + 1,
+                line: line_ends(good) + 1,
                 reason: "not UTF-8 text (a binary file?)".into(),
             }
         })?;
@@ -194,41 +241,42 @@ impl StoTable {
             return Err(perr(1, "the file is empty".into()));
         }
         let mut table = StoTable::default();
-        let mut lines = text.lines().enumerate();
+        let mut lines = text_lines(text).enumerate();
         let mut found_end = false;
-        // The header line of each key, to name both lines of a key given
-        // twice with different values (which one holds is anyone's guess).
-        let mut key_line: BTreeMap<String, usize> = BTreeMap::new();
+        // The value and header line of each key, to name both lines of a
+        // key given twice with different values (which one holds is
+        // anyone's guess).
+        let mut header: BTreeMap<String, (String, usize)> = BTreeMap::new();
         for (i, raw) in lines.by_ref() {
-            let line = raw.trim_end_matches('\r').trim();
+            let line = raw.trim();
             if line == "endheader" {
                 found_end = true;
                 break;
             }
             if let Some((k, v)) = line.split_once('=') {
                 let (k, v) = (k.trim(), v.trim());
-                if !matches!(
-                    k,
-                    "DataType" | "version" | "OpenSimVersion" | "nRows" | "nColumns"
-                ) {
-                    if let Some(old) = table.metadata.get(k).filter(|old| *old != v) {
+                if !matches!(k, "DataType" | "version" | "OpenSimVersion") {
+                    if let Some((old, line)) = header.get(k).filter(|(old, _)| *old != v) {
                         return Err(perr(
                             i + 1,
                             format!(
-                                "header key '{k}' given twice: '{old}' on line {}, '{v}' here",
-                                key_line.get(k).copied().unwrap_or(0)
+                                "header key '{k}' given twice: '{old}' on line {line}, '{v}' here"
                             ),
                         ));
                     }
-                    key_line.insert(k.to_string(), i + 1);
-                    table.metadata.insert(k.to_string(), v.to_string());
+                    header.insert(k.to_string(), (v.to_string(), i + 1));
+                    // The counts are the file's, checked below, not kept:
+                    // the writers count the table they write.
+                    if !matches!(k, "nRows" | "nColumns") {
+                        table.metadata.insert(k.to_string(), v.to_string());
+                    }
                 }
             } else if i == 0 && !line.is_empty() {
                 table.name = Some(line.to_string());
             }
         }
         if !found_end {
-            return Err(perr(text.lines().count(), "no 'endheader' line".into()));
+            return Err(perr(text_lines(text).count(), "no 'endheader' line".into()));
         }
         table.in_degrees(path)?;
         let (label_line, labels_raw) = loop {
@@ -237,10 +285,12 @@ impl StoTable {
                     let _ = i;
                     continue;
                 }
-                Some((i, raw)) => break (i + 1, raw.trim_end_matches('\r')),
+                // Trimmed as a data line is: a tab at the end of every
+                // line is no column.
+                Some((i, raw)) => break (i + 1, raw.trim()),
                 None => {
                     return Err(perr(
-                        text.lines().count(),
+                        text_lines(text).count(),
                         "no column labels after 'endheader'".into(),
                     ))
                 }
@@ -263,6 +313,12 @@ impl StoTable {
                 ),
             ));
         }
+        if let Some(k) = labels.iter().position(String::is_empty) {
+            return Err(perr(
+                label_line,
+                format!("column {} has no label (time is column 1)", k + 1),
+            ));
+        }
         if let Some((first, k)) = first_repeat(&labels) {
             return Err(perr(
                 label_line,
@@ -274,9 +330,37 @@ impl StoTable {
                 ),
             ));
         }
+        // A count the header declares (OpenSim's Storage writes `nRows`
+        // and `nColumns`, time a column, as `write_mot` does) must be the
+        // file's: a file cut at a line boundary reads as whole otherwise.
+        let declared = |key: &str| -> Result<Option<usize>, StoError> {
+            let Some((v, _)) = header.get(key) else {
+                return Ok(None);
+            };
+            v.parse().map(Some).map_err(|_| StoError::Header {
+                file: path.into(),
+                key: key.into(),
+                reason: format!("'{v}' is not a count"),
+            })
+        };
+        let count_err = |key: &str, reason: String| StoError::Header {
+            file: path.into(),
+            key: key.into(),
+            reason,
+        };
+        let declared_rows = declared("nRows")?;
+        if let Some(n) = declared("nColumns")?.filter(|&n| n != labels.len()) {
+            return Err(count_err(
+                "nColumns",
+                format!(
+                    "declares {n} columns (time included), the file has {}",
+                    labels.len()
+                ),
+            ));
+        }
         table.labels = labels[1..].to_vec();
         for (i, raw) in lines {
-            let line = raw.trim_end_matches('\r').trim();
+            let line = raw.trim();
             if line.is_empty() {
                 continue;
             }
@@ -297,17 +381,37 @@ impl StoTable {
                     "NaN" | "nan" => f64::NAN,
                     "Inf" | "inf" => f64::INFINITY,
                     "-Inf" | "-inf" => f64::NEG_INFINITY,
-                    s => s.parse().map_err(|_| {
-                        perr(
-                            i + 1,
-                            format!("column '{}': '{s}' is not a number", labels[c]),
-                        )
-                    })?,
+                    s => match s.parse::<f64>() {
+                        // Digits that parse to an infinity: too large for
+                        // a double, to be named as written.
+                        Ok(v) if v.is_infinite() && s.bytes().any(|b| b.is_ascii_digit()) => {
+                            return Err(perr(
+                                i + 1,
+                                format!(
+                                    "column '{}': '{s}' is not a finite number (it overflows)",
+                                    labels[c]
+                                ),
+                            ))
+                        }
+                        Ok(v) => v,
+                        Err(_) => {
+                            return Err(perr(
+                                i + 1,
+                                format!("column '{}': '{s}' is not a number", labels[c]),
+                            ))
+                        }
+                    },
                 };
                 vals.push(v);
             }
             table.time.push(vals[0]);
             table.rows.push(vals[1..].to_vec());
+        }
+        if let Some(n) = declared_rows.filter(|&n| n != table.time.len()) {
+            return Err(count_err(
+                "nRows",
+                format!("declares {n} data rows, the file has {}", table.time.len()),
+            ));
         }
         Ok(table)
     }
@@ -364,8 +468,32 @@ impl StoTable {
         Ok(())
     }
 
-    /// The columns `names`, row by row, all finite. A missing column is an
-    /// error whose reason is `missing` (what the caller needed it for).
+    /// Check that every value of every column but time (which
+    /// [`Self::check_time`] checks) is finite, also in the columns the
+    /// caller does not read: a NaN or infinity is refused naming its row,
+    /// time and column, as [`Self::finite_columns`] (which runs it) does.
+    pub fn check_finite(&self, path: &Path) -> Result<(), StoError> {
+        for (r, row) in self.rows.iter().enumerate() {
+            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
+                return Err(StoError::Column {
+                    file: path.into(),
+                    column: self.labels[k].clone(),
+                    reason: format!(
+                        "row {} (t = {}): {} is not a finite number",
+                        r + 1,
+                        self.time[r],
+                        row[k]
+                    ),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// The columns `names`, row by row, all finite; then the other columns
+    /// must be finite too ([`Self::check_finite`]): a file's NaN is refused
+    /// wherever it is. A missing column is an error whose reason is
+    /// `missing` (what the caller needed it for), before any of these.
     pub fn finite_columns(
         &self,
         path: &Path,
@@ -402,6 +530,7 @@ impl StoTable {
             }
             out.push(x);
         }
+        self.check_finite(path)?;
         Ok(out)
     }
 }
@@ -412,11 +541,24 @@ impl StoTable {
     /// left leg's column and its right partner's, which the symmetric
     /// system carries as one. They agree within 1e-6 relative (leap
     /// writes both from one value); a row whose original is not finite is
-    /// left to the reader of the original to refuse.
+    /// left to the reader of the original to refuse. The refusal
+    /// ([`StoError::Copies`]) names both columns and values alike.
     pub fn check_copied_columns<'a>(
         &self,
         path: &Path,
         pairs: impl IntoIterator<Item = (&'a str, &'a str)>,
+    ) -> Result<(), StoError> {
+        self.check_copies(path, pairs.into_iter().map(|(c, o)| (c, o, false)))
+    }
+
+    /// [`Self::check_copied_columns`] of pairs each flagged whether its
+    /// columns hold degrees: compared as the radians [`read_states`]
+    /// converts them to, named with the file's own values, and said to be
+    /// in degrees.
+    fn check_copies<'a>(
+        &self,
+        path: &Path,
+        pairs: impl IntoIterator<Item = (&'a str, &'a str, bool)>,
     ) -> Result<(), StoError> {
         let index: std::collections::HashMap<&str, usize> = self
             .labels
@@ -425,19 +567,33 @@ impl StoTable {
             .map(|(k, l)| (l.as_str(), k))
             .collect();
         let col = |l: &str| index.get(l).copied();
-        for (copy, original) in pairs {
+        for (copy, original, degrees) in pairs {
             let (Some(c), Some(o)) = (col(copy), col(original)) else {
                 continue;
             };
             if c == o {
                 continue;
             }
+            let radians = |v: f64| if degrees { v.to_radians() } else { v };
+            let units = if degrees {
+                " (the file's values, in degrees)"
+            } else {
+                ""
+            };
             for (r, row) in self.rows.iter().enumerate() {
-                if let Some(reason) = copy_mismatch(row[c], row[o], original) {
-                    return Err(StoError::Column {
+                let (vc, vo) = (row[c], row[o]);
+                if copies_differ(radians(vc), radians(vo)) {
+                    return Err(StoError::Copies {
                         file: path.into(),
-                        column: copy.into(),
-                        reason: format!("row {} (t = {}): {reason}", r + 1, self.time[r]),
+                        left: copy.into(),
+                        right: original.into(),
+                        row: r + 1,
+                        time: self.time[r],
+                        reason: format!(
+                            "{} and {}{units}; {COPY_MISMATCH_REASON}: give both columns the same values, or leave out the left leg's columns",
+                            readable(vc),
+                            readable(vo)
+                        ),
                     });
                 }
             }
@@ -446,7 +602,8 @@ impl StoTable {
     }
 }
 
-/// Why `copy_mismatch` refuses a left column; commands that can read both
+/// Why `copy_mismatch` refuses a left value, and a storage file's left
+/// column ([`StoError::Copies`]) is refused; commands that can read both
 /// legs (`--full`) recognise their refusal by it and say so.
 pub const COPY_MISMATCH_REASON: &str =
     "the symmetric model gives both legs one value, its right leg's";
@@ -456,14 +613,21 @@ pub const COPY_MISMATCH_REASON: &str =
 /// carries for both, if it does: by more than 1e-6 relative. A non-finite
 /// original is its own reader's to name.
 pub fn copy_mismatch(copy: f64, original: f64, original_label: &str) -> Option<String> {
-    let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
-    (original.is_finite() && !agree).then(|| {
+    copies_differ(copy, original).then(|| {
         format!(
             "{} differs from {original_label} ({}): {COPY_MISMATCH_REASON}; give both columns the same values, or leave out the left leg's columns",
             readable(copy),
             readable(original)
         )
     })
+}
+
+/// Whether a left leg's value `copy` differs from `original`, its right
+/// partner's, by more than 1e-6 relative; a non-finite original is its
+/// own reader's to name.
+fn copies_differ(copy: f64, original: f64) -> bool {
+    let agree = (copy - original).abs() <= 1e-6 * (1.0 + original.abs());
+    original.is_finite() && !agree
 }
 
 /// The first label that repeats one before it: (its first index, its
@@ -641,26 +805,18 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// must be finite and strictly increasing over at least 2 rows;
 /// activations in [0, 1] and fibre lengths positive; a left leg's column,
 /// where the symmetric system carries it by its right partner's, equal to
-/// that one ([`StoTable::check_copied_columns`]).
+/// that one ([`StoTable::check_copied_columns`]). The values are checked
+/// finite by [`StoTable::finite_columns`], which takes the states out
+/// (after the check of a missing column, which is the more telling).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
     let columns = eq.model_state_columns();
-    if t.in_degrees(path)? {
-        let nq = eq.nq();
-        let rotational = rotational_coordinates(eq);
-        for (name, i) in &columns {
-            if *i >= 2 * nq || !rotational.contains(&(i % nq)) {
-                continue;
-            }
-            if let Some(k) = t.labels.iter().position(|l| l == name) {
-                for row in &mut t.rows {
-                    row[k] = row[k].to_radians();
-                }
-            }
-        }
-        t.metadata.insert("inDegrees".into(), "no".into());
-    }
+    let nq = eq.nq();
+    let rotational = rotational_coordinates(eq);
+    let degrees = t.in_degrees(path)?;
+    // A column in degrees: the value or speed of a rotational coordinate.
+    let in_degrees = |i: usize| degrees && i < 2 * nq && rotational.contains(&(i % nq));
     // The physical range of the muscle states, as `leap eval` checks it.
     for (k, label) in t.labels.iter().enumerate() {
         if !(label.ends_with("/activation") || label.ends_with("/fiber_length")) {
@@ -676,13 +832,28 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
+    // The left leg's columns against their right partners', before the
+    // conversion, to name the file's values.
     let names = eq.state_names();
-    t.check_copied_columns(
+    t.check_copies(
         path,
         columns
             .iter()
-            .map(|(l, i)| (l.as_str(), names[*i].as_str())),
+            .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(*i))),
     )?;
+    if degrees {
+        for (name, i) in &columns {
+            if !in_degrees(*i) {
+                continue;
+            }
+            if let Some(k) = t.labels.iter().position(|l| l == name) {
+                for row in &mut t.rows {
+                    row[k] = row[k].to_radians();
+                }
+            }
+        }
+        t.metadata.insert("inDegrees".into(), "no".into());
+    }
     Ok(t)
 }
 
@@ -796,8 +967,9 @@ impl Controls {
     /// Read excitations for `muscles` from an OpenSim controls or Moco
     /// solution file. A muscle's column may be named `/forceset/<m>` (Moco),
     /// `<m>` or `<m>.excitation` (OpenSim 3 controls). Every muscle must
-    /// have a column; values must be finite and in [0, 1]; time must
-    /// increase strictly. A column of a left muscle `<stem>_l` not among
+    /// have a column; values must be finite and in [0, 1], and every other
+    /// column's finite too ([`StoTable::check_finite`]); time must increase
+    /// strictly. A column of a left muscle `<stem>_l` not among
     /// `muscles`, whose right partner `<stem>_r` is (the symmetric system
     /// carries both by the right one), must equal the right one's. A
     /// muscle's excitation in two columns (`/forceset/<m>` and `<m>`) is
@@ -849,6 +1021,9 @@ impl Controls {
             }
             cols.push(k);
         }
+        // The columns not read (a solution's states): after the read ones,
+        // which say why their values matter.
+        t.check_finite(path)?;
         // A left muscle's column, where its right partner's excitation is
         // read for both, must agree with it.
         let mut pairs = Vec::new();

@@ -123,7 +123,7 @@ fn bad_simulate_input_gets_clear_errors() {
         // The left soleus's own column, not its right partner's values.
         (
             &["--controls", "tests/data/controls/jumper_asymmetric.sto"],
-            "jumper_asymmetric.sto: column '/forceset/soleus_l': row 1 (t = 0): 0.5 differs from /forceset/soleus_r",
+            "jumper_asymmetric.sto: columns '/forceset/soleus_l' and '/forceset/soleus_r' differ at row 1 (t = 0): 0.5 and 0.01061888305456504;",
         ),
     ];
     for (args, want) in cases {

@@ -339,12 +339,12 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
         (
             "bent",
             bent,
-            format!("column '{knee_l}': row 3 (t = 0.1): -1.25 differs from {knee_r} (-1.375): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
+            format!("columns '{knee_l}' and '{knee_r}' differ at row 3 (t = 0.1): -1.25 and -1.375; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "uneven",
             uneven,
-            format!("column '/forceset/soleus_l': row 2 (t = 0.05): 0.9 differs from {soleus} ({sr}): the symmetric model gives both legs one value, its right leg's; give both columns the same values, or leave out the left leg's columns"),
+            format!("columns '/forceset/soleus_l' and '{soleus}' differ at row 2 (t = 0.05): 0.9 and {sr}; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns"),
         ),
         (
             "repeated",
@@ -359,10 +359,11 @@ fn a_guess_in_degrees_equals_the_guess_in_radians_and_bad_guesses_are_refused() 
             .to_string();
         assert_eq!(e, format!("{}: {want}", p.display()), "{name}");
         // Integrated on the mesh (integrate_guess), only the excitations
-        // and times are read: the activation of 7 is no error there.
+        // and times are read: the activation of 7 is no error there. A NaN
+        // is, in any column.
         let e = leap::solve::guess_from_excitations_file(&tr, &p).map_err(|e| e.to_string());
         match name {
-            "active" | "nan" | "bent" => assert!(e.is_ok(), "{name}: {e:?}"),
+            "active" | "bent" => assert!(e.is_ok(), "{name}: {e:?}"),
             _ => assert_eq!(e.unwrap_err(), format!("{}: {want}", p.display()), "{name}"),
         }
     }
@@ -548,4 +549,263 @@ fn a_header_key_given_twice_with_different_values_is_refused() {
     .unwrap();
     assert_eq!(t.metadata["inDegrees"], "yes");
     assert_eq!(t.rows.len(), 2);
+}
+
+/// `nRows` and `nColumns`, as `write_mot` writes them (time is a column),
+/// are checked against the file: a file cut at a line boundary had read as
+/// complete.
+#[test]
+fn header_row_and_column_counts_that_disagree_with_the_file_are_refused() {
+    let p = Path::new("counts.mot");
+    let body = "endheader\ntime\ta\tb\n0\t1\t2\n0.1\t3\t4\n";
+    let t = StoTable::parse(&format!("m\nversion=1\nnRows=2\nnColumns=3\n{body}"), p).unwrap();
+    assert_eq!((t.labels.len(), t.time.len()), (2, 2));
+    assert!(!t.metadata.contains_key("nRows") && !t.metadata.contains_key("nColumns"));
+    for (header, want) in [
+        (
+            "nRows=3\nnColumns=3",
+            "counts.mot: header 'nRows': declares 3 data rows, the file has 2",
+        ),
+        (
+            "nRows=2\nnColumns=2",
+            "counts.mot: header 'nColumns': declares 2 columns (time included), the file has 3",
+        ),
+        (
+            "nRows=two",
+            "counts.mot: header 'nRows': 'two' is not a count",
+        ),
+    ] {
+        let e = StoTable::parse(&format!("m\nversion=1\n{header}\n{body}"), p)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, want, "{header}");
+    }
+    // A file leap wrote, cut after its third data row.
+    let dir = scratch("counts");
+    let full = dir.join("full.mot");
+    let t = StoTable {
+        name: Some("grf".into()),
+        labels: vec!["a".into()],
+        time: vec![0.0, 0.1, 0.2, 0.3, 0.4],
+        rows: vec![vec![1.0]; 5],
+        ..Default::default()
+    };
+    t.write_mot(&full).unwrap();
+    assert_eq!(StoTable::read(&full).unwrap().time.len(), 5);
+    let text = std::fs::read_to_string(&full).unwrap();
+    let cut = dir.join("cut.mot");
+    let keep = text.find("0.3\t").unwrap();
+    std::fs::write(&cut, &text[..keep]).unwrap();
+    let e = StoTable::read(&cut).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: header 'nRows': declares 5 data rows, the file has 3",
+            cut.display()
+        )
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A tab at the end of every line, the label line's and the data lines',
+/// makes no column: the label line kept an empty last label and every row
+/// was one value short. An empty label between two others is refused.
+#[test]
+fn a_trailing_tab_makes_no_column_and_an_empty_label_inside_is_refused() {
+    let p = Path::new("tabs.sto");
+    let want = StoTable::parse("endheader\ntime\ta\tb\n0\t1\t2\n0.1\t3\t4\n", p).unwrap();
+    for text in [
+        "endheader\ntime\ta\tb\t\n0\t1\t2\t\n0.1\t3\t4\t\n",
+        "endheader\r\ntime\ta\tb\t\r\n0\t1\t2\t\r\n0.1\t3\t4\t\r\n",
+        // On the label line alone.
+        "endheader\ntime\ta\tb\t\n0\t1\t2\n0.1\t3\t4\n",
+    ] {
+        assert_eq!(StoTable::parse(text, p).unwrap(), want, "{text:?}");
+    }
+    let e = StoTable::parse("endheader\ntime\t\tb\n0\t1\t2\n", p)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "tabs.sto: line 2: column 2 has no label (time is column 1)"
+    );
+}
+
+/// Old Mac OS line ends, a carriage return alone, end lines as a newline
+/// does: such a file was one line without 'endheader'.
+#[test]
+fn carriage_return_line_ends_are_read() {
+    let p = Path::new("cr.sto");
+    let lf = "states\ninDegrees=no\nendheader\ntime\ta\n0\t1\n0.1\t2\n";
+    let want = StoTable::parse(lf, p).unwrap();
+    assert_eq!(StoTable::parse(&lf.replace('\n', "\r"), p).unwrap(), want);
+    // Mixed with LF and CRLF (files pasted together), a blank line kept.
+    let mixed = "states\r\ninDegrees=no\rendheader\ntime\ta\r\r0\t1\n0.1\t2";
+    assert_eq!(StoTable::parse(mixed, p).unwrap(), want);
+    // Lines are counted by them.
+    let e = StoTable::parse("endheader\rtime\ta\r0\t1\r0.1\tabc\r", p)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(e, "cr.sto: line 4: column 'a': 'abc' is not a number");
+    let dir = scratch("cr");
+    let f = dir.join("bin.sto");
+    std::fs::write(&f, b"name\rendheader\rtime\tx\r0\t\xff\r").unwrap();
+    let e = StoTable::read(&f).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!("{}: line 4: not UTF-8 text (a binary file?)", f.display())
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A number too large for a double is named as written, not as the
+/// infinity it parses to.
+#[test]
+fn a_number_that_overflows_is_named_as_written() {
+    let p = Path::new("big.sto");
+    for (text, want) in [
+        (
+            "endheader\ntime\ta\n0\t1\n1e400\t2\n",
+            "big.sto: line 4: column 'time': '1e400' is not a finite number (it overflows)",
+        ),
+        (
+            "endheader\ntime\ta\n0\t-1.5E+999\n",
+            "big.sto: line 3: column 'a': '-1.5E+999' is not a finite number (it overflows)",
+        ),
+    ] {
+        let e = StoTable::parse(text, p).unwrap_err().to_string();
+        assert_eq!(e, want);
+    }
+    // The largest double is a number; Inf, written as such, is read (and
+    // refused by the readers that use the table).
+    let t = StoTable::parse(
+        "endheader\ntime\ta\n0\t1.7976931348623157e308\n0.1\tInf\n",
+        p,
+    )
+    .unwrap();
+    assert_eq!(t.rows, [[f64::MAX], [f64::INFINITY]]);
+}
+
+/// A value that is not finite is refused in any column, not only in the
+/// columns a command reads: `leap analyze` read a NaN excitation, `leap
+/// simulate --controls` a NaN state.
+#[test]
+fn a_non_finite_value_in_a_column_not_read_is_refused() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("non_finite");
+    let rad = states_table(eq, ocp.x0());
+    let column = |l: &str| rad.labels.iter().position(|x| x == l).unwrap();
+    let (soleus, hip) = ("/forceset/soleus_r", "/jointset/hip_r/hip_flexion_r/value");
+    let muscles: Vec<&str> = eq
+        .muscles
+        .iter()
+        .map(|&m| eq.model.muscles[m].spec.name.as_str())
+        .collect();
+    // States: an excitation (and an extra column) nobody reads.
+    let mut t = rad.clone();
+    t.rows[1][column(soleus)] = f64::NAN;
+    let p = dir.join("exc_nan.sto");
+    t.write_sto(&p).unwrap();
+    let want = format!(
+        "{}: column '{soleus}': row 2 (t = 0.05): NaN is not a finite number",
+        p.display()
+    );
+    let e = leap::analyze::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(e, want);
+    let mut t = rad.clone();
+    t.labels.push("/extra".into());
+    for (r, row) in t.rows.iter_mut().enumerate() {
+        row.push(if r == 2 { f64::NEG_INFINITY } else { 0.0 });
+    }
+    t.write_sto(&p).unwrap();
+    let e = leap::analyze::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: column '/extra': row 3 (t = 0.1): -inf is not a finite number",
+            p.display()
+        )
+    );
+    // Controls: a state column nobody reads.
+    let mut t = rad.clone();
+    t.rows[2][column(hip)] = f64::NAN;
+    t.write_sto(&p).unwrap();
+    let e = Controls::from_file(&p, &muscles).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: column '{hip}': row 3 (t = 0.1): NaN is not a finite number",
+            p.display()
+        )
+    );
+    // An excitation that is read keeps its own reason.
+    let e = Controls::from_file(Path::new("tests/data/controls/jumper_nan.sto"), &muscles)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("row 2 (t = 0.1): excitation NaN is not a number in [0, 1]"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// With `inDegrees=yes`, a left column that differs from its right
+/// partner is shown with the file's own values, in degrees, and said to
+/// be: they had been shown converted to radians, without a word.
+#[test]
+fn a_left_right_mismatch_in_degrees_shows_the_files_values() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("mismatch_degrees");
+    let mut deg = in_degrees(&states_table(eq, ocp.x0()), "yes");
+    let (knee_l, knee_r) = (
+        "/jointset/knee_l/knee_angle_l/value",
+        "/jointset/knee_r/knee_angle_r/value",
+    );
+    let column = |l: &str| deg.labels.iter().position(|x| x == l).unwrap();
+    let (kl, kr) = (column(knee_l), column(knee_r));
+    deg.rows[2][kr] = -80.0;
+    deg.rows[2][kl] = -70.0;
+    let p = dir.join("deg.sto");
+    deg.write_sto(&p).unwrap();
+    let e = leap::io::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: columns '{knee_l}' and '{knee_r}' differ at row 3 (t = 0.1): -70 and -80 (the file's values, in degrees); the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns",
+            p.display()
+        )
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A left column that differs from its right partner is named with it,
+/// neither as the culprit: the right one may be the absurd one.
+#[test]
+fn a_left_right_mismatch_names_both_columns_alike() {
+    let ocp = jumper_ocp();
+    let eq = &ocp.eq;
+    let dir = scratch("mismatch");
+    let mut t = states_table(eq, ocp.x0());
+    let (left, right) = (
+        "/forceset/soleus_l/fiber_length",
+        "/forceset/soleus_r/fiber_length",
+    );
+    let k = t.labels.iter().position(|x| x == right).unwrap();
+    t.rows[1][k] = 1e6;
+    let p = dir.join("huge.sto");
+    t.write_sto(&p).unwrap();
+    // The left value as the file gives it.
+    let kl = t.labels.iter().position(|x| x == left).unwrap();
+    let fibre = StoTable::read(&p).unwrap().rows[1][kl];
+    let e = leap::io::read_states(eq, &p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        format!(
+            "{}: columns '{left}' and '{right}' differ at row 2 (t = 0.05): {fibre} and 1e6; the symmetric model gives both legs one value, its right leg's: give both columns the same values, or leave out the left leg's columns",
+            p.display()
+        )
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
