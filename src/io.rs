@@ -210,9 +210,10 @@ impl StoTable {
 
     /// Read a `.sto` or `.mot` file (version 1 or 3; tabs or spaces, a tab
     /// ending the label line and the data lines making no column; lines
-    /// ended by LF, CRLF or CR alone (old Mac OS); a UTF-8 byte-order mark). Values are as in the file: see
-    /// [`read_states`] for degrees. A header's `nRows` and `nColumns`
-    /// (time included) must count the file's data rows and columns.
+    /// ended by LF, CRLF or CR alone (old Mac OS); a UTF-8 byte-order
+    /// mark). Values are as in the file: see [`read_states`] for degrees.
+    /// A header's `nRows` and `nColumns` (time included) must count the
+    /// file's data rows and columns.
     pub fn read(path: &Path) -> Result<Self, StoError> {
         let bytes = read_input(path).map_err(|error| StoError::Io {
             file: path.into(),

@@ -1017,7 +1017,7 @@ fn simulate(
                     "warning: {}: {} column(s) name no muscle of the model and are not read: {}{more}",
                     p.display(),
                     unread.len(),
-                    leap::solve::label_list(&unread[..unread.len().min(10)])
+                    unread[..unread.len().min(10)].join(", ")
                 );
             }
             c.check_run(p, st.t_max)?;

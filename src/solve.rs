@@ -121,22 +121,6 @@ fn bang_bang_failure(model: &Model, method: Method, e: impl std::fmt::Display) -
     )
 }
 
-/// Column labels for a message, comma-separated; an empty label is named
-/// as such (it would print as nothing).
-pub fn label_list(labels: &[String]) -> String {
-    labels
-        .iter()
-        .map(|l| {
-            if l.is_empty() {
-                "(an empty label)"
-            } else {
-                l.as_str()
-            }
-        })
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
 /// Create the results directory `dir` (and its parents), with an error
 /// that says what stands in the way (the OS's own, "File exists", does not
 /// say that a regular file has the directory's name).
@@ -1693,7 +1677,7 @@ impl SolveReport {
                 "  warning: {}: {} column(s) name no muscle of the model and are not read: {}\n",
                 self.guess,
                 self.unread_guess_columns.len(),
-                label_list(&self.unread_guess_columns)
+                self.unread_guess_columns.join(", ")
             ));
         }
         if !self.removed_stale_files.is_empty() {
@@ -1703,18 +1687,5 @@ impl SolveReport {
             ));
         }
         s
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    /// An empty label is named, not printed as nothing.
-    #[test]
-    fn label_list_names_an_empty_label() {
-        let labels = ["/forceset/solues_r".to_string(), String::new()];
-        assert_eq!(
-            super::label_list(&labels),
-            "/forceset/solues_r, (an empty label)"
-        );
     }
 }
