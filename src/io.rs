@@ -248,6 +248,7 @@ impl StoTable {
         // key given twice with different values (which one holds is
         // anyone's guess).
         let mut header: BTreeMap<String, (String, usize)> = BTreeMap::new();
+        let mut version: Option<String> = None;
         for (i, raw) in lines.by_ref() {
             let line = raw.trim();
             if line == "endheader" {
@@ -256,6 +257,9 @@ impl StoTable {
             }
             if let Some((k, v)) = line.split_once('=') {
                 let (k, v) = (k.trim(), v.trim());
+                if k == "version" {
+                    version = Some(v.to_string());
+                }
                 if !matches!(k, "DataType" | "version" | "OpenSimVersion") {
                     if let Some((old, line)) = header.get(k).filter(|(old, _)| *old != v) {
                         return Err(perr(
@@ -331,11 +335,15 @@ impl StoTable {
                 ),
             ));
         }
-        // A count the header declares (OpenSim's Storage writes `nRows`
-        // and `nColumns`, time a column, as `write_mot` does) must be the
-        // file's: a file cut at a line boundary reads as whole otherwise.
+        // A count the header of a version-1 file declares (OpenSim's
+        // Storage writes `nRows` and `nColumns`, time a column, as
+        // `write_mot` does) must be the file's: a file cut at a line
+        // boundary reads as whole otherwise. From version 2 on, OpenSim's
+        // reader ignores them and its tables write them back unchanged
+        // after a trim or a new column: not checked there, as OpenSim does.
+        let counts_hold = version.as_deref().is_none_or(|v| v == "1");
         let declared = |key: &str| -> Result<Option<usize>, StoError> {
-            let Some((v, _)) = header.get(key) else {
+            let Some((v, _)) = header.get(key).filter(|_| counts_hold) else {
                 return Ok(None);
             };
             v.parse().map(Some).map_err(|_| StoError::Header {
@@ -473,9 +481,23 @@ impl StoTable {
     /// [`Self::check_time`] checks) is finite, also in the columns the
     /// caller does not read: a NaN or infinity is refused naming its row,
     /// time and column, as [`Self::finite_columns`] (which runs it) does.
+    /// A Moco solution's parameter columns (`num_parameters` in the header)
+    /// hold their value in the first row and NaN in every later one, as
+    /// `MocoTrajectory` writes them: such a column is not refused.
     pub fn check_finite(&self, path: &Path) -> Result<(), StoError> {
+        let moco_parameters = self
+            .metadata
+            .get("num_parameters")
+            .and_then(|v| v.trim().parse::<usize>().ok())
+            .is_some_and(|n| n > 0);
+        let parameter_column = |k: usize| {
+            moco_parameters
+                && self.rows.first().is_some_and(|r| r[k].is_finite())
+                && self.rows.iter().skip(1).all(|r| r[k].is_nan())
+        };
+        let exempt: Vec<bool> = (0..self.labels.len()).map(parameter_column).collect();
         for (r, row) in self.rows.iter().enumerate() {
-            if let Some(k) = row.iter().position(|v| !v.is_finite()) {
+            if let Some(k) = (0..row.len()).find(|&k| !exempt[k] && !row[k].is_finite()) {
                 return Err(StoError::Column {
                     file: path.into(),
                     column: self.labels[k].clone(),

@@ -412,7 +412,7 @@ impl Shooting {
             .simulate_bang_bang(1e-6)
             .map_err(|f| OcpError::Simulation(f.to_string()))?;
         let tf = summary.liftoff_time_s.ok_or_else(|| {
-            OcpError::Simulation(format!(
+            OcpError::Invalid(format!(
                 "the bang-bang jump does not lift off within {} s",
                 summary.final_time_s
             ))

@@ -579,6 +579,15 @@ fn header_row_and_column_counts_that_disagree_with_the_file_are_refused() {
             .unwrap_err()
             .to_string();
         assert_eq!(e, want, "{header}");
+        // Without a version the counts hold as in version 1; from version
+        // 2 on OpenSim's reader ignores them (its tables write them back
+        // unchanged after a trim), and so does leap's.
+        let e = StoTable::parse(&format!("m\n{header}\n{body}"), p)
+            .unwrap_err()
+            .to_string();
+        assert_eq!(e, want, "{header}");
+        let t = StoTable::parse(&format!("m\nversion=3\n{header}\n{body}"), p).unwrap();
+        assert_eq!((t.labels.len(), t.time.len()), (2, 2), "{header}");
     }
     // A file leap wrote, cut after its third data row.
     let dir = scratch("counts");
@@ -808,4 +817,27 @@ fn a_left_right_mismatch_names_both_columns_alike() {
         )
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A Moco solution with parameters holds each parameter's value in the
+/// first row and NaN in the later ones (`MocoTrajectory::convertToTable`):
+/// such a column is read past, while the same NaNs without
+/// `num_parameters` in the header, or a NaN in a parameter column's first
+/// row, are refused.
+#[test]
+fn moco_parameter_columns_with_nan_after_the_first_row_are_accepted() {
+    let p = Path::new("params.sto");
+    let body =
+        "endheader\ntime\ta\t/bodyset/torso/mass_param\n0\t1\t70\n0.1\t2\tNaN\n0.2\t3\tNaN\n";
+    let t = StoTable::parse(&format!("num_parameters=1\n{body}"), p).unwrap();
+    t.check_finite(p).unwrap();
+    let t = StoTable::parse(body, p).unwrap();
+    let e = t.check_finite(p).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "params.sto: column '/bodyset/torso/mass_param': row 2 (t = 0.1): NaN is not a finite number"
+    );
+    let first_nan = body.replace("\t70\n", "\tNaN\n");
+    let t = StoTable::parse(&format!("num_parameters=1\n{first_nan}"), p).unwrap();
+    assert!(t.check_finite(p).is_err());
 }
