@@ -195,8 +195,19 @@ fn remove_stale_results(
 /// Remove the QPs an earlier run dumped into `dir` (`qp_iter*.json`), so
 /// that the directory holds this run's only. Returns how many.
 fn remove_stale_qp_dumps(dir: &Path) -> Result<usize, SolveError> {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return Ok(0);
+    let entries = match std::fs::read_dir(dir) {
+        Ok(e) => e,
+        // No directory yet: nothing of an earlier run to remove.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
+        Err(e) => return Err(SolveError::Io {
+            file: dir.into(),
+            error: std::io::Error::new(
+                e.kind(),
+                format!(
+                    "--dump-qps: cannot read the QP directory to remove an earlier run's QPs: {e}"
+                ),
+            ),
+        }),
     };
     let mut n = 0;
     for e in entries.flatten() {
