@@ -549,16 +549,24 @@ pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
 /// outside its range [lo, hi] unit") of each.
 pub(crate) fn coordinates_outside_range(eq: &StateEquation, x: &[f64]) -> Vec<(usize, String)> {
     let model = &eq.model;
+    let outside: Vec<usize> = (0..eq.nq())
+        .filter(|&k| {
+            let [lo, hi] = model.coordinates[eq.system.coordinates[k]].range;
+            !(lo..=hi).contains(&x[k])
+        })
+        .collect();
+    if outside.is_empty() {
+        // The usual row (`leap analyze` checks every one): no names built.
+        return Vec::new();
+    }
     let names = eq.state_names();
     let rotational = crate::io::rotational_coordinates(eq);
-    (0..eq.nq())
-        .filter_map(|k| {
+    outside
+        .into_iter()
+        .map(|k| {
             let [lo, hi] = model.coordinates[eq.system.coordinates[k]].range;
-            if (lo..=hi).contains(&x[k]) {
-                return None;
-            }
             let unit = if rotational.contains(&k) { "rad" } else { "m" };
-            Some((
+            (
                 k,
                 format!(
                     "{} = {} {unit} lies outside its range [{}, {}] {unit}",
@@ -567,7 +575,7 @@ pub(crate) fn coordinates_outside_range(eq: &StateEquation, x: &[f64]) -> Vec<(u
                     crate::io::readable(lo),
                     crate::io::readable(hi)
                 ),
-            ))
+            )
         })
         .collect()
 }

@@ -180,16 +180,24 @@ fn remove_stale_results(
         if written.contains(&p) || !p.is_file() {
             continue;
         }
-        std::fs::remove_file(&p).map_err(|e| SolveError::Io {
-            file: p.clone(),
-            error: std::io::Error::new(
-                e.kind(),
-                format!("cannot remove this result file of an earlier run, which this run did not write: {e}"),
-            ),
+        std::fs::remove_file(&p).map_err(|e| {
+            io_error(
+                &p,
+                e,
+                "cannot remove this result file of an earlier run, which this run did not write",
+            )
         })?;
         removed.push(p.display().to_string());
     }
     Ok(removed)
+}
+
+/// An I/O error on `file`, `what` failed, with the OS's reason.
+fn io_error(file: &Path, e: std::io::Error, what: &str) -> SolveError {
+    SolveError::Io {
+        file: file.into(),
+        error: std::io::Error::new(e.kind(), format!("{what}: {e}")),
+    }
 }
 
 /// Remove the QPs an earlier run dumped into `dir` (`qp_iter*.json`), so
@@ -199,15 +207,13 @@ fn remove_stale_qp_dumps(dir: &Path) -> Result<usize, SolveError> {
         Ok(e) => e,
         // No directory yet: nothing of an earlier run to remove.
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(0),
-        Err(e) => return Err(SolveError::Io {
-            file: dir.into(),
-            error: std::io::Error::new(
-                e.kind(),
-                format!(
-                    "--dump-qps: cannot read the QP directory to remove an earlier run's QPs: {e}"
-                ),
-            ),
-        }),
+        Err(e) => {
+            return Err(io_error(
+                dir,
+                e,
+                "--dump-qps: cannot read the QP directory to remove an earlier run's QPs",
+            ))
+        }
     };
     let mut n = 0;
     for e in entries.flatten() {
@@ -217,12 +223,8 @@ fn remove_stale_qp_dumps(dir: &Path) -> Result<usize, SolveError> {
             .and_then(|f| f.to_str())
             .is_some_and(|f| f.starts_with("qp_iter") && f.ends_with(".json"));
         if is_dump && p.is_file() {
-            std::fs::remove_file(&p).map_err(|e| SolveError::Io {
-                file: p.clone(),
-                error: std::io::Error::new(
-                    e.kind(),
-                    format!("--dump-qps: cannot remove this QP of an earlier run: {e}"),
-                ),
+            std::fs::remove_file(&p).map_err(|e| {
+                io_error(&p, e, "--dump-qps: cannot remove this QP of an earlier run")
             })?;
             n += 1;
         }
