@@ -117,6 +117,10 @@ enum Command {
         /// Results directory (default: the study's output_directory, results/).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Model file (JSON), in place of the study's model (default:
+        /// models/jumper.json in the working directory, else leap's own).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// collocation (default) or shooting (the paper's direct shooting:
         /// excitations at the nodes, Dormand–Prince 5(4), forward
         /// sensitivities, about 1 s per iteration; the study's
@@ -308,6 +312,10 @@ enum BenchCommand {
     Solve {
         /// Study file (as `leap solve`).
         study: Option<PathBuf>,
+        /// Model file (JSON), in place of the study's model (as `leap
+        /// solve --model`).
+        #[arg(long)]
+        model: Option<PathBuf>,
         /// Solves per mesh (the medians over all runs are reported).
         #[arg(long, default_value_t = 1, value_parser = bench_repeats)]
         repeats: usize,
@@ -491,6 +499,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
         Command::Solve {
             study,
             out,
+            model,
             method,
             num_mesh_intervals,
             max_iterations,
@@ -520,7 +529,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 no_forward_check,
                 dump_qps,
             };
-            solve(study, overrides, json, quiet, verbose)
+            solve(study, model, overrides, json, quiet, verbose)
         }
         Command::Analyze {
             states,
@@ -803,13 +812,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
             which:
                 BenchCommand::Solve {
                     study,
+                    model,
                     repeats,
                     hessian,
                     num_mesh_intervals,
                     json,
                 },
         } => {
-            let config = leap::study::SolveConfig::load(study.as_deref())?;
+            let config =
+                leap::study::SolveConfig::load_with_model(study.as_deref(), model.as_deref())?;
             let name = study.map_or("built-in jump study".into(), |p| p.display().to_string());
             let report = leap::bench::solve(
                 &config,
@@ -1221,6 +1232,7 @@ fn simulate(
 
 fn solve(
     study: Option<PathBuf>,
+    model: Option<PathBuf>,
     overrides: leap::study::Overrides,
     json: bool,
     quiet: bool,
@@ -1238,7 +1250,8 @@ fn solve(
         }
         eprintln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
     });
-    let mut config = leap::study::SolveConfig::load(study.as_deref())?;
+    let mut config =
+        leap::study::SolveConfig::load_with_model(study.as_deref(), model.as_deref())?;
     config.apply(&overrides)?;
     if handler.is_ok() {
         config.settings.interrupt = Some(interrupt);

@@ -529,6 +529,17 @@ impl SolveStudy {
     /// `file` (the study's own file, None for the built-in study) and check
     /// every value.
     pub fn resolve(&self, file: Option<&Path>) -> Result<SolveConfig, StudyError> {
+        self.resolve_with_model(file, None)
+    }
+
+    /// [`Self::resolve`], with the model file named on the command line
+    /// (`--model`, relative to the working directory) in place of the
+    /// study's `model`.
+    pub fn resolve_with_model(
+        &self,
+        file: Option<&Path>,
+        model_override: Option<&Path>,
+    ) -> Result<SolveConfig, StudyError> {
         let origin = file
             .map(|p| p.display().to_string())
             .unwrap_or_else(|| "built-in study".into());
@@ -624,15 +635,25 @@ impl SolveStudy {
             }
         }
 
-        let model = match &self.model {
-            Some(m) => {
+        let model = match (model_override, &self.model) {
+            (Some(p), _) => {
+                if let Some(why) = crate::io::input_file_problem(p) {
+                    return Err(StudyError::Field {
+                        origin: "command line".into(),
+                        field: "--model".into(),
+                        reason: format!("model file '{}' {why}", p.display()),
+                    });
+                }
+                p.to_path_buf()
+            }
+            (None, Some(m)) => {
                 let p = rel(m);
                 if let Some(why) = crate::io::input_file_problem(&p) {
                     return Err(err("model", format!("model file '{}' {why}", p.display())));
                 }
                 p
             }
-            None => default_model()
+            (None, None) => default_model()
                 .ok_or_else(|| err("model", format!("the default model '{DEFAULT_MODEL}' is found neither in the working directory nor in leap's source tree; name one")))?,
         };
 
@@ -854,9 +875,15 @@ impl SolveConfig {
 
     /// Read and resolve a study file, or the built-in study.
     pub fn load(file: Option<&Path>) -> Result<Self, StudyError> {
+        Self::load_with_model(file, None)
+    }
+
+    /// [`Self::load`], with the model file named on the command line
+    /// (`--model`) in place of the study's.
+    pub fn load_with_model(file: Option<&Path>, model: Option<&Path>) -> Result<Self, StudyError> {
         match file {
-            Some(p) => SolveStudy::from_file(p)?.resolve(Some(p)),
-            None => Self::builtin(),
+            Some(p) => SolveStudy::from_file(p)?.resolve_with_model(Some(p), model),
+            None => SolveStudy::default().resolve_with_model(None, model),
         }
     }
 

@@ -105,6 +105,14 @@ fn bad_command_line_values_name_the_option() {
             "--backend",
         ),
         (vec!["solve", "no_such_study.json"], "no_such_study.json"),
+        (
+            vec!["solve", "--model", "no_such_model.json"],
+            "command line: --model: model file 'no_such_model.json' not found",
+        ),
+        (
+            vec!["bench", "solve", "--model", "no_such_model.json"],
+            "--model: model file 'no_such_model.json' not found",
+        ),
         // A benchmark's runs and iterations are bounded (an unbounded
         // count ran for hours without a word).
         (
@@ -841,6 +849,30 @@ fn solve_json(args: &[&std::ffi::OsStr], out: &Path) -> serde_json::Value {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(matches!(o.status.code(), Some(0 | 1)), "{args:?}: {err}");
     serde_json::from_slice(&o.stdout).unwrap()
+}
+
+/// `--model` replaces the study's model: the paper's study on the reduced
+/// model is, to the bit, the study that names the reduced model in its
+/// file, and not the paper's study on the default model.
+#[test]
+fn the_model_option_replaces_the_studys_model() {
+    let out = fresh_dir("model_option");
+    let small = ["--num-mesh-intervals", "4", "--max-iterations", "2"];
+    let with = |a: &[&str]| solve_json(&args(&[a, &small[..]].concat()), &out);
+    let given = with(&[
+        "models/jump_collocation.json",
+        "--model",
+        "models/jumper_reduced.json",
+    ]);
+    let named = with(&["models/jump_reduced.json"]);
+    let default = with(&["models/jump_collocation.json"]);
+    assert_eq!(given["model"], "models/jumper_reduced.json");
+    for key in ["variables", "constraints", "objective", "iterations"] {
+        assert_eq!(given[key], named[key], "{key}");
+    }
+    assert_ne!(given["variables"], default["variables"]);
+    assert_ne!(given["objective"], default["objective"]);
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// Command-line words as `solve_json` takes them.
