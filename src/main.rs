@@ -1250,8 +1250,7 @@ fn solve(
         }
         eprintln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
     });
-    let mut config =
-        leap::study::SolveConfig::load_with_model(study.as_deref(), model.as_deref())?;
+    let mut config = leap::study::SolveConfig::load_with_model(study.as_deref(), model.as_deref())?;
     config.apply(&overrides)?;
     if handler.is_ok() {
         config.settings.interrupt = Some(interrupt);

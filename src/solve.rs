@@ -414,6 +414,9 @@ pub struct SolveReport {
     /// "simbody" ([`crate::transcription::Backend`]).
     pub backend: &'static str,
     pub hessian: HessianMode,
+    /// The Hessian as a study names it ("exact", "exact-block-diagonal",
+    /// "exact-inertia-corrected", "bfgs"; `--hessian`).
+    pub hessian_option: &'static str,
     /// The problem solved (the study's `problem`): bounds on t_f (s), the
     /// number of eq. 4's rows, and whether the rows Ẏ_C ≥ 0 at every node
     /// were imposed.
@@ -633,6 +636,7 @@ pub fn run(
     report.unread_guess_columns = unread_guess;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
+    report.hessian_option = crate::study::hessian_option_name(&config.settings);
 
     // Outputs.
     let mesh = tr.unpack(&result.x);
@@ -772,6 +776,7 @@ fn run_shooting(
     report.guess_jump_height_m = guess_jump;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
+    report.hessian_option = crate::study::hessian_option_name(&config.settings);
     report.ignored_study_settings = config.ignored.clone();
     let o = sh.options();
     report.shooting = Some(ShootingSummary {
@@ -1105,6 +1110,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         fiber_dynamics: q.mesh.2,
         backend: q.backend,
         hessian: r.hessian,
+        hessian_option: "",
         time_final_bounds: ocp.options.final_time_bounds,
         no_countermovement_nodes: ocp.options.no_countermovement_nodes,
         no_com_descent: ocp.options.no_com_descent,
@@ -1421,11 +1427,42 @@ fn forward_check(
     Ok((report, files))
 }
 
+/// The table of `rows` under `header`, one row each (the paper's Table 2
+/// layout), or, on a terminal too narrow for that, transposed: one line
+/// per column of `header`, one column per row.
+fn table_fitting_terminal(header: &[&str], rows: &[Vec<String>]) -> String {
+    let mut t = comfy_table::Table::new();
+    t.set_header(header.to_vec());
+    for r in rows {
+        t.add_row(r.clone());
+    }
+    let text = t.to_string();
+    let widest = text.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+    match t.width() {
+        Some(w) if widest > usize::from(w) => transposed(header, rows).to_string(),
+        _ => text,
+    }
+}
+
+/// `rows` under `header` as columns: `header[0]` and the rows' first cells
+/// head the columns, each further header cell leads a line.
+fn transposed(header: &[&str], rows: &[Vec<String>]) -> comfy_table::Table {
+    let mut t = comfy_table::Table::new();
+    let mut top = vec![header[0].to_string()];
+    top.extend(rows.iter().map(|r| r[0].clone()));
+    t.set_header(top);
+    for (i, name) in header.iter().enumerate().skip(1) {
+        let mut line = vec![name.to_string()];
+        line.extend(rows.iter().map(|r| r[i].clone()));
+        t.add_row(line);
+    }
+    t
+}
+
 impl SolveReport {
     /// The paper's Table 2 row and the forward check, for a terminal.
     pub fn table(&self) -> String {
-        let mut t = comfy_table::Table::new();
-        t.set_header(vec![
+        let header = [
             "",
             "iterations",
             "time (s)",
@@ -1435,8 +1472,8 @@ impl SolveReport {
             "lift-off COM velocity (m/s)",
             "peak vertical GRF (BW)",
             "max constraint violation",
-        ]);
-        t.add_row(vec![
+        ];
+        let leap = vec![
             "leap".to_string(),
             self.iterations.to_string(),
             format!("{:.2}", self.wall_time_s),
@@ -1446,7 +1483,7 @@ impl SolveReport {
             format!("{:.3}", self.liftoff_com_velocity_mps),
             format!("{:.2}", self.peak_vertical_grf_bw),
             format!("{:.2e}", self.max_constraint_violation),
-        ]);
+        ];
         // Porsa et al. (2016): the cost of their solve by the same method
         // (MATLAB fmincon, 29 nodes), the predicted jump over their solves,
         // and the measured jumps (mean and range).
@@ -1454,7 +1491,7 @@ impl SolveReport {
             Method::Collocation => ("702", "12240 (3.4 h CPU)", "17.4"),
             Method::Shooting => ("602", "3045600 (846 h CPU)", "5059"),
         };
-        t.add_row(vec![
+        let paper = [
             "Porsa et al. 2016",
             iterations,
             time,
@@ -1464,8 +1501,8 @@ impl SolveReport {
             "2.2",
             "3.0–3.1",
             "≤ 1e-3",
-        ]);
-        t.add_row(vec![
+        ];
+        let experiment = [
             "experiment (Porsa et al. 2016)",
             "",
             "",
@@ -1475,13 +1512,19 @@ impl SolveReport {
             "2.0–2.5",
             "2.5–3.0",
             "",
-        ]);
+        ];
+        let rows = [
+            leap,
+            paper.map(String::from).to_vec(),
+            experiment.map(String::from).to_vec(),
+        ];
+        let t = table_fitting_terminal(&header, &rows);
         let mut s = format!(
-            "jump solve ({} mesh intervals, {}, {} fibre dynamics, {:?} Hessian{}): {} ({}){}\n{t}\n",
+            "jump solve ({} mesh intervals, {}, {} fibre dynamics, {} Hessian{}): {} ({}){}\n{t}\n",
             self.num_mesh_intervals,
             self.scheme,
             self.fiber_dynamics,
-            self.hessian,
+            self.hessian_option,
             if self.backend == "rust-native" {
                 String::new()
             } else {
@@ -1716,5 +1759,33 @@ impl SolveReport {
             ));
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The transposed table holds cell (i, j) of the row table at (j, i).
+    #[test]
+    fn transposed_table_swaps_rows_and_columns() {
+        let header = ["", "a", "b"];
+        let rows = vec![
+            vec!["x".to_string(), "1".into(), "2".into()],
+            vec!["y".to_string(), "3".into(), "".into()],
+        ];
+        let t = transposed(&header, &rows);
+        let cells =
+            |r: &comfy_table::Row| -> Vec<String> { r.cell_iter().map(|c| c.content()).collect() };
+        assert_eq!(cells(t.header().unwrap()), ["", "x", "y"]);
+        assert_eq!(cells(t.row(0).unwrap()), ["a", "1", "3"]);
+        assert_eq!(cells(t.row(1).unwrap()), ["b", "2", ""]);
+        assert!(t.row(2).is_none());
+        // Off a terminal the row layout stays.
+        let text = table_fitting_terminal(&header, &rows);
+        assert!(
+            text.lines().any(|l| l.contains(" x ") && l.contains(" 2 ")),
+            "{text}"
+        );
     }
 }

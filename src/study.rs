@@ -1233,6 +1233,24 @@ pub fn scheme_name(s: Scheme) -> &'static str {
         .unwrap_or("?")
 }
 
+/// The Hessian of `settings` as a study names it ([`apply_hessian`]'s
+/// inverse): "exact", "exact-block-diagonal", "exact-inertia-corrected" or
+/// "bfgs" ("exact-absolute" for the library's mirrored eigenvalues, which
+/// no study sets).
+pub fn hessian_option_name(settings: &SqpSettings) -> &'static str {
+    match (settings.hessian, settings.convexification) {
+        (HessianMode::PartitionedBfgs, _) => "bfgs",
+        (HessianMode::ExactConvexified, Convexification::InertiaCorrection) => {
+            "exact-inertia-corrected"
+        }
+        (HessianMode::ExactConvexified, _) if settings.block_diagonal_elements => {
+            "exact-block-diagonal"
+        }
+        (HessianMode::ExactConvexified, Convexification::Absolute) => "exact-absolute",
+        (HessianMode::ExactConvexified, Convexification::Clip) => "exact",
+    }
+}
+
 /// A study's Hessian choice: "exact", "exact-block-diagonal" (exact, with
 /// the transcription's block-diagonal approximation,
 /// [`SqpSettings::block_diagonal_elements`]), "exact-inertia-corrected"
@@ -1882,5 +1900,32 @@ mod tests {
             );
             assert!(e.contains("--integrate-guess"), "{g}: {e}");
         }
+    }
+
+    /// The Hessian's name in the summary is the study's own: the inverse
+    /// of `apply_hessian` for every option, also after another option.
+    #[test]
+    fn hessian_option_name_inverts_apply_hessian() {
+        let options = [
+            "exact",
+            "exact-block-diagonal",
+            "exact-inertia-corrected",
+            "bfgs",
+        ];
+        for before in options {
+            for h in options {
+                let mut settings = SqpSettings::default();
+                apply_hessian(&mut settings, before).unwrap();
+                apply_hessian(&mut settings, h).unwrap();
+                assert_eq!(hessian_option_name(&settings), h, "{before} then {h}");
+            }
+        }
+        let c = SolveConfig::builtin().unwrap();
+        assert_eq!(hessian_option_name(&c.settings), "exact");
+        let c = SolveStudy::from_json_str(r#"{"method": "shooting"}"#, "t")
+            .unwrap()
+            .resolve(None)
+            .unwrap();
+        assert_eq!(hessian_option_name(&c.settings), "bfgs");
     }
 }
