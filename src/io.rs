@@ -477,6 +477,39 @@ impl StoTable {
         Ok(())
     }
 
+    /// How many columns a Moco trajectory holds after its states, controls
+    /// and input controls: its multipliers, derivatives, slacks and
+    /// parameters, in this order at the end (`MocoTrajectory`'s blocks,
+    /// counted by its header's `num_*` keys). 0 for a file without those
+    /// keys, or whose counts do not add up to its columns.
+    pub fn moco_columns_after_controls(&self) -> usize {
+        let count = |key: &str| -> Option<usize> {
+            match self.metadata.get(key) {
+                Some(v) => v.trim().parse().ok(),
+                None => Some(0),
+            }
+        };
+        if !(self.metadata.contains_key("num_states") && self.metadata.contains_key("num_controls"))
+        {
+            return 0;
+        }
+        let blocks = |keys: &[&str]| -> Option<usize> {
+            keys.iter()
+                .try_fold(0usize, |sum, k| sum.checked_add(count(k)?))
+        };
+        let leading = blocks(&["num_states", "num_controls", "num_input_controls"]);
+        let trailing = blocks(&[
+            "num_multipliers",
+            "num_derivatives",
+            "num_slacks",
+            "num_parameters",
+        ]);
+        match (leading, trailing) {
+            (Some(l), Some(t)) if l.checked_add(t) == Some(self.labels.len()) => t,
+            _ => 0,
+        }
+    }
+
     /// Check that every value of every column but time (which
     /// [`Self::check_time`] checks) is finite, also in the columns the
     /// caller does not read: a NaN or infinity is refused naming its row,
@@ -961,11 +994,14 @@ fn excitation_labels(m: &str) -> [String; 3] {
 /// `/forceset/<x>`, or without a `/`) but name none of `muscles` (every
 /// muscle of the model, both legs): a misspelt muscle, or an actuator the
 /// model does not have. Nothing reads them; state columns (a solution's)
-/// are not counted.
+/// are not counted, nor a Moco trajectory's columns after its controls
+/// ([`StoTable::moco_columns_after_controls`]: multipliers
+/// `lambda_cid<k>_p<j>`, slacks and parameters have no `/` either).
 pub fn unread_excitation_columns(t: &StoTable, muscles: &[&str]) -> Vec<String> {
     let known: std::collections::HashSet<String> =
         muscles.iter().flat_map(|m| excitation_labels(m)).collect();
-    t.labels
+    let controls_end = t.labels.len() - t.moco_columns_after_controls();
+    t.labels[..controls_end]
         .iter()
         .filter(|l| {
             let control_like = l
@@ -1127,6 +1163,31 @@ impl Controls {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A Moco solution's multipliers, slacks and parameters carry no `/`
+    /// but are no excitations: only a misspelt control is reported. A
+    /// header whose counts do not match the columns counts every column.
+    #[test]
+    fn moco_columns_after_the_controls_are_not_unread_excitations() {
+        let text = |states: usize| {
+            format!(
+                "num_states={states}\nnum_controls=2\nnum_multipliers=1\nnum_derivatives=1\n\
+                 num_slacks=1\nnum_parameters=1\nendheader\n\
+                 time\t/jointset/hip_r/hip_flexion_r/value\t/forceset/soleus_r\tsolues_r\t\
+                 lambda_cid0_p0\t/jointset/hip_r/hip_flexion_r/accel\tgamma_cid0_p0\tmass_scale\n\
+                 0\t0.1\t0.5\t0.5\t0\t0\t0\t1.2\n"
+            )
+        };
+        let t = StoTable::parse(&text(1), Path::new("s.sto")).unwrap();
+        assert_eq!(t.moco_columns_after_controls(), 4);
+        assert_eq!(unread_excitation_columns(&t, &["soleus_r"]), ["solues_r"]);
+        let t = StoTable::parse(&text(2), Path::new("s.sto")).unwrap();
+        assert_eq!(t.moco_columns_after_controls(), 0);
+        assert_eq!(
+            unread_excitation_columns(&t, &["soleus_r"]),
+            ["solues_r", "lambda_cid0_p0", "gamma_cid0_p0", "mass_scale"]
+        );
+    }
 
     #[test]
     fn a_byte_order_mark_is_stripped() {
