@@ -868,11 +868,10 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
     let columns = eq.model_state_columns();
-    let nq = eq.nq();
-    let rotational = rotational_coordinates(eq);
     let degrees = t.in_degrees(path)?;
     // A column in degrees: the value or speed of a rotational coordinate.
-    let in_degrees = |i: usize| degrees && i < 2 * nq && rotational.contains(&(i % nq));
+    let angular = angular_columns(eq);
+    let in_degrees = |label: &str| degrees && angular.contains(label);
     // The physical range of the muscle states, as `leap eval` checks it.
     for (k, label) in t.labels.iter().enumerate() {
         if !(label.ends_with("/activation") || label.ends_with("/fiber_length")) {
@@ -895,22 +894,40 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
         path,
         columns
             .iter()
-            .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(*i))),
+            .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(l))),
     )?;
-    if degrees {
-        for (name, i) in &columns {
-            if !in_degrees(*i) {
-                continue;
-            }
-            if let Some(k) = t.labels.iter().position(|l| l == name) {
-                for row in &mut t.rows {
-                    row[k] = row[k].to_radians();
-                }
+    to_radians(&mut t, &angular, degrees);
+    Ok(t)
+}
+
+/// The value and speed columns of the rotational coordinates of `eq`'s
+/// model, both legs (`/jointset/<joint>/<coordinate>/value`, `/speed`):
+/// the columns that a file with `inDegrees=yes` holds in degrees (deg/s).
+pub fn angular_columns(eq: &StateEquation) -> std::collections::HashSet<String> {
+    let nq = eq.nq();
+    let rotational = rotational_coordinates(eq);
+    eq.model_state_columns()
+        .into_iter()
+        .filter(|(_, i)| *i < 2 * nq && rotational.contains(&(i % nq)))
+        .map(|(label, _)| label)
+        .collect()
+}
+
+/// With `degrees` (the file's `inDegrees=yes`), convert the columns of `t`
+/// named in `angular` ([`angular_columns`]) to radians and mark the table
+/// `inDegrees=no`; other columns stay as they are.
+pub fn to_radians(t: &mut StoTable, angular: &std::collections::HashSet<String>, degrees: bool) {
+    if !degrees {
+        return;
+    }
+    for (k, label) in t.labels.iter().enumerate() {
+        if angular.contains(label) {
+            for row in &mut t.rows {
+                row[k] = row[k].to_radians();
             }
         }
-        t.metadata.insert("inDegrees".into(), "no".into());
     }
-    Ok(t)
+    t.metadata.insert("inDegrees".into(), "no".into());
 }
 
 /// `text` (an error message, which may echo its input: a column label of a

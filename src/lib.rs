@@ -25,6 +25,7 @@ pub mod nlp;
 pub mod ocp;
 pub mod ode;
 pub mod path;
+pub mod report;
 pub mod scalar;
 pub mod shooting;
 pub mod simbody;

@@ -223,6 +223,32 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Plot a trajectory file (a solution, states, controls or ground
+    /// forces) against time as Moco's report does: sections of coordinate
+    /// values, speeds, activations, fibre lengths and excitations, then
+    /// any other column, reference files drawn beneath; one SVG page.
+    Report {
+        /// The trajectory (.sto or .mot).
+        trajectory: PathBuf,
+        /// Files drawn beneath the trajectory, thicker (the forward
+        /// check's states, measured data): their columns of the same names.
+        #[arg(long = "ref-files", num_args = 1..)]
+        ref_files: Vec<PathBuf>,
+        /// A right and a left column in one panel, the left dashed.
+        #[arg(long)]
+        bilateral: bool,
+        /// The SVG file (default: <trajectory stem>_report.svg beside the
+        /// trajectory).
+        #[arg(long)]
+        output: Option<PathBuf>,
+        /// The model whose rotational coordinates a file in degrees holds
+        /// in degrees (default as every command's).
+        #[command(flatten)]
+        model: ModelFile,
+        /// Print JSON (the file written, its panels by section, warnings).
+        #[arg(long)]
+        json: bool,
+    },
     /// Print the state and control names `leap eval` expects, and the static
     /// squat as a ready-made input.
     Squat {
@@ -692,6 +718,55 @@ fn run(cli: Cli) -> Result<ExitCode> {
                     ]);
                 }
                 outln!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
+            }
+            Ok(ExitCode::SUCCESS)
+        }
+        Command::Report {
+            trajectory,
+            ref_files,
+            bilateral,
+            output,
+            model,
+            json,
+        } => {
+            let model = model.path();
+            let m = leap::model::Model::from_file(&model)?;
+            let (_, eq) = leap::ode::StateEquation::opensim(&m, false)?;
+            let angular = leap::io::angular_columns(&eq);
+            let (text, panels, warnings) =
+                leap::report::report(&trajectory, &ref_files, bilateral, &angular)?;
+            let output = output.unwrap_or_else(|| leap::report::default_output(&trajectory));
+            leap::io::write_output(&output, text)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
+            for w in &warnings {
+                eprintln!("warning: {w}");
+            }
+            if json {
+                // Sections in the report's order, each with its panels.
+                let mut sections: Vec<serde_json::Value> = Vec::new();
+                for p in &panels {
+                    let same = sections
+                        .last()
+                        .is_some_and(|s| s["section"] == p.section.title());
+                    if !same {
+                        sections
+                            .push(serde_json::json!({"section": p.section.title(), "panels": []}));
+                    }
+                    if let Some(a) = sections.last_mut().and_then(|s| s["panels"].as_array_mut()) {
+                        a.push(serde_json::json!(p.title));
+                    }
+                }
+                outln!(
+                    "{}",
+                    serde_json::to_string_pretty(&serde_json::json!({
+                        "output": output.display().to_string(),
+                        "panels": panels.len(),
+                        "sections": sections,
+                        "warnings": warnings,
+                    }))?
+                );
+            } else {
+                outln!("{} panels written to {}", panels.len(), output.display());
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -1268,6 +1343,20 @@ fn solve(
     } else if !quiet {
         out!("{}", report.table());
         outln!("  results in {}", config.output_directory.display());
+        // The command that plots them, the forward check beneath.
+        let named = |suffix: &str| {
+            report
+                .output_files
+                .iter()
+                .find(|f| f.ends_with(suffix))
+                .cloned()
+        };
+        if let Some(solution) = named("_solution.sto") {
+            let forward = named("_forward_states.sto")
+                .map(|f| format!(" --ref-files {f}"))
+                .unwrap_or_default();
+            outln!("  plots: leap report {solution}{forward}");
+        }
     }
     Ok(if report.success {
         ExitCode::SUCCESS

@@ -20,6 +20,7 @@ mod opensim_files;
 mod opensim_forward;
 mod paths;
 mod paths_opensim;
+mod report;
 mod robustness;
 mod shooting;
 mod simbody_bridge;

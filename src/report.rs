@@ -1,0 +1,442 @@
+//! `leap report`: a trajectory file plotted against time, panel by panel,
+//! as Moco's report (`opensim-moco report`, `Bindings/Python/report.py`)
+//! lays it out: sections of coordinate values, speeds, activations, fibre
+//! lengths and excitations (then any other column), three panels a row,
+//! reference files drawn first and thicker beneath the trajectory, the y
+//! axis held to [0, 1] where the data lie in it, and with `bilateral` a
+//! right and a left column (`_r`, `_l`) in one panel, the left dashed.
+//! Written as one SVG page, which any browser opens.
+//!
+//! Every file is read in radians: a file with `inDegrees=yes` has its
+//! rotational coordinates' columns converted ([`crate::io::to_radians`]),
+//! so that a file in degrees and one in radians overlay.
+
+use crate::io::{StoError, StoTable};
+use plotters::prelude::*;
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+
+/// A report could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum ReportError {
+    #[error(transparent)]
+    Sto(#[from] StoError),
+    #[error("{file}: {reason}")]
+    Input { file: PathBuf, reason: String },
+    #[error("drawing the report: {0}")]
+    Draw(String),
+}
+
+/// The sections of a report, in Moco's order; `Other` holds what no other
+/// section takes (ground forces of a `.mot`, say).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Section {
+    CoordinateValues,
+    CoordinateSpeeds,
+    Activations,
+    FiberLengths,
+    Excitations,
+    Other,
+}
+
+impl Section {
+    pub fn title(self) -> &'static str {
+        match self {
+            Section::CoordinateValues => "coordinate values",
+            Section::CoordinateSpeeds => "coordinate speeds",
+            Section::Activations => "activations",
+            Section::FiberLengths => "fibre lengths",
+            Section::Excitations => "excitations",
+            Section::Other => "other columns",
+        }
+    }
+}
+
+/// One file's column in a panel.
+#[derive(Debug, Clone)]
+pub struct Series {
+    /// Which file: 0 the trajectory, k the k-th reference.
+    pub file: usize,
+    /// The left column of a bilateral panel (drawn dashed).
+    pub left: bool,
+    pub time: Vec<f64>,
+    pub values: Vec<f64>,
+}
+
+/// One panel: a quantity over time, from one or more files.
+#[derive(Debug, Clone)]
+pub struct Panel {
+    pub section: Section,
+    /// The coordinate's or muscle's name, or the column's label.
+    pub title: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+}
+
+/// A file to plot: its name in the legend and its table, in radians.
+pub struct ReportFile {
+    pub name: String,
+    pub table: StoTable,
+}
+
+impl ReportFile {
+    /// Read `path`, converting the columns named in `angular` (the
+    /// model's rotational coordinates, [`crate::io::angular_columns`]) from
+    /// degrees where the header says `inDegrees=yes`. Time must increase
+    /// over two rows or more, and every value be finite.
+    pub fn read(path: &Path, angular: &HashSet<String>) -> Result<Self, ReportError> {
+        let mut table = StoTable::read(path)?;
+        table.check_time(path, 2)?;
+        table.check_finite(path)?;
+        let degrees = table.in_degrees(path)?;
+        crate::io::to_radians(&mut table, angular, degrees);
+        let name = path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| path.display().to_string());
+        Ok(ReportFile { name, table })
+    }
+}
+
+/// The section of a column, and the name its panel shows.
+fn classify(label: &str) -> (Section, String) {
+    let segments: Vec<&str> = label.split('/').filter(|s| !s.is_empty()).collect();
+    let before_last = |n: usize| segments.get(segments.len().wrapping_sub(n)).copied();
+    let last = before_last(1).unwrap_or(label);
+    let owner = before_last(2).unwrap_or(label).to_string();
+    if label.starts_with("/jointset/") && segments.len() == 4 {
+        match last {
+            "value" => return (Section::CoordinateValues, owner),
+            "speed" => return (Section::CoordinateSpeeds, owner),
+            _ => {}
+        }
+    }
+    if label.starts_with("/forceset/") {
+        match (segments.len(), last) {
+            (2, name) => return (Section::Excitations, name.to_string()),
+            (3, "activation") => return (Section::Activations, owner),
+            (3, "fiber_length") => return (Section::FiberLengths, owner),
+            _ => {}
+        }
+    }
+    (Section::Other, label.to_string())
+}
+
+/// The y axis label of a panel.
+fn y_label(section: Section, label: &str, angular: &HashSet<String>) -> String {
+    let angle = angular.contains(label);
+    match section {
+        Section::CoordinateValues if angle => "angle (rad)".into(),
+        Section::CoordinateValues => "position (m)".into(),
+        Section::CoordinateSpeeds if angle => "speed (rad/s)".into(),
+        Section::CoordinateSpeeds => "speed (m/s)".into(),
+        Section::Activations => "activation".into(),
+        Section::FiberLengths => "fibre length (m)".into(),
+        Section::Excitations => "excitation".into(),
+        // OpenSim's ExternalLoads names: ground_force_vx (or
+        // ground_force_r_vx, leap's), ground_force_px, ground_torque_x.
+        Section::Other => {
+            let ends = |ends: [&str; 3]| ends.iter().any(|e| label.ends_with(e));
+            if label.contains("force") && ends(["_vx", "_vy", "_vz"]) {
+                "force (N)".into()
+            } else if label.contains("force") && ends(["_px", "_py", "_pz"]) {
+                "point (m)".into()
+            } else if label.contains("torque") && ends(["_x", "_y", "_z"]) {
+                "torque (N·m)".into()
+            } else {
+                String::new()
+            }
+        }
+    }
+}
+
+/// The right side's name of a left one: each path segment ending in `_l`
+/// ends in `_r` (`/jointset/hip_l/hip_flexion_l/value`), or None for a
+/// label with no such segment.
+fn right_partner(label: &str) -> Option<String> {
+    let mut changed = false;
+    let segments: Vec<String> = label
+        .split('/')
+        .map(|s| match s.strip_suffix("_l") {
+            Some(stem) => {
+                changed = true;
+                format!("{stem}_r")
+            }
+            None => s.to_string(),
+        })
+        .collect();
+    changed.then(|| segments.join("/"))
+}
+
+/// The panels of `files` (the trajectory first, then the references): one
+/// per column of the trajectory, in the trajectory's column order within
+/// Moco's sections, each with the same column of every file that has it.
+/// With `bilateral`, a left column whose right partner the trajectory has
+/// joins that panel. Columns only the references have are not plotted.
+pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) -> Vec<Panel> {
+    let Some(main) = files.first() else {
+        return Vec::new();
+    };
+    let has = |label: &str| main.table.labels.iter().any(|l| l == label);
+    let mut panels: Vec<(String, Panel)> = Vec::new();
+    for label in &main.table.labels {
+        let partner = right_partner(label).filter(|r| bilateral && has(r));
+        let key = partner.clone().unwrap_or_else(|| label.clone());
+        let index = match panels.iter().position(|(k, _)| *k == key) {
+            Some(i) => i,
+            None => {
+                let (section, title) = classify(&key);
+                panels.push((
+                    key.clone(),
+                    Panel {
+                        section,
+                        title,
+                        y_label: y_label(section, &key, angular),
+                        series: Vec::new(),
+                    },
+                ));
+                panels.len() - 1
+            }
+        };
+        for (file, f) in files.iter().enumerate() {
+            if let Some(values) = f.table.column(label) {
+                panels[index].1.series.push(Series {
+                    file,
+                    left: partner.is_some(),
+                    time: f.table.time.clone(),
+                    values,
+                });
+            }
+        }
+    }
+    let mut panels: Vec<Panel> = panels.into_iter().map(|(_, p)| p).collect();
+    // References beneath the trajectory; a stable sort keeps the columns'
+    // order within each section.
+    for p in &mut panels {
+        p.series.sort_by_key(|s| std::cmp::Reverse(s.file));
+    }
+    panels.sort_by_key(|p| p.section);
+    panels
+}
+
+/// Panel size and layout of the page (pixels).
+const PANEL_WIDTH: u32 = 330;
+const PANEL_HEIGHT: u32 = 230;
+const COLUMNS: u32 = 3;
+const SECTION_HEADING: u32 = 34;
+const LEGEND_HEIGHT: u32 = 30;
+
+/// The files' colours: the trajectory's first (Moco samples a colormap).
+const COLOURS: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+];
+
+/// The y range of a panel: [0, 1] where every value lies in it (Moco's
+/// rule), else the values' range widened by 5% (a constant by ±0.5, or
+/// by 5% of its size).
+fn y_range(p: &Panel) -> (f64, f64) {
+    let (lo, hi) = p
+        .series
+        .iter()
+        .flat_map(|s| s.values.iter().copied())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        });
+    if lo >= 0.0 && hi <= 1.0 {
+        return (0.0, 1.0);
+    }
+    let pad = if hi > lo {
+        0.05 * (hi - lo)
+    } else {
+        0.05 * lo.abs().max(10.0)
+    };
+    (lo - pad, hi + pad)
+}
+
+/// The report of `panels` as one SVG page, with `title` on top and a
+/// legend naming `files` (their line styles).
+pub fn svg(
+    title: &str,
+    files: &[String],
+    panels: &[Panel],
+    bilateral: bool,
+) -> Result<String, ReportError> {
+    let draw = |e: &dyn std::fmt::Display| ReportError::Draw(e.to_string());
+    let mut sections: Vec<(Section, Vec<&Panel>)> = Vec::new();
+    for p in panels {
+        match sections.last_mut() {
+            Some((s, ps)) if *s == p.section => ps.push(p),
+            _ => sections.push((p.section, vec![p])),
+        }
+    }
+    let rows = |n: usize| (n as u32).div_ceil(COLUMNS);
+    let height = LEGEND_HEIGHT
+        + 40
+        + sections
+            .iter()
+            .map(|(_, ps)| SECTION_HEADING + rows(ps.len()) * PANEL_HEIGHT)
+            .sum::<u32>();
+    let width = COLUMNS * PANEL_WIDTH;
+    let mut out = String::new();
+    {
+        let root = SVGBackend::with_string(&mut out, (width, height)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| draw(&e))?;
+        root.draw(&Text::new(title.to_string(), (10, 8), ("sans-serif", 18)))
+            .map_err(|e| draw(&e))?;
+        // The legend: one sample line per file, and the left side's style.
+        let mut x = 10;
+        let y = 40 + LEGEND_HEIGHT as i32 / 2;
+        for (k, name) in files.iter().enumerate() {
+            let style = line_style(k);
+            root.draw(&PathElement::new(vec![(x, y), (x + 30, y)], style))
+                .map_err(|e| draw(&e))?;
+            let what = if k == 0 {
+                name.clone()
+            } else {
+                format!("{name} (reference)")
+            };
+            let len = what.chars().count() as i32;
+            root.draw(&Text::new(what, (x + 36, y - 7), ("sans-serif", 13)))
+                .map_err(|e| draw(&e))?;
+            x += 50 + 7 * len;
+        }
+        if bilateral {
+            root.draw(&Text::new(
+                "right solid, left dashed".to_string(),
+                (x, y - 7),
+                ("sans-serif", 13),
+            ))
+            .map_err(|e| draw(&e))?;
+        }
+        let mut top = 40 + LEGEND_HEIGHT as i32;
+        for (section, ps) in &sections {
+            root.draw(&Text::new(
+                section.title().to_string(),
+                (10, top + 10),
+                ("sans-serif", 16),
+            ))
+            .map_err(|e| draw(&e))?;
+            top += SECTION_HEADING as i32;
+            for (i, p) in ps.iter().enumerate() {
+                let (c, r) = (i as u32 % COLUMNS, i as u32 / COLUMNS);
+                let x0 = (c * PANEL_WIDTH) as i32;
+                let y0 = top + (r * PANEL_HEIGHT) as i32;
+                let area = root.clone().shrink((x0, y0), (PANEL_WIDTH, PANEL_HEIGHT));
+                draw_panel(&area, p).map_err(|e| draw(&e))?;
+            }
+            top += (rows(ps.len()) * PANEL_HEIGHT) as i32;
+        }
+        root.present().map_err(|e| draw(&e))?;
+    }
+    Ok(out)
+}
+
+/// The line of file `k`: references thicker and lighter, beneath the
+/// trajectory, as Moco draws them.
+fn line_style(k: usize) -> ShapeStyle {
+    let colour = COLOURS[k % COLOURS.len()];
+    if k == 0 {
+        colour.stroke_width(2)
+    } else {
+        colour.mix(0.6).stroke_width(4)
+    }
+}
+
+fn draw_panel<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    p: &Panel,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (t0, t1) = p
+        .series
+        .iter()
+        .flat_map(|s| s.time.iter().copied())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+            (a.min(t), b.max(t))
+        });
+    let (y0, y1) = y_range(p);
+    let mut chart = ChartBuilder::on(area)
+        .caption(&p.title, ("sans-serif", 14))
+        .margin(8)
+        .x_label_area_size(32)
+        .y_label_area_size(56)
+        .build_cartesian_2d(t0..t1, y0..y1)?;
+    chart
+        .configure_mesh()
+        .x_desc("time (s)")
+        .y_desc(p.y_label.as_str())
+        .x_labels(5)
+        .y_labels(5)
+        .label_style(("sans-serif", 11))
+        .light_line_style(WHITE)
+        .draw()?;
+    for s in &p.series {
+        let points = s.time.iter().copied().zip(s.values.iter().copied());
+        let style = line_style(s.file);
+        if s.left {
+            chart.draw_series(DashedLineSeries::new(points, 6, 4, style))?;
+        } else {
+            chart.draw_series(LineSeries::new(points, style))?;
+        }
+    }
+    Ok(())
+}
+
+/// The report of the trajectory `path` with the reference files `refs`:
+/// its SVG text, the panels drawn and the warnings (a reference sharing no
+/// column with the trajectory). `angular` names the rotational
+/// coordinates' columns ([`crate::io::angular_columns`]).
+pub fn report(
+    path: &Path,
+    refs: &[PathBuf],
+    bilateral: bool,
+    angular: &HashSet<String>,
+) -> Result<(String, Vec<Panel>, Vec<String>), ReportError> {
+    let mut files = vec![ReportFile::read(path, angular)?];
+    if files[0].table.labels.is_empty() {
+        return Err(ReportError::Input {
+            file: path.into(),
+            reason: "no column but time to plot".into(),
+        });
+    }
+    let mut warnings = Vec::new();
+    for r in refs {
+        let f = ReportFile::read(r, angular)?;
+        if !f
+            .table
+            .labels
+            .iter()
+            .any(|l| files[0].table.labels.contains(l))
+        {
+            warnings.push(format!(
+                "{}: no column in common with {}: nothing of it is drawn",
+                r.display(),
+                path.display()
+            ));
+        }
+        files.push(f);
+    }
+    let panels = panels(&files, bilateral, angular);
+    let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
+    let text = svg(
+        &format!("leap report: {}", path.display()),
+        &names,
+        &panels,
+        bilateral,
+    )?;
+    Ok((text, panels, warnings))
+}
+
+/// The default report file of a trajectory: `<stem>_report.svg` beside it
+/// (Moco's report writes `<stem>_report.pdf`).
+pub fn default_output(path: &Path) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "trajectory".into());
+    path.with_file_name(format!("{stem}_report.svg"))
+}
