@@ -311,20 +311,29 @@ impl TryFrom<String> for JointType {
     }
 }
 
-impl TryFrom<JointFields> for JointSpec {
-    type Error = String;
-    fn try_from(j: JointFields) -> Result<Self, String> {
-        let kind = variant_name(j.kind, &JOINT_TYPES);
-        let takes: &[&str] = match j.kind {
+/// The fields every joint has.
+const JOINT_COMMON_FIELDS: [&str; 5] = ["type", "name", "parent", "child", "location_in_parent"];
+
+impl JointType {
+    /// The fields a joint of this type has besides the common ones.
+    fn fields(self) -> &'static [&'static str] {
+        match self {
             JointType::Planar => &["coordinates"],
             JointType::Pin => &["coordinate"],
             JointType::TranslatingHinge => &["coordinate", "translation_x", "translation_y"],
             JointType::Weld => &[],
-        };
+        }
+    }
+}
+
+impl TryFrom<JointFields> for JointSpec {
+    type Error = String;
+    fn try_from(j: JointFields) -> Result<Self, String> {
+        let kind = variant_name(j.kind, &JOINT_TYPES);
         crate::model::variant_fields(
             &format!("a {kind} joint"),
-            &["type", "name", "parent", "child", "location_in_parent"],
-            takes,
+            &JOINT_COMMON_FIELDS,
+            j.kind.fields(),
             &[
                 ("coordinates", j.coordinates.is_some()),
                 ("coordinate", j.coordinate.is_some()),
@@ -810,6 +819,50 @@ pub(crate) fn variant_fields(
     Ok(())
 }
 
+/// serde's error for a field that no type of joint or path point has
+/// lists the fields of every type; this is the error for the element's
+/// own type (from its `type` in `text`), as [`variant_fields`] gives it
+/// for a field of another type: "unknown field `orientaton`: a pin joint
+/// has fields ...". None where `reason` is no such error.
+fn unknown_field_of_type(text: &str, path: &str, reason: &str) -> Option<String> {
+    let field = reason.strip_prefix("unknown field `")?.split('`').next()?;
+    let at = reason.rfind(" at line ").map_or("", |k| &reason[k..]);
+    let parent = path.strip_suffix(field)?.strip_suffix('.')?;
+    let document: serde_json::Value = serde_json::from_str(text).ok()?;
+    let kind = json_at(&document, parent)?.get("type")?.as_str()?;
+    let last = parent.rsplit('.').next()?;
+    let (what, common, takes): (String, &[&str], &[&str]) =
+        if last.starts_with("joints[") && !parent.contains('.') {
+            let t = variant_named(kind, &JOINT_TYPES).ok()?;
+            (format!("a {kind} joint"), &JOINT_COMMON_FIELDS, t.fields())
+        } else if last.starts_with("path[") {
+            let (common, takes) = crate::path::path_point_fields(kind)?;
+            (format!("a {kind} path point"), common, takes)
+        } else {
+            return None;
+        };
+    variant_fields(&what, common, takes, &[(field, true)])
+        .err()
+        .map(|m| format!("{m}{at}"))
+}
+
+/// The value at a JSON path as serde_path_to_error writes it
+/// (`forces.muscles[3].path[1]`).
+fn json_at<'a>(document: &'a serde_json::Value, path: &str) -> Option<&'a serde_json::Value> {
+    let mut v = document;
+    for segment in path.split('.') {
+        let mut parts = segment.split('[');
+        let name = parts.next()?;
+        if !name.is_empty() {
+            v = v.get(name)?;
+        }
+        for index in parts {
+            v = v.get(index.strip_suffix(']')?.parse::<usize>().ok()?)?;
+        }
+    }
+    Some(v)
+}
+
 /// The JSON path (`forces.muscles[3].path[1]`) of the first place where
 /// `given` holds an array and `parsed` (the same document read and written
 /// back) an object.
@@ -955,8 +1008,8 @@ impl Model {
         let file = file.as_ref().to_path_buf();
         let spec: ModelFile = parse_json_object(text).map_err(|e| ModelError::Parse {
             file: file.clone(),
+            reason: unknown_field_of_type(text, &e.path, &e.reason).unwrap_or(e.reason),
             path: e.path,
-            reason: e.reason,
         })?;
         Self::from_spec(spec, file)
     }

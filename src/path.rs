@@ -89,19 +89,37 @@ impl TryFrom<String> for PathPointType {
     }
 }
 
+/// The fields every path point has.
+const PATH_POINT_COMMON_FIELDS: [&str; 2] = ["type", "body"];
+
+impl PathPointType {
+    /// The fields a path point of this type has besides the common ones.
+    fn fields(self) -> &'static [&'static str] {
+        match self {
+            PathPointType::Fixed => &["location"],
+            PathPointType::Conditional => &["location", "coordinate", "range"],
+            PathPointType::Moving => &["coordinate", "x_location", "y_location", "z_location"],
+        }
+    }
+}
+
+/// The common fields of a path point and those of the type named `kind`
+/// (None for no such type).
+pub(crate) fn path_point_fields(
+    kind: &str,
+) -> Option<(&'static [&'static str], &'static [&'static str])> {
+    let t = crate::model::variant_named(kind, &PATH_POINT_TYPES).ok()?;
+    Some((&PATH_POINT_COMMON_FIELDS, t.fields()))
+}
+
 impl TryFrom<PathPointFields> for PathPointSpec {
     type Error = String;
     fn try_from(p: PathPointFields) -> Result<Self, String> {
         let kind = crate::model::variant_name(p.kind, &PATH_POINT_TYPES);
-        let takes: &[&str] = match p.kind {
-            PathPointType::Fixed => &["location"],
-            PathPointType::Conditional => &["location", "coordinate", "range"],
-            PathPointType::Moving => &["coordinate", "x_location", "y_location", "z_location"],
-        };
         crate::model::variant_fields(
             &format!("a {kind} path point"),
-            &["type", "body"],
-            takes,
+            &PATH_POINT_COMMON_FIELDS,
+            p.kind.fields(),
             &[
                 ("location", p.location.is_some()),
                 ("coordinate", p.coordinate.is_some()),

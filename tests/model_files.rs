@@ -436,6 +436,18 @@ fn joint_and_path_point_fields_are_checked_against_their_type() {
             format!("joints[{pin}]"),
             "unknown field `coordinates`: a pin joint has fields `type`, `name`, `parent`, `child`, `location_in_parent`, `coordinate`",
         ),
+        // A field no joint type has: the error lists the pin joint's
+        // fields, not every type's.
+        (
+            set(format!("/joints/{pin}"), "orientaton", serde_json::json!([0.0, 0.0, 0.0])),
+            format!("joints[{pin}].orientaton"),
+            "unknown field `orientaton`: a pin joint has fields `type`, `name`, `parent`, `child`, `location_in_parent`, `coordinate` at line",
+        ),
+        (
+            set(format!("{pp}/{moving}"), "locaton", serde_json::json!([0.0, 0.0, 0.0])),
+            format!("forces.muscles[{l}].path[{moving}].locaton"),
+            "unknown field `locaton`: a moving path point has fields `type`, `body`, `coordinate`, `x_location`, `y_location`, `z_location` at line",
+        ),
         (
             drop(format!("/joints/{knee}"), "translation_x"),
             format!("joints[{knee}]"),
