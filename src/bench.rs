@@ -691,6 +691,8 @@ pub struct SolveBenchReport {
     pub variables: usize,
     pub constraints: usize,
     pub hessian: crate::sqp::HessianMode,
+    /// The Hessian as a study names it ([`crate::study::hessian_option_name`]).
+    pub hessian_option: &'static str,
     pub runs: Vec<SolveBenchRun>,
     pub median_wall_time_s: f64,
     /// Medians over all runs of the iteration count and of the wall time
@@ -756,6 +758,7 @@ pub fn solve(
         variables,
         constraints,
         hessian: configs[0].settings.hessian,
+        hessian_option: crate::study::hessian_option_name(&configs[0].settings),
         median_wall_time_s: median(runs.iter().map(|r| r.wall_time_s).collect()),
         median_iterations: median(runs.iter().map(|r| r.iterations as f64).collect()),
         median_time_per_iteration_s: median(
@@ -804,9 +807,9 @@ impl SolveBenchReport {
             ]);
         }
         format!(
-            "{} ({:?} Hessian): {} variables, {} constraints (last run); medians over {} runs: wall time {:.1} s, {} iterations, {:.3} s per iteration\n{t}",
+            "{} ({} Hessian): {} variables, {} constraints (last run); medians over {} runs: wall time {:.1} s, {} iterations, {:.3} s per iteration\n{t}",
             self.study,
-            self.hessian,
+            self.hessian_option,
             self.variables,
             self.constraints,
             self.runs.len(),

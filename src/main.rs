@@ -736,26 +736,20 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let (text, panels, warnings) =
                 leap::report::report(&trajectory, &ref_files, bilateral, &angular)?;
             let output = output.unwrap_or_else(|| leap::report::default_output(&trajectory));
-            leap::io::write_output(&output, text)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", output.display()))?;
+            leap::report::check_output(&output, &trajectory, &ref_files)?;
+            leap::io::write_output(&output, text).map_err(|e| anyhow::anyhow!("--output: {e}"))?;
             for w in &warnings {
                 eprintln!("warning: {w}");
             }
             if json {
                 // Sections in the report's order, each with its panels.
-                let mut sections: Vec<serde_json::Value> = Vec::new();
-                for p in &panels {
-                    let same = sections
-                        .last()
-                        .is_some_and(|s| s["section"] == p.section.title());
-                    if !same {
-                        sections
-                            .push(serde_json::json!({"section": p.section.title(), "panels": []}));
-                    }
-                    if let Some(a) = sections.last_mut().and_then(|s| s["panels"].as_array_mut()) {
-                        a.push(serde_json::json!(p.title));
-                    }
-                }
+                let sections: Vec<serde_json::Value> = leap::report::sections(&panels)
+                    .into_iter()
+                    .map(|(section, ps)| {
+                        let titles: Vec<&str> = ps.iter().map(|p| p.title.as_str()).collect();
+                        serde_json::json!({"section": section.title(), "panels": titles})
+                    })
+                    .collect();
                 outln!(
                     "{}",
                     serde_json::to_string_pretty(&serde_json::json!({
@@ -1351,11 +1345,19 @@ fn solve(
                 .find(|f| f.ends_with(suffix))
                 .cloned()
         };
+        // Quoted for a shell where a path holds a space or a quote.
+        let arg = |p: String| {
+            if p.contains(|c: char| c.is_whitespace() || c == '\'' || c == '"') {
+                format!("'{}'", p.replace('\'', r"'\''"))
+            } else {
+                p
+            }
+        };
         if let Some(solution) = named("_solution.sto") {
             let forward = named("_forward_states.sto")
-                .map(|f| format!(" --ref-files {f}"))
+                .map(|f| format!(" --ref-files {}", arg(f)))
                 .unwrap_or_default();
-            outln!("  plots: leap report {solution}{forward}");
+            outln!("  plots: leap report {}{forward}", arg(solution));
         }
     }
     Ok(if report.success {

@@ -1,11 +1,16 @@
 //! `leap report`: a trajectory file plotted against time, panel by panel,
-//! as Moco's report (`opensim-moco report`, `Bindings/Python/report.py`)
-//! lays it out: sections of coordinate values, speeds, activations, fibre
-//! lengths and excitations (then any other column), three panels a row,
-//! reference files drawn first and thicker beneath the trajectory, the y
-//! axis held to [0, 1] where the data lie in it, and with `bilateral` a
-//! right and a left column (`_r`, `_l`) in one panel, the left dashed.
-//! Written as one SVG page, which any browser opens.
+//! after Moco's report (`opensim-moco report`, `Bindings/Python/report.py`):
+//! sections of coordinate values, speeds and accelerations, activations,
+//! normalized tendon forces, fibre lengths (leap's muscle state) and
+//! excitations, then any other column (a `.mot`'s ground forces, Moco's
+//! multipliers), three panels a row; reference files drawn first and
+//! thicker beneath the trajectory, over the trajectory's time span; the y
+//! axis held to [0, 1] where the data lie in it; with `bilateral` a right
+//! and a left column (`_r`, `_l`, also inside a name: `ground_force_l_vx`)
+//! in one panel, the left dashed. Unlike Moco, each coordinate's values and
+//! speeds are sections of their own, and Moco's parameter columns (one
+//! value, then NaN) are left out. Written as one SVG page, which any
+//! browser opens.
 //!
 //! Every file is read in radians: a file with `inDegrees=yes` has its
 //! rotational coordinates' columns converted ([`crate::io::to_radians`]),
@@ -33,7 +38,9 @@ pub enum ReportError {
 pub enum Section {
     CoordinateValues,
     CoordinateSpeeds,
+    CoordinateAccelerations,
     Activations,
+    NormalizedTendonForces,
     FiberLengths,
     Excitations,
     Other,
@@ -44,7 +51,9 @@ impl Section {
         match self {
             Section::CoordinateValues => "coordinate values",
             Section::CoordinateSpeeds => "coordinate speeds",
+            Section::CoordinateAccelerations => "coordinate accelerations",
             Section::Activations => "activations",
+            Section::NormalizedTendonForces => "normalized tendon forces",
             Section::FiberLengths => "fibre lengths",
             Section::Excitations => "excitations",
             Section::Other => "other columns",
@@ -108,6 +117,7 @@ fn classify(label: &str) -> (Section, String) {
         match last {
             "value" => return (Section::CoordinateValues, owner),
             "speed" => return (Section::CoordinateSpeeds, owner),
+            "accel" => return (Section::CoordinateAccelerations, owner),
             _ => {}
         }
     }
@@ -115,6 +125,7 @@ fn classify(label: &str) -> (Section, String) {
         match (segments.len(), last) {
             (2, name) => return (Section::Excitations, name.to_string()),
             (3, "activation") => return (Section::Activations, owner),
+            (3, "normalized_tendon_force") => return (Section::NormalizedTendonForces, owner),
             (3, "fiber_length") => return (Section::FiberLengths, owner),
             _ => {}
         }
@@ -124,12 +135,18 @@ fn classify(label: &str) -> (Section, String) {
 
 /// The y axis label of a panel.
 fn y_label(section: Section, label: &str, angular: &HashSet<String>) -> String {
-    let angle = angular.contains(label);
+    let angle = angular.contains(label)
+        || label
+            .strip_suffix("/accel")
+            .is_some_and(|c| angular.contains(&format!("{c}/value")));
     match section {
         Section::CoordinateValues if angle => "angle (rad)".into(),
         Section::CoordinateValues => "position (m)".into(),
         Section::CoordinateSpeeds if angle => "speed (rad/s)".into(),
         Section::CoordinateSpeeds => "speed (m/s)".into(),
+        Section::CoordinateAccelerations if angle => "acceleration (rad/s²)".into(),
+        Section::CoordinateAccelerations => "acceleration (m/s²)".into(),
+        Section::NormalizedTendonForces => "tendon force / F0".into(),
         Section::Activations => "activation".into(),
         Section::FiberLengths => "fibre length (m)".into(),
         Section::Excitations => "excitation".into(),
@@ -150,19 +167,20 @@ fn y_label(section: Section, label: &str, angular: &HashSet<String>) -> String {
     }
 }
 
-/// The right side's name of a left one: each path segment ending in `_l`
-/// ends in `_r` (`/jointset/hip_l/hip_flexion_l/value`), or None for a
-/// label with no such segment.
+/// The right side's name of a left one: in each path segment a final
+/// `_l` becomes `_r` (`/jointset/hip_l/hip_flexion_l/value`), and so does
+/// an `_l_` inside it (`ground_force_l_vx`); None for a label with neither.
 fn right_partner(label: &str) -> Option<String> {
     let mut changed = false;
     let segments: Vec<String> = label
         .split('/')
-        .map(|s| match s.strip_suffix("_l") {
-            Some(stem) => {
-                changed = true;
-                format!("{stem}_r")
+        .map(|s| {
+            let mut side = s.replace("_l_", "_r_");
+            if let Some(stem) = side.strip_suffix("_l") {
+                side = format!("{stem}_r");
             }
-            None => s.to_string(),
+            changed |= side != s;
+            side
         })
         .collect();
     changed.then(|| segments.join("/"))
@@ -170,16 +188,31 @@ fn right_partner(label: &str) -> Option<String> {
 
 /// The panels of `files` (the trajectory first, then the references): one
 /// per column of the trajectory, in the trajectory's column order within
-/// Moco's sections, each with the same column of every file that has it.
-/// With `bilateral`, a left column whose right partner the trajectory has
-/// joins that panel. Columns only the references have are not plotted.
+/// the sections, each with the same column of every file that has it, the
+/// references' cut to the trajectory's time span. With `bilateral`, a left
+/// column whose right partner the trajectory has joins that panel, and
+/// every left column is drawn dashed. Columns only the references have are
+/// not plotted, nor a column with fewer than two finite values (a Moco
+/// parameter's: its value, then NaN); non-finite values are left out.
 pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) -> Vec<Panel> {
     let Some(main) = files.first() else {
         return Vec::new();
     };
+    let (t0, t1) = match (main.table.time.first(), main.table.time.last()) {
+        (Some(&a), Some(&b)) => (a, b),
+        _ => return Vec::new(),
+    };
     let has = |label: &str| main.table.labels.iter().any(|l| l == label);
     let mut panels: Vec<(String, Panel)> = Vec::new();
     for label in &main.table.labels {
+        let finite = main
+            .table
+            .column(label)
+            .map_or(0, |c| c.iter().filter(|v| v.is_finite()).count());
+        if finite < 2 {
+            continue;
+        }
+        let left = bilateral && right_partner(label).is_some();
         let partner = right_partner(label).filter(|r| bilateral && has(r));
         let key = partner.clone().unwrap_or_else(|| label.clone());
         let index = match panels.iter().position(|(k, _)| *k == key) {
@@ -200,10 +233,18 @@ pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) 
         };
         for (file, f) in files.iter().enumerate() {
             if let Some(values) = f.table.column(label) {
+                let (time, values) = f
+                    .table
+                    .time
+                    .iter()
+                    .zip(values)
+                    .filter(|(t, _)| (t0..=t1).contains(*t))
+                    .map(|(t, v)| (*t, v))
+                    .unzip();
                 panels[index].1.series.push(Series {
                     file,
-                    left: partner.is_some(),
-                    time: f.table.time.clone(),
+                    left,
+                    time,
                     values,
                 });
             }
@@ -236,26 +277,107 @@ const COLOURS: [RGBColor; 6] = [
     RGBColor(140, 86, 75),
 ];
 
-/// The y range of a panel: [0, 1] where every value lies in it (Moco's
-/// rule), else the values' range widened by 5% (a constant by ±0.5, or
-/// by 5% of its size).
-fn y_range(p: &Panel) -> (f64, f64) {
-    let (lo, hi) = p
-        .series
-        .iter()
-        .flat_map(|s| s.values.iter().copied())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
-    if lo >= 0.0 && hi <= 1.0 {
-        return (0.0, 1.0);
-    }
-    let pad = if hi > lo {
-        0.05 * (hi - lo)
+/// A closed range of time or values: (from, to).
+pub type Range = (f64, f64);
+
+/// The range of finite values in `values`, or None.
+fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    values.filter(|v| v.is_finite()).fold(None, |r, v| match r {
+        None => Some((v, v)),
+        Some((a, b)) => Some((v.min(a), v.max(b))),
+    })
+}
+
+/// The time and y ranges of a panel. Time: the span of its series. y:
+/// [0, 1] where every finite value lies in it (Moco's rule), else the
+/// values' range widened by 5% of its size (a constant by 5% of its
+/// magnitude, at least 0.5). An error where a range is empty or its span
+/// overflows a double (plotters would not finish).
+pub fn panel_ranges(p: &Panel) -> Result<(Range, Range), String> {
+    let (t0, t1) = finite_range(p.series.iter().flat_map(|s| s.time.iter().copied()))
+        .ok_or("no time to plot")?;
+    let (lo, hi) = finite_range(p.series.iter().flat_map(|s| s.values.iter().copied()))
+        .ok_or("no finite value to plot")?;
+    let y = if lo >= 0.0 && hi <= 1.0 {
+        (0.0, 1.0)
     } else {
-        0.05 * lo.abs().max(10.0)
+        let pad = if hi > lo {
+            0.05 * (hi - lo)
+        } else {
+            0.05 * lo.abs().max(10.0)
+        };
+        (lo - pad, hi + pad)
     };
-    (lo - pad, hi + pad)
+    let t = if t1 > t0 {
+        (t0, t1)
+    } else {
+        (t0 - 0.5, t0 + 0.5)
+    };
+    for ((a, b), what) in [(t, "times"), (y, "values")] {
+        if !(a.is_finite() && b.is_finite() && (b - a).is_finite()) {
+            return Err(format!(
+                "{what} from {} to {}: the span overflows a double, nothing to draw",
+                crate::io::readable(a),
+                crate::io::readable(b)
+            ));
+        }
+    }
+    Ok((t, y))
+}
+
+/// The points of one series to draw: all of them when there are few, else
+/// per time bucket (`buckets` over [t0, t1]) the first, lowest, highest
+/// and last, in time order, which draws the same line at the page's
+/// resolution. Non-finite values are left out.
+fn thinned(s: &Series, (t0, t1): (f64, f64), buckets: usize) -> Vec<(f64, f64)> {
+    let points = s
+        .time
+        .iter()
+        .copied()
+        .zip(s.values.iter().copied())
+        .filter(|(_, v)| v.is_finite());
+    if s.time.len() <= 4 * buckets || t1 <= t0 {
+        return points.collect();
+    }
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    let mut bucket: Vec<(f64, f64)> = Vec::new();
+    let mut current = None;
+    let flush = |bucket: &mut Vec<(f64, f64)>, out: &mut Vec<(f64, f64)>| {
+        if bucket.is_empty() {
+            return;
+        }
+        let by_value = |a: &&(f64, f64), b: &&(f64, f64)| a.1.total_cmp(&b.1);
+        let (first, last) = (bucket[0], bucket[bucket.len() - 1]);
+        let lo = *bucket.iter().min_by(by_value).unwrap_or(&first);
+        let hi = *bucket.iter().max_by(by_value).unwrap_or(&first);
+        let mut keep = vec![first, lo, hi, last];
+        keep.sort_by(|a, b| a.0.total_cmp(&b.0));
+        keep.dedup();
+        out.extend(keep);
+        bucket.clear();
+    };
+    for (t, v) in points {
+        let k = (((t - t0) / (t1 - t0)) * buckets as f64).floor() as i64;
+        if current != Some(k) {
+            flush(&mut bucket, &mut out);
+            current = Some(k);
+        }
+        bucket.push((t, v));
+    }
+    flush(&mut bucket, &mut out);
+    out
+}
+
+/// The panels of each section, in the panels' order.
+pub fn sections(panels: &[Panel]) -> Vec<(Section, Vec<&Panel>)> {
+    let mut sections: Vec<(Section, Vec<&Panel>)> = Vec::new();
+    for p in panels {
+        match sections.last_mut() {
+            Some((s, ps)) if *s == p.section => ps.push(p),
+            _ => sections.push((p.section, vec![p])),
+        }
+    }
+    sections
 }
 
 /// The report of `panels` as one SVG page, with `title` on top and a
@@ -267,53 +389,63 @@ pub fn svg(
     bilateral: bool,
 ) -> Result<String, ReportError> {
     let draw = |e: &dyn std::fmt::Display| ReportError::Draw(e.to_string());
-    let mut sections: Vec<(Section, Vec<&Panel>)> = Vec::new();
+    let sections = sections(panels);
+    let mut ranges = Vec::with_capacity(panels.len());
     for p in panels {
-        match sections.last_mut() {
-            Some((s, ps)) if *s == p.section => ps.push(p),
-            _ => sections.push((p.section, vec![p])),
-        }
+        ranges.push(panel_ranges(p).map_err(|r| {
+            ReportError::Draw(format!("panel '{}' ({}): {r}", p.title, p.section.title()))
+        })?);
     }
+    let width = COLUMNS * PANEL_WIDTH;
+    // The legend: one entry per file (a sample line and its name), on as
+    // many lines as the page's width needs.
+    let entries: Vec<String> = files
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            if k == 0 {
+                name.clone()
+            } else {
+                format!("{name} (reference)")
+            }
+        })
+        .chain(bilateral.then(|| "right solid, left dashed".to_string()))
+        .collect();
+    let mut places = Vec::with_capacity(entries.len());
+    let (mut x, mut line) = (10i32, 0i32);
+    for e in &entries {
+        let w = 50 + 7 * e.chars().count() as i32;
+        if x > 10 && x + w > width as i32 {
+            (x, line) = (10, line + 1);
+        }
+        places.push((x, line));
+        x += w;
+    }
+    let legend_height = LEGEND_HEIGHT * (line as u32 + 1);
     let rows = |n: usize| (n as u32).div_ceil(COLUMNS);
-    let height = LEGEND_HEIGHT
+    let height = legend_height
         + 40
         + sections
             .iter()
             .map(|(_, ps)| SECTION_HEADING + rows(ps.len()) * PANEL_HEIGHT)
             .sum::<u32>();
-    let width = COLUMNS * PANEL_WIDTH;
     let mut out = String::new();
     {
         let root = SVGBackend::with_string(&mut out, (width, height)).into_drawing_area();
         root.fill(&WHITE).map_err(|e| draw(&e))?;
         root.draw(&Text::new(title.to_string(), (10, 8), ("sans-serif", 18)))
             .map_err(|e| draw(&e))?;
-        // The legend: one sample line per file, and the left side's style.
-        let mut x = 10;
-        let y = 40 + LEGEND_HEIGHT as i32 / 2;
-        for (k, name) in files.iter().enumerate() {
-            let style = line_style(k);
-            root.draw(&PathElement::new(vec![(x, y), (x + 30, y)], style))
+        for (k, (e, &(x, line))) in entries.iter().zip(&places).enumerate() {
+            let y = 40 + LEGEND_HEIGHT as i32 * line + LEGEND_HEIGHT as i32 / 2;
+            if k < files.len() {
+                root.draw(&PathElement::new(vec![(x, y), (x + 30, y)], line_style(k)))
+                    .map_err(|e| draw(&e))?;
+            }
+            root.draw(&Text::new(e.clone(), (x + 36, y - 7), ("sans-serif", 13)))
                 .map_err(|e| draw(&e))?;
-            let what = if k == 0 {
-                name.clone()
-            } else {
-                format!("{name} (reference)")
-            };
-            let len = what.chars().count() as i32;
-            root.draw(&Text::new(what, (x + 36, y - 7), ("sans-serif", 13)))
-                .map_err(|e| draw(&e))?;
-            x += 50 + 7 * len;
         }
-        if bilateral {
-            root.draw(&Text::new(
-                "right solid, left dashed".to_string(),
-                (x, y - 7),
-                ("sans-serif", 13),
-            ))
-            .map_err(|e| draw(&e))?;
-        }
-        let mut top = 40 + LEGEND_HEIGHT as i32;
+        let mut top = 40 + legend_height as i32;
+        let mut ranges = ranges.iter();
         for (section, ps) in &sections {
             root.draw(&Text::new(
                 section.title().to_string(),
@@ -327,7 +459,10 @@ pub fn svg(
                 let x0 = (c * PANEL_WIDTH) as i32;
                 let y0 = top + (r * PANEL_HEIGHT) as i32;
                 let area = root.clone().shrink((x0, y0), (PANEL_WIDTH, PANEL_HEIGHT));
-                draw_panel(&area, p).map_err(|e| draw(&e))?;
+                let Some(&(t, y)) = ranges.next() else {
+                    return Err(ReportError::Draw("a panel without its ranges".into()));
+                };
+                draw_panel(&area, p, t, y).map_err(|e| draw(&e))?;
             }
             top += (rows(ps.len()) * PANEL_HEIGHT) as i32;
         }
@@ -339,7 +474,11 @@ pub fn svg(
 /// The line of file `k`: references thicker and lighter, beneath the
 /// trajectory, as Moco draws them.
 fn line_style(k: usize) -> ShapeStyle {
-    let colour = COLOURS[k % COLOURS.len()];
+    // References cycle through the colours after the trajectory's.
+    let colour = match k {
+        0 => COLOURS[0],
+        k => COLOURS[1 + (k - 1) % (COLOURS.len() - 1)],
+    };
     if k == 0 {
         colour.stroke_width(2)
     } else {
@@ -347,18 +486,14 @@ fn line_style(k: usize) -> ShapeStyle {
     }
 }
 
+/// One panel over the time range `(t0, t1)` and y range `(y0, y1)`
+/// ([`panel_ranges`]).
 fn draw_panel<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     p: &Panel,
+    (t0, t1): (f64, f64),
+    (y0, y1): (f64, f64),
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
-    let (t0, t1) = p
-        .series
-        .iter()
-        .flat_map(|s| s.time.iter().copied())
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
-            (a.min(t), b.max(t))
-        });
-    let (y0, y1) = y_range(p);
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, ("sans-serif", 14))
         .margin(8)
@@ -375,7 +510,7 @@ fn draw_panel<DB: DrawingBackend>(
         .light_line_style(WHITE)
         .draw()?;
     for s in &p.series {
-        let points = s.time.iter().copied().zip(s.values.iter().copied());
+        let points = thinned(s, (t0, t1), PANEL_WIDTH as usize);
         let style = line_style(s.file);
         if s.left {
             chart.draw_series(DashedLineSeries::new(points, 6, 4, style))?;
@@ -427,7 +562,14 @@ pub fn report(
         &names,
         &panels,
         bilateral,
-    )?;
+    )
+    .map_err(|e| match e {
+        ReportError::Draw(reason) => ReportError::Input {
+            file: path.into(),
+            reason,
+        },
+        e => e,
+    })?;
     Ok((text, panels, warnings))
 }
 
@@ -439,4 +581,37 @@ pub fn default_output(path: &Path) -> PathBuf {
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "trajectory".into());
     path.with_file_name(format!("{stem}_report.svg"))
+}
+
+/// Refuse an output file that is the trajectory or a reference (it would
+/// be overwritten by the report), or whose directory does not exist.
+pub fn check_output(output: &Path, trajectory: &Path, refs: &[PathBuf]) -> Result<(), ReportError> {
+    let refuse = |reason: String| ReportError::Input {
+        file: output.into(),
+        reason,
+    };
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if let Some(input) = std::iter::once(trajectory)
+        .chain(refs.iter().map(PathBuf::as_path))
+        .find(|p| same(output, p))
+    {
+        return Err(refuse(format!(
+            "--output is the input file {}: the report would overwrite it; name another file",
+            input.display()
+        )));
+    }
+    let dir = match output.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(refuse(format!(
+            "--output: the directory {} does not exist",
+            dir.display()
+        )));
+    }
+    Ok(())
 }

@@ -1431,6 +1431,12 @@ fn forward_check(
 /// layout), or, on a terminal too narrow for that, transposed: one line
 /// per column of `header`, one column per row.
 fn table_fitting_terminal(header: &[&str], rows: &[Vec<String>]) -> String {
+    table_fitting(header, rows, comfy_table::Table::new().width())
+}
+
+/// [`table_fitting_terminal`] for a terminal `width` columns wide (None:
+/// not a terminal).
+fn table_fitting(header: &[&str], rows: &[Vec<String>], width: Option<u16>) -> String {
     let mut t = comfy_table::Table::new();
     t.set_header(header.to_vec());
     for r in rows {
@@ -1438,7 +1444,7 @@ fn table_fitting_terminal(header: &[&str], rows: &[Vec<String>]) -> String {
     }
     let text = t.to_string();
     let widest = text.lines().map(|l| l.chars().count()).max().unwrap_or(0);
-    match t.width() {
+    match width {
         Some(w) if widest > usize::from(w) => transposed(header, rows).to_string(),
         _ => text,
     }
@@ -1503,7 +1509,7 @@ impl SolveReport {
             "≤ 1e-3",
         ];
         let experiment = [
-            "experiment (Porsa et al. 2016)",
+            "experiment",
             "",
             "",
             "",
@@ -1563,7 +1569,7 @@ impl SolveReport {
                 }
             ));
         }
-        s.push_str(&format!("  leap's times are wall times of the SQP; the paper's are its {} solve's CPU time (MATLAB fmincon) and its predictions over its solves; the experiment's mean (range)\n", match self.method {
+        s.push_str(&format!("  leap's times are wall times of the SQP; the paper's are its {} solve's CPU time (MATLAB fmincon) and its predictions over its solves; the experiment's (Porsa et al. 2016) mean (range)\n", match self.method {
             Method::Collocation => "collocation",
             Method::Shooting => "shooting",
         }));
@@ -1781,11 +1787,22 @@ mod tests {
         assert_eq!(cells(t.row(0).unwrap()), ["a", "1", "3"]);
         assert_eq!(cells(t.row(1).unwrap()), ["b", "2", ""]);
         assert!(t.row(2).is_none());
-        // Off a terminal the row layout stays.
-        let text = table_fitting_terminal(&header, &rows);
+        // Off a terminal, or on a wide one, the row layout stays; on a
+        // narrow one the table is transposed.
+        let row_layout = |text: &str| text.lines().any(|l| l.contains(" x ") && l.contains(" 2 "));
+        for width in [None, Some(200)] {
+            assert!(
+                row_layout(&table_fitting(&header, &rows, width)),
+                "{width:?}"
+            );
+        }
+        let narrow = table_fitting(&header, &rows, Some(10));
+        assert!(!row_layout(&narrow), "{narrow}");
         assert!(
-            text.lines().any(|l| l.contains(" x ") && l.contains(" 2 ")),
-            "{text}"
+            narrow
+                .lines()
+                .any(|l| l.contains(" a ") && l.contains(" 3 ")),
+            "{narrow}"
         );
     }
 }

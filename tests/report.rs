@@ -286,3 +286,145 @@ fn leap_report_writes_beside_the_trajectory_and_refuses_bad_input() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A panel of one series of `values` over `time`.
+fn panel_of(time: Vec<f64>, values: Vec<f64>) -> leap::report::Panel {
+    leap::report::Panel {
+        section: Section::Other,
+        title: "x".into(),
+        y_label: String::new(),
+        series: vec![leap::report::Series {
+            file: 0,
+            left: false,
+            time,
+            values,
+        }],
+    }
+}
+
+#[test]
+fn y_ranges_hold_fractions_to_0_1_and_refuse_overflowing_spans() {
+    use leap::report::panel_ranges;
+    let t = vec![0.0, 2.0];
+    // Moco's rule: data in [0, 1] get the axis [0, 1].
+    assert_eq!(
+        panel_ranges(&panel_of(t.clone(), vec![0.2, 0.7])).unwrap(),
+        ((0.0, 2.0), (0.0, 1.0))
+    );
+    // Otherwise the range widened by 5% of its size on each side.
+    let (_, (lo, hi)) = panel_ranges(&panel_of(t.clone(), vec![-1.0, 3.0])).unwrap();
+    assert!(
+        (lo + 1.2).abs() < 1e-12 && (hi - 3.2).abs() < 1e-12,
+        "{lo} {hi}"
+    );
+    // A constant gets a span; NaN (a Moco parameter's rows) is left out.
+    let (_, (lo, hi)) = panel_ranges(&panel_of(t.clone(), vec![5.0, f64::NAN])).unwrap();
+    assert!(lo < 5.0 && hi > 5.0);
+    // Spans beyond a double are refused: plotters does not finish on them.
+    for (time, values) in [
+        (t.clone(), vec![0.0, 1.75e308]),
+        (t.clone(), vec![-1e308, 1e308]),
+        (vec![-1.7e308, 1.7e308], vec![0.0, 2.0]),
+    ] {
+        let e = panel_ranges(&panel_of(time, values)).unwrap_err();
+        assert!(e.contains("overflows a double"), "{e}");
+    }
+}
+
+#[test]
+fn left_columns_are_dashed_references_cut_and_parameters_left_out() {
+    let ang = HashSet::new();
+    let dir = tmp("styles");
+    let main = dir.join("bil.sto");
+    std::fs::write(
+        &main,
+        "num_states=0\nnum_controls=2\nnum_parameters=1\nendheader\n\
+         time\ta_r\ta_l\tmass\n0\t0.1\t0.2\t70\n1\t0.5\t0.6\tNaN\n",
+    )
+    .unwrap();
+    let width2 = |svg: &str| polylines(svg, "2").len();
+    let (plain, ps, _) = leap::report::report(&main, &[], false, &ang).unwrap();
+    // The parameter column (its value, then NaN) is no panel.
+    assert_eq!(
+        ps.iter().map(|p| p.title.as_str()).collect::<Vec<_>>(),
+        ["a_r", "a_l"]
+    );
+    assert_eq!(width2(&plain), 3, "legend sample and two solid lines");
+    let (both, ps, _) = leap::report::report(&main, &[], true, &ang).unwrap();
+    assert_eq!(ps.len(), 1);
+    assert!(width2(&both) > 5, "the left line drawn in dashes");
+    // A reference reaching past the trajectory is cut to its time span.
+    let longer = dir.join("longer.sto");
+    std::fs::write(&longer, "endheader\ntime\ta_r\n-1\t0\n0.5\t0.3\n3\t0.9\n").unwrap();
+    let (_, ps, _) = leap::report::report(&main, &[longer], false, &ang).unwrap();
+    let reference = ps[0].series.iter().find(|s| s.file == 1).unwrap();
+    assert_eq!(reference.time, [0.5]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A long file is drawn with a few points per pixel column, its extremes
+/// kept: a one-row spike among 50,000 rows reaches the same pixel as in a
+/// three-row file of the same ranges.
+#[test]
+fn long_files_are_thinned_keeping_their_extremes() {
+    let ang = HashSet::new();
+    let dir = tmp("thin");
+    let n = 50_000;
+    let spike = 31_337;
+    let time: Vec<f64> = (0..n).map(|k| k as f64 / (n - 1) as f64).collect();
+    let values: Vec<f64> = (0..n).map(|k| if k == spike { 1.0 } else { 0.0 }).collect();
+    let long = dir.join("long.sto");
+    table(
+        vec!["x".into()],
+        time.clone(),
+        values.iter().map(|&v| vec![v]).collect(),
+    )
+    .write_sto(&long)
+    .unwrap();
+    let short = dir.join("short.sto");
+    table(
+        vec!["x".into()],
+        vec![0.0, time[spike], 1.0],
+        vec![vec![0.0], vec![1.0], vec![0.0]],
+    )
+    .write_sto(&short)
+    .unwrap();
+    let line = |f: &Path| {
+        let (svg, _, _) = leap::report::report(f, &[], false, &ang).unwrap();
+        polylines(&svg, "2").remove(1)
+    };
+    let (long_line, short_line) = (line(&long), line(&short));
+    assert!(long_line.len() < 4 * 330, "{} points", long_line.len());
+    let top = |l: &[(f64, f64)]| l.iter().map(|p| p.1).fold(f64::INFINITY, f64::min);
+    let bottom = |l: &[(f64, f64)]| l.iter().map(|p| p.1).fold(f64::NEG_INFINITY, f64::max);
+    assert_eq!(top(&long_line), top(&short_line));
+    assert_eq!(bottom(&long_line), bottom(&short_line));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn the_output_may_not_be_an_input_nor_in_a_missing_directory() {
+    let dir = tmp("output");
+    let traj = dir.join("a.sto");
+    table(vec!["x".into()], vec![0.0, 1.0], vec![vec![0.0], vec![1.0]])
+        .write_sto(&traj)
+        .unwrap();
+    let before = std::fs::read_to_string(&traj).unwrap();
+    for (output, what) in [
+        (traj.clone(), "the report would overwrite it"),
+        (dir.join("no_dir/r.svg"), "does not exist"),
+    ] {
+        let err = refused(
+            Command::cargo_bin("leap")
+                .unwrap()
+                .arg("report")
+                .arg(&traj)
+                .arg("--output")
+                .arg(&output),
+            "report --output",
+        );
+        assert!(err.contains(what), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&traj).unwrap(), before);
+    let _ = std::fs::remove_dir_all(&dir);
+}
