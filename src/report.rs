@@ -186,12 +186,20 @@ fn right_partner(label: &str) -> Option<String> {
     changed.then(|| segments.join("/"))
 }
 
+/// A right side's name without its side: `_r_` becomes `_`, a final `_r`
+/// goes (`hip_flexion_r` → `hip_flexion`, `ground_force_r_vx` →
+/// `ground_force_vx`).
+fn side_free(name: &str) -> String {
+    let name = name.replace("_r_", "_");
+    name.strip_suffix("_r").map_or(name.clone(), str::to_string)
+}
+
 /// The panels of `files` (the trajectory first, then the references): one
 /// per column of the trajectory, in the trajectory's column order within
 /// the sections, each with the same column of every file that has it, the
 /// references' cut to the trajectory's time span. With `bilateral`, a left
-/// column whose right partner the trajectory has joins that panel, and
-/// every left column is drawn dashed. Columns only the references have are
+/// column whose right partner the trajectory has joins that panel, which
+/// is then named without the side, and every left column is drawn dashed. Columns only the references have are
 /// not plotted, nor a column with fewer than two finite values (a Moco
 /// parameter's: its value, then NaN); non-finite values are left out.
 pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) -> Vec<Panel> {
@@ -231,6 +239,12 @@ pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) 
                 panels.len() - 1
             }
         };
+        // A panel holding both sides is named without the side, as
+        // Moco's bilateral report names it.
+        if partner.is_some() {
+            let title = &mut panels[index].1.title;
+            *title = side_free(title);
+        }
         for (file, f) in files.iter().enumerate() {
             if let Some(values) = f.table.column(label) {
                 let (time, values) = f

@@ -102,7 +102,7 @@ fn panels_follow_mocos_sections_with_the_models_counts() {
     assert_eq!(count(&both, Section::Activations), nm / 2);
     let hip = both
         .iter()
-        .find(|p| p.section == Section::CoordinateValues && p.title == "hip_flexion_r")
+        .find(|p| p.section == Section::CoordinateValues && p.title == "hip_flexion")
         .unwrap();
     assert_eq!(hip.series.len(), 2);
     assert_eq!(hip.series.iter().filter(|s| s.left).count(), 1);
@@ -352,6 +352,7 @@ fn left_columns_are_dashed_references_cut_and_parameters_left_out() {
     assert_eq!(width2(&plain), 3, "legend sample and two solid lines");
     let (both, ps, _) = leap::report::report(&main, &[], true, &ang).unwrap();
     assert_eq!(ps.len(), 1);
+    assert_eq!(ps[0].title, "a", "both sides: no side in the name");
     assert!(width2(&both) > 5, "the left line drawn in dashes");
     // A reference reaching past the trajectory is cut to its time span.
     let longer = dir.join("longer.sto");
