@@ -18,7 +18,7 @@
 
 use crate::io::{StoError, StoTable};
 use plotters::prelude::*;
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 
 /// A report could not be made.
@@ -199,9 +199,10 @@ fn side_free(name: &str) -> String {
 /// the sections, each with the same column of every file that has it, the
 /// references' cut to the trajectory's time span. With `bilateral`, a left
 /// column whose right partner the trajectory has joins that panel, which
-/// is then named without the side, and every left column is drawn dashed. Columns only the references have are
-/// not plotted, nor a column with fewer than two finite values (a Moco
-/// parameter's: its value, then NaN); non-finite values are left out.
+/// is then named without the side, and every left column is drawn dashed.
+/// Columns only the references have are not plotted, nor a column with
+/// fewer than two finite values (a Moco parameter's: its value, then
+/// NaN); non-finite values are left out.
 pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) -> Vec<Panel> {
     let Some(main) = files.first() else {
         return Vec::new();
@@ -210,61 +211,67 @@ pub fn panels(files: &[ReportFile], bilateral: bool, angular: &HashSet<String>) 
         (Some(&a), Some(&b)) => (a, b),
         _ => return Vec::new(),
     };
-    let has = |label: &str| main.table.labels.iter().any(|l| l == label);
-    let mut panels: Vec<(String, Panel)> = Vec::new();
-    for label in &main.table.labels {
-        let finite = main
-            .table
-            .column(label)
-            .map_or(0, |c| c.iter().filter(|v| v.is_finite()).count());
-        if finite < 2 {
+    // Each file's column index by label (a file may have thousands).
+    let columns: Vec<HashMap<&str, usize>> = files
+        .iter()
+        .map(|f| {
+            f.table
+                .labels
+                .iter()
+                .enumerate()
+                .map(|(k, l)| (l.as_str(), k))
+                .collect()
+        })
+        .collect();
+    let mut panels: Vec<Panel> = Vec::new();
+    let mut panel_of: HashMap<String, usize> = HashMap::new();
+    for (k, label) in main.table.labels.iter().enumerate() {
+        if main.table.rows.iter().filter(|r| r[k].is_finite()).count() < 2 {
             continue;
         }
-        let left = bilateral && right_partner(label).is_some();
-        let partner = right_partner(label).filter(|r| bilateral && has(r));
-        let key = partner.clone().unwrap_or_else(|| label.clone());
-        let index = match panels.iter().position(|(k, _)| *k == key) {
-            Some(i) => i,
-            None => {
-                let (section, title) = classify(&key);
-                panels.push((
-                    key.clone(),
-                    Panel {
-                        section,
-                        title,
-                        y_label: y_label(section, &key, angular),
-                        series: Vec::new(),
-                    },
-                ));
-                panels.len() - 1
-            }
+        let right = if bilateral {
+            right_partner(label)
+        } else {
+            None
         };
+        let left = right.is_some();
+        let partner = right.filter(|r| columns[0].contains_key(r.as_str()));
+        let key = partner.clone().unwrap_or_else(|| label.clone());
+        let index = *panel_of.entry(key.clone()).or_insert_with(|| {
+            let (section, title) = classify(&key);
+            panels.push(Panel {
+                section,
+                title,
+                y_label: y_label(section, &key, angular),
+                series: Vec::new(),
+            });
+            panels.len() - 1
+        });
         // A panel holding both sides is named without the side, as
         // Moco's bilateral report names it.
         if partner.is_some() {
-            let title = &mut panels[index].1.title;
-            *title = side_free(title);
+            panels[index].title = side_free(&panels[index].title);
         }
-        for (file, f) in files.iter().enumerate() {
-            if let Some(values) = f.table.column(label) {
-                let (time, values) = f
-                    .table
-                    .time
-                    .iter()
-                    .zip(values)
-                    .filter(|(t, _)| (t0..=t1).contains(*t))
-                    .map(|(t, v)| (*t, v))
-                    .unzip();
-                panels[index].1.series.push(Series {
-                    file,
-                    left,
-                    time,
-                    values,
-                });
-            }
+        for (file, (f, cols)) in files.iter().zip(&columns).enumerate() {
+            let Some(&c) = cols.get(label.as_str()) else {
+                continue;
+            };
+            let (time, values) = f
+                .table
+                .time
+                .iter()
+                .zip(&f.table.rows)
+                .filter(|(t, _)| (t0..=t1).contains(*t))
+                .map(|(t, r)| (*t, r[c]))
+                .unzip();
+            panels[index].series.push(Series {
+                file,
+                left,
+                time,
+                values,
+            });
         }
     }
-    let mut panels: Vec<Panel> = panels.into_iter().map(|(_, p)| p).collect();
     // References beneath the trajectory; a stable sort keeps the columns'
     // order within each section.
     for p in &mut panels {
