@@ -507,6 +507,20 @@ fn line_style(k: usize) -> ShapeStyle {
     }
 }
 
+/// plotters' own text for the tick at `v`, but a zero that rounding left
+/// negative (a tick at -5.6e-17 of a range from -0.7 to 0.2) reads "0.0",
+/// not "-0.0".
+fn tick_label(v: &f64) -> String {
+    let text =
+        <plotters::coord::types::RangedCoordf64 as plotters::coord::ranged1d::ValueFormatter<
+            f64,
+        >>::format(v);
+    match text.strip_prefix('-') {
+        Some(magnitude) if magnitude.parse::<f64>() == Ok(0.0) => magnitude.to_string(),
+        _ => text,
+    }
+}
+
 /// One panel over the time range `(t0, t1)` and y range `(y0, y1)`
 /// ([`panel_ranges`]).
 fn draw_panel<DB: DrawingBackend>(
@@ -527,6 +541,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_desc(p.y_label.as_str())
         .x_labels(5)
         .y_labels(5)
+        .x_label_formatter(&tick_label)
+        .y_label_formatter(&tick_label)
         .label_style(("sans-serif", 11))
         .light_line_style(WHITE)
         .draw()?;

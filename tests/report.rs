@@ -429,3 +429,61 @@ fn the_output_may_not_be_an_input_nor_in_a_missing_directory() {
     assert_eq!(std::fs::read_to_string(&traj).unwrap(), before);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The text of every `<text>` element of an SVG, trimmed.
+fn texts(svg: &str) -> Vec<String> {
+    svg.split("<text")
+        .skip(1)
+        .filter_map(|t| {
+            let body = &t[t.find('>')? + 1..];
+            Some(body[..body.find("</text>")?].trim().to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn tick_labels_read_zero_without_a_sign() {
+    let ang = HashSet::new();
+    let dir = tmp("ticks");
+    // Ranges whose tick at zero plotters computes as a tiny negative
+    // number (-0.7..0.2 and -0.12..0.08 printed "-0.0"), and some that
+    // never did.
+    for (k, (a, b)) in [
+        (-0.7, 0.2),
+        (-0.12, 0.08),
+        (-1.0, 1.0),
+        (-0.3, 0.3),
+        (-10.0, 10.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let time: Vec<f64> = (0..50).map(|i| i as f64 / 49.0).collect();
+        let rows = time
+            .iter()
+            .map(|&t| vec![a + (b - a) * (0.5 - 0.5 * (std::f64::consts::PI * t).cos())])
+            .collect();
+        let path = dir.join(format!("r{k}.sto"));
+        table(vec!["x".into()], time, rows)
+            .write_sto(&path)
+            .unwrap();
+        let (svg, _, _) = leap::report::report(&path, &[], false, &ang).unwrap();
+        let ticks: Vec<f64> = texts(&svg)
+            .iter()
+            .filter_map(|t| t.parse::<f64>().ok())
+            .collect();
+        // The y ticks and the time ticks 0.0, 0.5, 1.0 at least; zero
+        // among the y ticks of every range here.
+        assert!(ticks.len() >= 6, "[{a}, {b}]: ticks {ticks:?}");
+        let zeros: Vec<String> = texts(&svg)
+            .into_iter()
+            .filter(|t| t.parse::<f64>() == Ok(0.0))
+            .collect();
+        assert!(zeros.len() >= 2, "[{a}, {b}]: zeros {zeros:?}");
+        assert!(
+            zeros.iter().all(|t| !t.starts_with('-')),
+            "[{a}, {b}]: a zero tick with a sign: {zeros:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
