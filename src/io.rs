@@ -913,6 +913,66 @@ pub fn angular_columns(eq: &StateEquation) -> std::collections::HashSet<String> 
         .collect()
 }
 
+/// The model's state columns by the names OpenSim wrote before 4.0, which
+/// inverse kinematics (`<coordinate>` columns of a `.mot`), CMC and older
+/// states files still carry, each with its absolute path (what Moco's
+/// `TabOpUseAbsoluteStateNames` reads): `<coordinate>` for
+/// `/jointset/<joint>/<coordinate>/value`, `<coordinate>_u` for its
+/// `/speed`, `<muscle>.activation` and `<muscle>.fiber_length` for
+/// `/forceset/<muscle>/activation` and `/fiber_length`.
+pub fn pre_4_state_names(eq: &StateEquation) -> std::collections::HashMap<String, String> {
+    eq.model_state_columns()
+        .into_iter()
+        .filter_map(|(path, _)| {
+            let segments: Vec<&str> = path.split('/').filter(|s| !s.is_empty()).collect();
+            let old = match segments.as_slice() {
+                ["jointset", _, c, "value"] => c.to_string(),
+                ["jointset", _, c, "speed"] => format!("{c}_u"),
+                ["forceset", m, what @ ("activation" | "fiber_length")] => format!("{m}.{what}"),
+                _ => return None,
+            };
+            Some((old, path))
+        })
+        .collect()
+}
+
+/// Rename the columns of `t` that carry a pre-4.0 state name (`names`,
+/// [`pre_4_state_names`]) to its absolute path, where `t` has no column of
+/// that path already; the renamed columns' (old, new) labels.
+pub fn use_absolute_state_names(
+    t: &mut StoTable,
+    names: &std::collections::HashMap<String, String>,
+) -> Vec<(String, String)> {
+    let present: std::collections::HashSet<String> = t.labels.iter().cloned().collect();
+    let mut renamed = Vec::new();
+    for label in &mut t.labels {
+        if let Some(path) = names.get(label.as_str()).filter(|p| !present.contains(*p)) {
+            renamed.push((label.clone(), path.clone()));
+            *label = path.clone();
+        }
+    }
+    renamed
+}
+
+/// What a file's columns mean for the model: which are rotational
+/// coordinates ([`angular_columns`]), and the absolute state paths of
+/// pre-4.0 names ([`pre_4_state_names`]).
+#[derive(Debug, Clone, Default)]
+pub struct ModelColumns {
+    pub angular: std::collections::HashSet<String>,
+    pub pre_4_names: std::collections::HashMap<String, String>,
+}
+
+impl ModelColumns {
+    /// The columns of `eq`'s model, both legs.
+    pub fn of(eq: &StateEquation) -> Self {
+        ModelColumns {
+            angular: angular_columns(eq),
+            pre_4_names: pre_4_state_names(eq),
+        }
+    }
+}
+
 /// With `degrees` (the file's `inDegrees=yes`), convert the columns of `t`
 /// named in `angular` ([`angular_columns`]) to radians and mark the table
 /// `inDegrees=no`; other columns stay as they are.

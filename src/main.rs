@@ -732,14 +732,14 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let model = model.path();
             let m = leap::model::Model::from_file(&model)?;
             let (_, eq) = leap::ode::StateEquation::opensim(&m, false)?;
-            let angular = leap::io::angular_columns(&eq);
+            let columns = leap::io::ModelColumns::of(&eq);
             let (text, panels, warnings) =
-                leap::report::report(&trajectory, &ref_files, bilateral, &angular)?;
+                leap::report::report(&trajectory, &ref_files, bilateral, &columns)?;
             let output = output.unwrap_or_else(|| leap::report::default_output(&trajectory));
             leap::report::check_output(&output, &trajectory, &ref_files)?;
             leap::io::write_output(&output, text).map_err(|e| anyhow::anyhow!("--output: {e}"))?;
             for w in &warnings {
-                eprintln!("warning: {w}");
+                leap::errln!("warning: {w}");
             }
             if json {
                 // Sections in the report's order, each with its panels.

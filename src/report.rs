@@ -16,7 +16,7 @@
 //! rotational coordinates' columns converted ([`crate::io::to_radians`]),
 //! so that a file in degrees and one in radians overlay.
 
-use crate::io::{StoError, StoTable};
+use crate::io::{ModelColumns, StoError, StoTable};
 use plotters::prelude::*;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -89,16 +89,18 @@ pub struct ReportFile {
 }
 
 impl ReportFile {
-    /// Read `path`, converting the columns named in `angular` (the
-    /// model's rotational coordinates, [`crate::io::angular_columns`]) from
-    /// degrees where the header says `inDegrees=yes`. Time must increase
+    /// Read `path`: columns under OpenSim's pre-4.0 state names (an IK
+    /// file's `hip_flexion_r`) renamed to the model's absolute paths, and
+    /// the rotational coordinates' (`columns`, [`ModelColumns`]) converted
+    /// from degrees where the header says `inDegrees=yes`. Time must increase
     /// over two rows or more, and every value be finite.
-    pub fn read(path: &Path, angular: &HashSet<String>) -> Result<Self, ReportError> {
+    pub fn read(path: &Path, columns: &ModelColumns) -> Result<Self, ReportError> {
         let mut table = StoTable::read(path)?;
         table.check_time(path, 2)?;
         table.check_finite(path)?;
         let degrees = table.in_degrees(path)?;
-        crate::io::to_radians(&mut table, angular, degrees);
+        crate::io::use_absolute_state_names(&mut table, &columns.pre_4_names);
+        crate::io::to_radians(&mut table, &columns.angular, degrees);
         let name = path
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
@@ -310,7 +312,9 @@ fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 }
 
 /// The time and y ranges of a panel. Time: the span of its series. y:
-/// [0, 1] where every finite value lies in it (Moco's rule), else the
+/// [0, 1] for activations, excitations and normalized tendon forces whose
+/// finite values all lie in it (Moco's rule; a fibre length in metres or a
+/// centre of pressure near 0.1 m on it had drawn a flat line), else the
 /// values' range widened by 5% of its size (a constant by 5% of its
 /// magnitude, at least 0.5). An error where a range is empty or its span
 /// overflows a double (plotters would not finish).
@@ -319,7 +323,11 @@ pub fn panel_ranges(p: &Panel) -> Result<(Range, Range), String> {
         .ok_or("no time to plot")?;
     let (lo, hi) = finite_range(p.series.iter().flat_map(|s| s.values.iter().copied()))
         .ok_or("no finite value to plot")?;
-    let y = if lo >= 0.0 && hi <= 1.0 {
+    let unit_interval = matches!(
+        p.section,
+        Section::Activations | Section::Excitations | Section::NormalizedTendonForces
+    );
+    let y = if unit_interval && lo >= 0.0 && hi <= 1.0 {
         (0.0, 1.0)
     } else {
         let pad = if hi > lo {
@@ -507,19 +515,38 @@ fn line_style(k: usize) -> ShapeStyle {
     }
 }
 
-/// plotters' own text for the tick at `v`, but a zero that rounding left
-/// negative (a tick at -5.6e-17 of a range from -0.7 to 0.2) reads "0.0",
-/// not "-0.0".
-fn tick_label(v: &f64) -> String {
-    let text =
-        <plotters::coord::types::RangedCoordf64 as plotters::coord::ranged1d::ValueFormatter<
-            f64,
-        >>::format(v);
+/// The text of the tick at `v` on an axis over `(lo, hi)`: with the
+/// decimals of the ticks' spacing, as plotters places them (every tick
+/// apart and alike; plotters' own text repeated "-0.4352" over a span of
+/// 1e-6, and wrote "800.0"), in scientific notation far from 1. A zero
+/// that rounding left negative (a tick at -5.6e-17 of a range from -0.7 to
+/// 0.2) reads "0", not "-0".
+fn tick_label(v: f64, (lo, hi): Range) -> String {
+    let ticks = plotters::coord::types::RangedCoordf64::from(lo..hi).key_points(TICKS);
+    let step = ticks
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .fold(f64::INFINITY, f64::min);
+    let magnitude = lo.abs().max(hi.abs());
+    // The spacing is {1, 2, 5}·10^m: m, kept from rounding just below.
+    let m = (step.log10() + 1e-9).floor();
+    let text = if !(step > 0.0 && step.is_finite()) {
+        format!("{v}")
+    } else if magnitude >= 1e6 || m < -5.0 {
+        let digits = (magnitude.log10().floor() - m).clamp(0.0, 12.0) as usize;
+        format!("{v:.digits$e}")
+    } else {
+        let decimals = (-m).max(0.0) as usize;
+        format!("{v:.decimals$}")
+    };
     match text.strip_prefix('-') {
         Some(magnitude) if magnitude.parse::<f64>() == Ok(0.0) => magnitude.to_string(),
         _ => text,
     }
 }
+
+/// The most ticks an axis gets.
+const TICKS: usize = 5;
 
 /// One panel over the time range `(t0, t1)` and y range `(y0, y1)`
 /// ([`panel_ranges`]).
@@ -532,6 +559,8 @@ fn draw_panel<DB: DrawingBackend>(
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, ("sans-serif", 14))
         .margin(8)
+        // Room for the last time tick's text, centred on the right edge.
+        .margin_right(18)
         .x_label_area_size(32)
         .y_label_area_size(56)
         .build_cartesian_2d(t0..t1, y0..y1)?;
@@ -539,10 +568,10 @@ fn draw_panel<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc("time (s)")
         .y_desc(p.y_label.as_str())
-        .x_labels(5)
-        .y_labels(5)
-        .x_label_formatter(&tick_label)
-        .y_label_formatter(&tick_label)
+        .x_labels(TICKS)
+        .y_labels(TICKS)
+        .x_label_formatter(&|v| tick_label(*v, (t0, t1)))
+        .y_label_formatter(&|v| tick_label(*v, (y0, y1)))
         .label_style(("sans-serif", 11))
         .light_line_style(WHITE)
         .draw()?;
@@ -560,24 +589,27 @@ fn draw_panel<DB: DrawingBackend>(
 
 /// The report of the trajectory `path` with the reference files `refs`:
 /// its SVG text, the panels drawn and the warnings (a reference sharing no
-/// column with the trajectory). `angular` names the rotational
-/// coordinates' columns ([`crate::io::angular_columns`]).
+/// column or no time with the trajectory). `columns` says what the files'
+/// columns are for the model ([`ModelColumns`]).
 pub fn report(
     path: &Path,
     refs: &[PathBuf],
     bilateral: bool,
-    angular: &HashSet<String>,
+    columns: &ModelColumns,
 ) -> Result<(String, Vec<Panel>, Vec<String>), ReportError> {
-    let mut files = vec![ReportFile::read(path, angular)?];
+    let mut files = vec![ReportFile::read(path, columns)?];
     if files[0].table.labels.is_empty() {
         return Err(ReportError::Input {
             file: path.into(),
             reason: "no column but time to plot".into(),
         });
     }
+    let span = |t: &StoTable| (t.time[0], t.time[t.time.len() - 1]);
+    let (t0, t1) = span(&files[0].table);
     let mut warnings = Vec::new();
     for r in refs {
-        let f = ReportFile::read(r, angular)?;
+        let f = ReportFile::read(r, columns)?;
+        let (r0, r1) = span(&f.table);
         if !f
             .table
             .labels
@@ -589,10 +621,21 @@ pub fn report(
                 r.display(),
                 path.display()
             ));
+        } else if !f.table.time.iter().any(|t| (t0..=t1).contains(t)) {
+            // References are cut to the trajectory's time span.
+            warnings.push(format!(
+                "{}: its times ({}–{} s) lie outside those of {} ({}–{} s): nothing of it is drawn",
+                r.display(),
+                crate::io::readable(r0),
+                crate::io::readable(r1),
+                path.display(),
+                crate::io::readable(t0),
+                crate::io::readable(t1)
+            ));
         }
         files.push(f);
     }
-    let panels = panels(&files, bilateral, angular);
+    let panels = panels(&files, bilateral, &columns.angular);
     let names: Vec<String> = files.iter().map(|f| f.name.clone()).collect();
     let text = svg(
         &format!("leap report: {}", path.display()),
@@ -621,7 +664,8 @@ pub fn default_output(path: &Path) -> PathBuf {
 }
 
 /// Refuse an output file that is the trajectory or a reference (it would
-/// be overwritten by the report), or whose directory does not exist.
+/// be overwritten by the report), that is not named `.svg` (a `.png` had
+/// received SVG text), or whose directory does not exist.
 pub fn check_output(output: &Path, trajectory: &Path, refs: &[PathBuf]) -> Result<(), ReportError> {
     let refuse = |reason: String| ReportError::Input {
         file: output.into(),
@@ -639,6 +683,15 @@ pub fn check_output(output: &Path, trajectory: &Path, refs: &[PathBuf]) -> Resul
             "--output is the input file {}: the report would overwrite it; name another file",
             input.display()
         )));
+    }
+    let svg = output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if !svg {
+        return Err(refuse(
+            "--output: the report is an SVG page; name the file .svg (a browser prints it to PDF, rsvg-convert turns it into PNG)"
+                .into(),
+        ));
     }
     let dir = match output.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,

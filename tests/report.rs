@@ -25,6 +25,14 @@ fn angular(m: &Model) -> HashSet<String> {
     leap::io::angular_columns(&eq)
 }
 
+/// The columns with only `angular` known (no pre-4.0 names).
+fn cols(angular: &HashSet<String>) -> leap::io::ModelColumns {
+    leap::io::ModelColumns {
+        angular: angular.clone(),
+        ..Default::default()
+    }
+}
+
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("leap_report_{}_{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
@@ -179,7 +187,7 @@ fn the_lines_carry_the_values_and_degrees_overlay_radians() {
     table(false).write_sto(&main).unwrap();
     table(true).write_sto(&reference).unwrap();
     let (svg, ps, warnings) =
-        leap::report::report(&main, std::slice::from_ref(&reference), false, &ang).unwrap();
+        leap::report::report(&main, std::slice::from_ref(&reference), false, &cols(&ang)).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     assert_eq!(ps.len(), 2);
     assert_eq!(ps[0].section, Section::CoordinateValues);
@@ -287,10 +295,10 @@ fn leap_report_writes_beside_the_trajectory_and_refuses_bad_input() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// A panel of one series of `values` over `time`.
+/// An activation panel of one series of `values` over `time`.
 fn panel_of(time: Vec<f64>, values: Vec<f64>) -> leap::report::Panel {
     leap::report::Panel {
-        section: Section::Other,
+        section: Section::Activations,
         title: "x".into(),
         y_label: String::new(),
         series: vec![leap::report::Series {
@@ -306,11 +314,25 @@ fn panel_of(time: Vec<f64>, values: Vec<f64>) -> leap::report::Panel {
 fn y_ranges_hold_fractions_to_0_1_and_refuse_overflowing_spans() {
     use leap::report::panel_ranges;
     let t = vec![0.0, 2.0];
-    // Moco's rule: data in [0, 1] get the axis [0, 1].
+    // Moco's rule: activations, excitations and normalized tendon forces
+    // in [0, 1] get the axis [0, 1].
     assert_eq!(
         panel_ranges(&panel_of(t.clone(), vec![0.2, 0.7])).unwrap(),
         ((0.0, 2.0), (0.0, 1.0))
     );
+    // Not quantities with units that happen to lie in it (a fibre length
+    // in metres, a centre of pressure): their own range, widened by 5%.
+    for section in [Section::FiberLengths, Section::Other] {
+        let p = leap::report::Panel {
+            section,
+            ..panel_of(t.clone(), vec![0.08, 0.12])
+        };
+        let (_, (lo, hi)) = panel_ranges(&p).unwrap();
+        assert!(
+            (lo - 0.078).abs() < 1e-12 && (hi - 0.122).abs() < 1e-12,
+            "{section:?}: {lo} {hi}"
+        );
+    }
     // Otherwise the range widened by 5% of its size on each side.
     let (_, (lo, hi)) = panel_ranges(&panel_of(t.clone(), vec![-1.0, 3.0])).unwrap();
     assert!(
@@ -343,21 +365,21 @@ fn left_columns_are_dashed_references_cut_and_parameters_left_out() {
     )
     .unwrap();
     let width2 = |svg: &str| polylines(svg, "2").len();
-    let (plain, ps, _) = leap::report::report(&main, &[], false, &ang).unwrap();
+    let (plain, ps, _) = leap::report::report(&main, &[], false, &cols(&ang)).unwrap();
     // The parameter column (its value, then NaN) is no panel.
     assert_eq!(
         ps.iter().map(|p| p.title.as_str()).collect::<Vec<_>>(),
         ["a_r", "a_l"]
     );
     assert_eq!(width2(&plain), 3, "legend sample and two solid lines");
-    let (both, ps, _) = leap::report::report(&main, &[], true, &ang).unwrap();
+    let (both, ps, _) = leap::report::report(&main, &[], true, &cols(&ang)).unwrap();
     assert_eq!(ps.len(), 1);
     assert_eq!(ps[0].title, "a", "both sides: no side in the name");
     assert!(width2(&both) > 5, "the left line drawn in dashes");
     // A reference reaching past the trajectory is cut to its time span.
     let longer = dir.join("longer.sto");
     std::fs::write(&longer, "endheader\ntime\ta_r\n-1\t0\n0.5\t0.3\n3\t0.9\n").unwrap();
-    let (_, ps, _) = leap::report::report(&main, &[longer], false, &ang).unwrap();
+    let (_, ps, _) = leap::report::report(&main, &[longer], false, &cols(&ang)).unwrap();
     let reference = ps[0].series.iter().find(|s| s.file == 1).unwrap();
     assert_eq!(reference.time, [0.5]);
     let _ = std::fs::remove_dir_all(&dir);
@@ -391,7 +413,7 @@ fn long_files_are_thinned_keeping_their_extremes() {
     .write_sto(&short)
     .unwrap();
     let line = |f: &Path| {
-        let (svg, _, _) = leap::report::report(f, &[], false, &ang).unwrap();
+        let (svg, _, _) = leap::report::report(f, &[], false, &cols(&ang)).unwrap();
         polylines(&svg, "2").remove(1)
     };
     let (long_line, short_line) = (line(&long), line(&short));
@@ -414,6 +436,7 @@ fn the_output_may_not_be_an_input_nor_in_a_missing_directory() {
     for (output, what) in [
         (traj.clone(), "the report would overwrite it"),
         (dir.join("no_dir/r.svg"), "does not exist"),
+        (dir.join("r.png"), "name the file .svg"),
     ] {
         let err = refused(
             Command::cargo_bin("leap")
@@ -467,7 +490,7 @@ fn tick_labels_read_zero_without_a_sign() {
         table(vec!["x".into()], time, rows)
             .write_sto(&path)
             .unwrap();
-        let (svg, _, _) = leap::report::report(&path, &[], false, &ang).unwrap();
+        let (svg, _, _) = leap::report::report(&path, &[], false, &cols(&ang)).unwrap();
         let ticks: Vec<f64> = texts(&svg)
             .iter()
             .filter_map(|t| t.parse::<f64>().ok())
@@ -485,5 +508,126 @@ fn tick_labels_read_zero_without_a_sign() {
             "[{a}, {b}]: a zero tick with a sign: {zeros:?}"
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tick_labels_tell_close_ticks_apart_and_round_ones_plainly() {
+    let ang = HashSet::new();
+    let dir = tmp("tick_digits");
+    // A span of 1e-6 about -0.4352 (plotters' own text printed one label
+    // five times), and one of 1,000 N (it printed "800.0").
+    for (k, (a, b, plain)) in [(-0.4352005, -0.4351995, false), (0.0, 1000.0, true)]
+        .into_iter()
+        .enumerate()
+    {
+        let time = vec![0.0, 0.5, 1.0];
+        let rows = vec![vec![a], vec![0.5 * (a + b)], vec![b]];
+        let path = dir.join(format!("d{k}.sto"));
+        table(vec!["x".into()], time, rows)
+            .write_sto(&path)
+            .unwrap();
+        let (svg, _, _) = leap::report::report(&path, &[], false, &cols(&ang)).unwrap();
+        // The y ticks: plotters anchors their texts at the end.
+        let y: Vec<String> = svg
+            .split("<text")
+            .filter(|t| t.contains("text-anchor=\"end\""))
+            .filter_map(|t| {
+                let body = &t[t.find('>')? + 1..];
+                Some(body[..body.find("</text>")?].trim().to_string())
+            })
+            .collect();
+        let values: Vec<f64> = y.iter().map(|t| t.parse().unwrap()).collect();
+        assert!(values.len() >= 3, "[{a}, {b}]: {y:?}");
+        let mut distinct = y.clone();
+        distinct.sort();
+        distinct.dedup();
+        assert_eq!(distinct.len(), y.len(), "[{a}, {b}]: a label twice: {y:?}");
+        // Each label within half a step of a tick's value: the ticks are
+        // evenly spaced, so neighbouring labels differ by the same step.
+        let steps: Vec<f64> = values.windows(2).map(|w| (w[1] - w[0]).abs()).collect();
+        assert!(
+            steps
+                .iter()
+                .all(|s| (s - steps[0]).abs() <= 1e-9 * (1.0 + steps[0])),
+            "[{a}, {b}]: uneven labels {y:?}"
+        );
+        if plain {
+            assert!(y.iter().all(|t| !t.contains('.')), "{y:?}");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// OpenSim's inverse kinematics writes coordinates by their pre-4.0
+/// names (`hip_flexion_r`, in degrees): such a file overlays a solution's
+/// `/jointset/.../value` columns, converted to radians, as Moco's
+/// `TabOpUseAbsoluteStateNames` reads it; a reference outside the
+/// trajectory's time span is warned of.
+#[test]
+fn an_ik_file_overlays_by_its_pre_4_names_and_a_reference_elsewhere_in_time_is_warned_of() {
+    let m = model();
+    let (_, eq) = StateEquation::opensim(&m, false).unwrap();
+    let columns = leap::io::ModelColumns::of(&eq);
+    let dir = tmp("ik");
+    let time: Vec<f64> = (0..21).map(|k| k as f64 * 0.01).collect();
+    let hip = |t: f64| 1.2 - 3.0 * t * t;
+    let tx = |t: f64| 0.1 * t;
+    let solution = table(
+        vec![
+            "/jointset/hip_r/hip_flexion_r/value".into(),
+            "/jointset/ground_pelvis/pelvis_tx/value".into(),
+            "/forceset/soleus_r/activation".into(),
+        ],
+        time.clone(),
+        time.iter().map(|&t| vec![hip(t), tx(t), t]).collect(),
+    );
+    let mut ik = table(
+        vec![
+            "hip_flexion_r".into(),
+            "pelvis_tx".into(),
+            "soleus_r.activation".into(),
+        ],
+        time.clone(),
+        time.iter()
+            .map(|&t| vec![hip(t).to_degrees(), tx(t), t])
+            .collect(),
+    );
+    ik.metadata.insert("inDegrees".into(), "yes".into());
+    let (main, reference) = (dir.join("solution.sto"), dir.join("ik.mot"));
+    solution.write_sto(&main).unwrap();
+    ik.write_sto(&reference).unwrap();
+    let (svg, ps, warnings) =
+        leap::report::report(&main, std::slice::from_ref(&reference), false, &columns).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for p in &ps {
+        assert_eq!(p.series.len(), 2, "{}: the IK column joins it", p.title);
+    }
+    assert_eq!(ps[0].section, Section::CoordinateValues);
+    // The same points, to the pixel: names mapped, degrees converted
+    // (the hip), metres kept (pelvis_tx).
+    let (ours, refs) = (polylines(&svg, "2"), polylines(&svg, "4"));
+    assert_eq!(ours.len(), 4, "legend sample and three panels");
+    assert_eq!(ours[1..], refs[1..]);
+    // The reading itself: the renamed columns, the hip in radians.
+    let f = leap::report::ReportFile::read(&reference, &columns).unwrap();
+    assert_eq!(f.table.labels[0], "/jointset/hip_r/hip_flexion_r/value");
+    assert_eq!(f.table.labels[2], "/forceset/soleus_r/activation");
+    assert!((f.table.rows[20][0] - hip(0.2)).abs() < 1e-12);
+    assert!((f.table.rows[20][1] - tx(0.2)).abs() < 1e-15);
+    // A reference a second later than the solution: warned of, not drawn.
+    let mut later = ik.clone();
+    later.time.iter_mut().for_each(|t| *t += 1.0);
+    let later_path = dir.join("later.mot");
+    later.write_sto(&later_path).unwrap();
+    let (_, ps, warnings) =
+        leap::report::report(&main, std::slice::from_ref(&later_path), false, &columns).unwrap();
+    assert!(
+        warnings.len() == 1 && warnings[0].contains("lie outside"),
+        "{warnings:?}"
+    );
+    assert!(ps
+        .iter()
+        .all(|p| p.series.iter().all(|s| s.file == 0 || s.time.is_empty())));
     let _ = std::fs::remove_dir_all(&dir);
 }
