@@ -86,7 +86,7 @@ def leap_simulate(controls, accuracy):
     with tempfile.TemporaryDirectory() as out:
         run = subprocess.run([str(ROOT / "target/release/leap"), "simulate", "--controls", str(controls),
                               "--accuracy", str(accuracy), "--out", out, "--json"], capture_output=True, text=True, check=True)
-        labels, rows = read_sto(pathlib.Path(out) / "jump_states.sto")
+        labels, rows = read_sto(pathlib.Path(out) / "forward_states.sto")
     return json.loads(run.stdout), dict(zip(labels, rows[0]))
 
 

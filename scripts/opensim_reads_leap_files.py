@@ -6,10 +6,10 @@ leap solves and simulates the symmetric system (one leg carries both), but a
 user opens its results on models/jumper.osim, which has both legs. This
 script asks OpenSim itself:
 
-- the states file of `leap simulate` (`jump_states.sto`): does it hold every
+- the states file of `leap simulate` (`forward_states.sto`): does it hold every
   state variable of jumper.osim, no more (StatesTrajectory.
   createFromStatesTable with neither missing nor extra columns allowed)?
-- its controls file (`jump_controls.sto`): one column per actuator, by
+- its controls file (`forward_controls.sto`): one column per actuator, by
   Moco's control names?
 - every file, the ground forces' `.mot` too: does Storage, which the GUI's
   File > Load Motion uses, load it with all its columns?
@@ -78,14 +78,14 @@ def main():
         # The GUI's File > Load Motion reads with Storage: every file must
         # load there with all its columns (time among them).
         storage = {}
-        for path in (sim / "jump_states.sto", sim / "jump_controls.sto", sim / "jump_grf.mot",
+        for path in (sim / "forward_states.sto", sim / "forward_controls.sto", sim / "forward_grf.mot",
                      sol / "jump_solution.sto", sol / "jump_grf.mot"):
             st = osim.Storage(str(path))
             storage[f"{path.parent.name}/{path.name}"] = {"rows": st.getSize(),
                                                         "columns": st.getColumnLabels().getSize()}
 
-        states = osim.TimeSeriesTable(str(sim / "jump_states.sto"))
-        ctrl = osim.TimeSeriesTable(str(sim / "jump_controls.sto"))
+        states = osim.TimeSeriesTable(str(sim / "forward_states.sto"))
+        ctrl = osim.TimeSeriesTable(str(sim / "forward_controls.sto"))
         # Raises unless every state variable has its column and no column is
         # unknown to the model.
         traj = osim.StatesTrajectory.createFromStatesTable(model, states, False, False, False)
@@ -96,7 +96,7 @@ def main():
         sol_state_names = list(solution.getStateNames())
         sol_control_names = list(solution.getControlNames())
 
-        grf = osim.TimeSeriesTable(str(sim / "jump_grf.mot"))
+        grf = osim.TimeSeriesTable(str(sim / "forward_grf.mot"))
         grf_times = list(grf.getIndependentColumn())
         col = labels_of(states)
         samples, next_t = [], 0.0

@@ -71,6 +71,9 @@ pub struct JumpAnalysis {
     pub liftoff: bool,
     /// Whether the window was given (`--window`), not the push-off found.
     pub window_given: bool,
+    /// Whether each muscle's row stands for both legs' (the symmetric
+    /// system), not for one muscle (`--full`).
+    pub both_sides: bool,
     pub budget: EnergyBudget,
     /// ∫ (F_y − m g) dt over the window and m · ΔẎ_C: equal by Newton's
     /// second law (N·s).
@@ -114,8 +117,11 @@ pub enum AnalysisError {
     EmptyWindow(f64, f64),
     #[error("one row between {} s and {} s (t = {} s): a window needs two rows or more to integrate over", crate::io::readable(*.0), crate::io::readable(*.1), crate::io::readable(*.2))]
     OneRow(f64, f64, f64),
-    #[error("row at t = {t} s: its states give a non-finite {what}: a state of that row lies far outside what the model can do", t = crate::io::readable(*.0), what = .1)]
-    NotFinite(f64, &'static str),
+    /// A row whose states give a non-finite quantity; the third field
+    /// names its coordinates outside their ranges
+    /// ([`crate::eval::outside_range_hint`]).
+    #[error("row at t = {t} s: its states give a non-finite {what}{why}", t = crate::io::readable(*.0), what = .1, why = if .2.is_empty() { ": a state of that row lies far outside what the model can do" } else { .2.as_str() })]
+    NotFinite(f64, &'static str, String),
 }
 
 /// Per row: what the analysis integrates.
@@ -174,7 +180,15 @@ fn sample(
         (power, "muscle power"),
     ] {
         if !value.is_finite() {
-            return Err(AnalysisError::NotFinite(t, what));
+            return Err(AnalysisError::NotFinite(
+                t,
+                what,
+                crate::eval::outside_range_hint(
+                    eq,
+                    x,
+                    "a file in degrees without `inDegrees=yes` in its header?",
+                ),
+            ));
         }
     }
     Ok(Sample {
@@ -212,11 +226,14 @@ pub fn analyze(
     let mut in_contact = false;
     let mut warnings = Vec::new();
     let mut warned = vec![false; eq.nq()];
+    // A window's ends hold the rows a hair beyond them: report times
+    // summed step by step (0.2000000000000001) are the rows meant.
+    let slack = |t: f64| 1e-9 * (1.0 + t.abs());
     for (t, x) in time.iter().zip(states) {
-        if *t < t0 {
+        if *t < t0 - slack(t0) {
             continue;
         }
-        if *t > t1 {
+        if *t > t1 + slack(t1) {
             break;
         }
         for (k, w) in crate::eval::coordinates_outside_range(eq, x) {
@@ -289,6 +306,7 @@ pub fn analyze(
     Ok(JumpAnalysis {
         liftoff,
         window_given: window.is_some(),
+        both_sides: eq.system.symmetric,
         budget: EnergyBudget {
             start_s: first.t,
             end_s: last.t,
@@ -390,7 +408,12 @@ impl JumpAnalysis {
             "vertical impulse ∫(Fy − mg) dt {:.2} N·s, COM momentum change {:.2} N·s\n",
             self.vertical_impulse_ns, self.com_momentum_change_ns
         ));
-        s.push_str("work of the muscles on both sides; W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt\n");
+        s.push_str(if self.both_sides {
+            "work of the muscles on both sides; "
+        } else {
+            "work of each muscle; "
+        });
+        s.push_str("W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt\n");
         s
     }
 }

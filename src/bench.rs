@@ -690,8 +690,13 @@ pub struct SolveBenchReport {
     pub study: String,
     pub variables: usize,
     pub constraints: usize,
+    /// The SQP's Hessian mode (`hessian_mode` in the JSON, as in `leap
+    /// solve`'s).
+    #[serde(rename = "hessian_mode")]
     pub hessian: crate::sqp::HessianMode,
-    /// The Hessian as a study names it ([`crate::study::hessian_option_name`]).
+    /// The Hessian as a study names it ([`crate::study::hessian_option_name`]):
+    /// `hessian` in the JSON.
+    #[serde(rename = "hessian")]
     pub hessian_option: &'static str,
     pub runs: Vec<SolveBenchRun>,
     pub median_wall_time_s: f64,

@@ -400,6 +400,11 @@ pub fn evaluate(
         return Err(crate::ode::OdeError::NotFinite {
             state: names[k].clone(),
             value: xdot[k],
+            why: outside_range_hint(
+                eq,
+                x,
+                "the input in degrees? leap eval reads coordinates in radians",
+            ),
         });
     }
     let model = &eq.model;
@@ -542,6 +547,32 @@ pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
         }
     }
     out
+}
+
+/// Why a state `x` may give non-finite forces: ": " and its coordinates
+/// outside their ranges ([`coordinates_outside_range`]), with `degrees`
+/// (where the input says it is in radians) where every rotational one of
+/// them would lie in its range in radians; empty if none is outside.
+pub(crate) fn outside_range_hint(eq: &StateEquation, x: &[f64], degrees: &str) -> String {
+    let outside = coordinates_outside_range(eq, x);
+    if outside.is_empty() {
+        return String::new();
+    }
+    let rotational = crate::io::rotational_coordinates(eq);
+    let in_degrees = outside.iter().all(|&(k, _)| {
+        let [lo, hi] = eq.model.coordinates[eq.system.coordinates[k]].range;
+        rotational.contains(&k) && (lo..=hi).contains(&x[k].to_radians())
+    });
+    let list: Vec<String> = outside.into_iter().map(|(_, w)| w).collect();
+    format!(
+        ": {}{}",
+        list.join("; "),
+        if in_degrees {
+            format!(" (in radians it would lie in its range: {degrees})")
+        } else {
+            String::new()
+        }
+    )
 }
 
 /// The coordinates of state `x` outside their ranges in the model file

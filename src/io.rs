@@ -919,8 +919,18 @@ pub fn angular_columns(eq: &StateEquation) -> std::collections::HashSet<String> 
 /// `TabOpUseAbsoluteStateNames` reads): `<coordinate>` for
 /// `/jointset/<joint>/<coordinate>/value`, `<coordinate>_u` for its
 /// `/speed`, `<muscle>.activation` and `<muscle>.fiber_length` for
-/// `/forceset/<muscle>/activation` and `/fiber_length`.
+/// `/forceset/<muscle>/activation` and `/fiber_length`; and the controls'
+/// `<muscle>` and `<muscle>.excitation` (ForwardTool's and CMC's) for
+/// `/forceset/<muscle>`.
 pub fn pre_4_state_names(eq: &StateEquation) -> std::collections::HashMap<String, String> {
+    let controls = eq.model.muscles.iter().flat_map(|m| {
+        let name = &m.spec.name;
+        let path = format!("/forceset/{name}");
+        [
+            (name.clone(), path.clone()),
+            (format!("{name}.excitation"), path),
+        ]
+    });
     eq.model_state_columns()
         .into_iter()
         .filter_map(|(path, _)| {
@@ -933,6 +943,7 @@ pub fn pre_4_state_names(eq: &StateEquation) -> std::collections::HashMap<String
             };
             Some((old, path))
         })
+        .chain(controls)
         .collect()
 }
 
@@ -1018,12 +1029,21 @@ pub fn readable(x: f64) -> String {
     }
 }
 
+/// How far outside [0, 1] a file's activation may lie
+/// ([`muscle_state_out_of_range`]).
+pub const ACTIVATION_SLACK: f64 = 1e-3;
+
 /// Why a muscle state named `label` (OpenSim's `/activation` or
 /// `/fiber_length` path) is outside its physical range, if it is: an
-/// activation in [0, 1] (to 1e-6: IPOPT, Moco's solver, relaxes bounds by
-/// 1e-8), a fibre length positive. Other states have no range here.
+/// activation in [0, 1] to 1e-3 (an explicit integrator's step overshoots
+/// the bound a little: `leap simulate --integrator RungeKuttaFeldberg` at
+/// 1e-5 writes 1.00009; IPOPT, Moco's solver, relaxes bounds by 1e-8; the
+/// SQP projects a guess into its bounds, and the muscle laws clamp the
+/// activation as OpenSim's do), a fibre length positive. Other states have
+/// no range here.
 pub fn muscle_state_out_of_range(label: &str, v: f64) -> Option<String> {
-    if label.ends_with("/activation") && !(-1e-6..=1.0 + 1e-6).contains(&v) {
+    if label.ends_with("/activation") && !(-ACTIVATION_SLACK..=1.0 + ACTIVATION_SLACK).contains(&v)
+    {
         Some(format!(
             "an activation must be in [0, 1], got {}",
             readable(v)

@@ -10,6 +10,17 @@
 // Index loops mirror the equations they implement.
 #![allow(clippy::needless_range_loop, clippy::large_enum_variant)]
 
+/// `eprintln!` that carries on when standard error is closed or full
+/// (`leap paths 2>&1 | head -1`, `2>/dev/full`): a warning or a log line
+/// that cannot be shown is no reason to panic (`eprintln!` does).
+#[macro_export]
+macro_rules! errln {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 pub mod analyze;
 pub mod bench;
 pub mod crosscheck;

@@ -91,7 +91,7 @@ enum Command {
         /// Integrator accuracy (ExplicitEuler: fixed step in s). Default 1e-5.
         #[arg(long, allow_negative_numbers = true)]
         accuracy: Option<f64>,
-        /// Stop time if the apex is not reached (s).
+        /// Stop time if the apex is not reached (s; default 1).
         #[arg(long, allow_negative_numbers = true)]
         t_max: Option<f64>,
         /// Results directory (default results/).
@@ -102,7 +102,7 @@ enum Command {
         json: bool,
     },
     /// Solve the maximum-height jump (Porsa, Lin & Pandy 2016) by direct
-    /// collocation and SQP from a study file (or the built-in study, the
+    /// collocation (or direct shooting) and SQP from a study file (or the built-in study, the
     /// paper's problem); write the solution, ground forces and iteration
     /// history, print the paper's Table 2 row and check the optimal
     /// excitations by forward simulation.
@@ -194,6 +194,8 @@ enum Command {
     Eval {
         #[command(flatten)]
         model: ModelFile,
+        /// The states and excitations: JSON (.json) or CSV (.csv); `leap
+        /// squat` prints a ready-made one.
         #[arg(long)]
         input: PathBuf,
         /// The full 10-coordinate system instead of the symmetric one.
@@ -254,18 +256,21 @@ enum Command {
     Squat {
         #[command(flatten)]
         model: ModelFile,
+        /// Both legs' states and excitations (the full system, for `leap
+        /// eval --full`) instead of the symmetric system's right leg.
         #[arg(long)]
         full: bool,
     },
     /// The length jumps of the exact muscle paths where conditional path
-    /// points switch (what the smooth option removes), other coordinates
-    /// at a pose of the model.
+    /// points switch (what the optimizer's smoothed paths, blended over
+    /// 0.02 rad, remove), other coordinates at a pose of the model.
     Paths {
         #[command(flatten)]
         model: ModelFile,
         /// Pose of the other coordinates (a pose name of the model file).
         #[arg(long, default_value = "squat")]
         pose: String,
+        /// Print JSON.
         #[arg(long)]
         json: bool,
     },
@@ -420,7 +425,7 @@ fn main() -> ExitCode {
     // rather than die on an illegal instruction.
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     if !(std::is_x86_feature_detected!("avx2") && std::is_x86_feature_detected!("fma")) {
-        eprintln!(
+        leap::errln!(
             "error: this build of leap needs a CPU with AVX2 and FMA (x86-64-v3, .cargo/config.toml); \
              rebuild with RUSTFLAGS=\"-C target-cpu=x86-64\" for this one"
         );
@@ -430,11 +435,11 @@ fn main() -> ExitCode {
     match run(cli) {
         Ok(code) => code,
         Err(e) if e.is::<StdoutError>() => {
-            eprintln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
+            leap::errln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
             ExitCode::from(3)
         }
         Err(e) => {
-            eprintln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
+            leap::errln!("error: {}", leap::io::bounded_message(&format!("{e:#}")));
             ExitCode::from(2)
         }
     }
@@ -593,10 +598,10 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 out!("{}", a.to_text());
             }
             for w in &a.warnings {
-                eprintln!("warning: {}: {w}", states.display());
+                leap::errln!("warning: {}: {w}", states.display());
             }
             if let Some(w) = a.newton_warning() {
-                eprintln!("{w}");
+                leap::errln!("{w}");
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -614,7 +619,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 let r = leap::eval::evaluate(&eq, &laws, x, u)
                     .with_context(|| format!("{}: evaluation {k}", input.display()))?;
                 for w in &r.warnings {
-                    eprintln!("warning: {}: evaluation {k}: {w}", input.display());
+                    leap::errln!("warning: {}: evaluation {k}: {w}", input.display());
                 }
                 reports.push(r);
             }
@@ -717,7 +722,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                         format!("{:+.4}", 1e3 * j.jump_m),
                     ]);
                 }
-                outln!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump removed by the smooth option: {:.4} mm", 1e3 * largest);
+                outln!("conditional path points of the exact (OpenSim) paths, other coordinates at the '{pose}' pose\n{t}\nlargest length jump, which the optimizer's smoothed paths remove: {:.4} mm", 1e3 * largest);
             }
             Ok(ExitCode::SUCCESS)
         }
@@ -954,6 +959,12 @@ fn at_most(n: usize, limit: usize) -> Result<usize, String> {
     }
 }
 
+/// The stem of `leap simulate`'s files (`forward_states.sto`,
+/// `forward_controls.sto`, `forward_grf.mot`, `forward_summary.json`):
+/// apart from `leap solve`'s `jump_*` in the same default directory, whose
+/// `jump_grf.mot` and `jump_summary.json` a simulation had overwritten.
+const SIMULATE_NAME: &str = leap::study::SIMULATE_FILE_PREFIX;
+
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     study: Option<PathBuf>,
@@ -1067,8 +1078,8 @@ fn simulate(
         }
         e => e,
     })?;
-    let mut files = leap::simulate::trajectory_files("jump").to_vec();
-    files.push("jump_summary.json".into());
+    let mut files = leap::simulate::trajectory_files(SIMULATE_NAME).to_vec();
+    files.push(format!("{SIMULATE_NAME}_summary.json"));
     leap::solve::check_result_files(&out_dir, &files)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
     let m = leap::model::Model::from_file(&model_path)?;
@@ -1093,7 +1104,7 @@ fn simulate(
                     n if n > 10 => format!(" and {} more", n - 10),
                     _ => String::new(),
                 };
-                eprintln!(
+                leap::errln!(
                     "warning: {}: {} column(s) name no muscle of the model and are not read: {}{more}",
                     p.display(),
                     unread.len(),
@@ -1170,13 +1181,24 @@ fn simulate(
     };
     match result {
         Ok((summary, traj)) => {
-            let files = write_trajectory(&eq, &traj, &out_dir, "jump")?;
+            let files = write_trajectory(&eq, &traj, &out_dir, SIMULATE_NAME)?;
             let mut v = serde_json::to_value(&summary)?;
             // Without a lift-off there is no jump: the JSON says so as the
             // text does ("-"), and keeps the COM's change apart.
             if summary.liftoff_time_s.is_none() {
                 v["jump_height_m"] = serde_json::Value::Null;
                 v["final_com_height_change_m"] = serde_json::json!(summary.jump_height_m);
+            }
+            // Feet that leave the ground under a falling body (muscles too
+            // weak, or switched off early) give no jump, whatever the
+            // height after: say so, as for no lift-off.
+            let falling = summary.liftoff_com_velocity_mps.filter(|&vy| vy < 0.0);
+            v["liftoff_while_falling"] = serde_json::json!(falling.is_some());
+            if let Some(vy) = falling {
+                leap::errln!(
+                    "warning: the feet left the ground with the centre of mass moving down at {:.3} m/s: a fall, not a jump (the jump height is the apex after lift-off against the standing height)",
+                    -vy
+                );
             }
             if let Some((a, b)) = controls_range {
                 v["controls_time_range"] = serde_json::json!([a, b]);
@@ -1187,7 +1209,7 @@ fn simulate(
                 // warning below speaks.
                 if let Some(push_off) = summary.liftoff_time_s {
                     if a > 0.0 || b < 0.9 * push_off {
-                        eprintln!(
+                        leap::errln!(
                             "warning: the controls file covers {a:.3}–{b:.3} s of a push-off to {push_off:.3} s: outside that range its first and last rows are held"
                         );
                     }
@@ -1204,14 +1226,14 @@ fn simulate(
                     };
                     let long = c.time.len() > 1 && c.time[0] <= 0.0 && b - a > MAX_T_MAX;
                     if long && c.time[1] >= end {
-                        eprintln!(
+                        leap::errln!(
                             "warning: {what} at {end:.3} s, before the controls file's second row (t = {} s; the file spans {}–{} s, longer than any jump): it read only the line between the first two rows; OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
                             leap::io::readable(c.time[1]),
                             leap::io::readable(a),
                             leap::io::readable(b)
                         );
                     } else if long && summary.liftoff_time_s.is_none() {
-                        eprintln!(
+                        leap::errln!(
                             "warning: no lift-off before t_max = {} s, and the controls file spans {}–{} s, longer than any jump: OpenSim's files are in seconds (times in milliseconds need dividing by 1000)",
                             leap::io::readable(st.t_max),
                             leap::io::readable(a),
@@ -1220,12 +1242,13 @@ fn simulate(
                     }
                 }
             }
+            let summary_file = out_dir.join(format!("{SIMULATE_NAME}_summary.json"));
             v["files"] = serde_json::json!(files
                 .iter()
+                .chain(std::iter::once(&summary_file))
                 .map(|p| p.display().to_string())
                 .collect::<Vec<_>>());
             v["static_squat_max_abs_qdd"] = serde_json::json!(squat.max_abs_qdd);
-            let summary_file = out_dir.join("jump_summary.json");
             leap::io::write_output(&summary_file, serde_json::to_string_pretty(&v)?)
                 .with_context(|| summary_file.display().to_string())?;
             if json {
@@ -1247,7 +1270,7 @@ fn simulate(
                     ),
                     None => {
                         outln!("  jump height            - (no lift-off before t_max)");
-                        eprintln!(
+                        leap::errln!(
                             "warning: the feet did not leave the ground before t_max = {} s: no jump; the COM ended {:.1} cm from its standing height",
                             st.t_max,
                             100.0 * summary.jump_height_m
@@ -1278,22 +1301,22 @@ fn simulate(
             Ok(ExitCode::SUCCESS)
         }
         Err(failure) => {
-            let files = write_trajectory(&eq, &failure.trajectory, &out_dir, "jump")?;
+            let files = write_trajectory(&eq, &failure.trajectory, &out_dir, SIMULATE_NAME)?;
             let names = eq.state_names();
             let state: serde_json::Map<String, serde_json::Value> = names
                 .iter()
                 .zip(&failure.state)
                 .map(|(n, v)| (n.clone(), serde_json::json!(v)))
                 .collect();
+            let summary_file = out_dir.join(format!("{SIMULATE_NAME}_summary.json"));
             let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
-                "files": files.iter().map(|p| p.display().to_string()).collect::<Vec<_>>()});
-            let summary_file = out_dir.join("jump_summary.json");
+                "files": files.iter().chain(std::iter::once(&summary_file)).map(|p| p.display().to_string()).collect::<Vec<_>>()});
             leap::io::write_output(&summary_file, serde_json::to_string_pretty(&v)?)
                 .with_context(|| summary_file.display().to_string())?;
             if json {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             }
-            eprintln!("error: integration failed at t = {} s: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
+            leap::errln!("error: integration failed at t = {} s: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
             Ok(ExitCode::from(1))
         }
     }
@@ -1317,7 +1340,7 @@ fn solve(
         if flag.swap(true, Ordering::Relaxed) {
             std::process::exit(130);
         }
-        eprintln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
+        leap::errln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
     });
     let mut config = leap::study::SolveConfig::load_with_model(study.as_deref(), model.as_deref())?;
     config.apply(&overrides)?;
@@ -1328,7 +1351,7 @@ fn solve(
     let verbose = force_log || (chatty && std::io::stderr().is_terminal());
     let mut progress = |line: &str| {
         if chatty {
-            eprintln!("leap solve: {line}");
+            leap::errln!("leap solve: {line}");
         }
     };
     let report = leap::solve::run(&config, verbose, &mut progress)?;

@@ -592,6 +592,13 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
     match text.trim_start().chars().next() {
         Some('{') => {}
         None => return Err(document("empty; expected a JSON object".into())),
+        // An OpenSim model or setup file (.osim, XML) is the file a user
+        // has at hand.
+        Some('<') => {
+            return Err(document(
+                "an XML file (an OpenSim .osim model or setup file?): leap reads its own JSON files, such as models/jumper.json and the studies models/jump_*.json (models/jumper.osim is written from models/jumper.json, for OpenSim)".into(),
+            ))
+        }
         Some(_) => {
             // Say what the document is when it is JSON, else where it is not.
             let reason = match serde_json::from_str::<serde_json::Value>(text) {

@@ -67,9 +67,15 @@ pub enum OdeError {
     },
     #[error("the workspace's given muscle paths belong to another (q, q̇) or system")]
     StaleGivenPaths,
-    /// A derivative that is not finite at the state given.
-    #[error("the derivative of '{state}' is {value} at this state (a coordinate far outside its range?)")]
-    NotFinite { state: String, value: f64 },
+    /// A derivative that is not finite at the state given; `why` names
+    /// the coordinates outside their ranges, if any
+    /// ([`crate::eval::outside_range_hint`]).
+    #[error("the derivative of '{state}' is {value} at this state{}", if why.is_empty() { " (a coordinate far outside its range?)" } else { why.as_str() })]
+    NotFinite {
+        state: String,
+        value: f64,
+        why: String,
+    },
     /// A muscle path without a positive finite length at one of the
     /// model's poses.
     #[error(transparent)]

@@ -327,10 +327,14 @@ pub fn panel_ranges(p: &Panel) -> Result<(Range, Range), String> {
         p.section,
         Section::Activations | Section::Excitations | Section::NormalizedTendonForces
     );
+    // A span below a billionth of the values' magnitude (or 1e-12) is
+    // rounding: drawn as a constant (plotters gives a span below 2.2e-16
+    // one tick, and labels cannot tell ticks 1e-14 apart at 0.7).
+    let constant = hi - lo <= (1e-9 * lo.abs().max(hi.abs())).max(1e-12);
     let y = if unit_interval && lo >= 0.0 && hi <= 1.0 {
         (0.0, 1.0)
     } else {
-        let pad = if hi > lo {
+        let pad = if !constant {
             0.05 * (hi - lo)
         } else {
             0.05 * lo.abs().max(10.0)
@@ -526,14 +530,15 @@ fn tick_label(v: f64, (lo, hi): Range) -> String {
     let step = ticks
         .windows(2)
         .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
         .fold(f64::INFINITY, f64::min);
     let magnitude = lo.abs().max(hi.abs());
     // The spacing is {1, 2, 5}·10^m: m, kept from rounding just below.
     let m = (step.log10() + 1e-9).floor();
     let text = if !(step > 0.0 && step.is_finite()) {
-        format!("{v}")
+        crate::io::readable(v)
     } else if magnitude >= 1e6 || m < -5.0 {
-        let digits = (magnitude.log10().floor() - m).clamp(0.0, 12.0) as usize;
+        let digits = (magnitude.log10().floor() - m).clamp(0.0, 15.0) as usize;
         format!("{v:.digits$e}")
     } else {
         let decimals = (-m).max(0.0) as usize;
@@ -621,17 +626,26 @@ pub fn report(
                 r.display(),
                 path.display()
             ));
-        } else if !f.table.time.iter().any(|t| (t0..=t1).contains(t)) {
-            // References are cut to the trajectory's time span.
-            warnings.push(format!(
-                "{}: its times ({}–{} s) lie outside those of {} ({}–{} s): nothing of it is drawn",
-                r.display(),
-                crate::io::readable(r0),
-                crate::io::readable(r1),
-                path.display(),
-                crate::io::readable(t0),
-                crate::io::readable(t1)
-            ));
+        } else {
+            // References are cut to the trajectory's time span; a line
+            // needs two rows in it.
+            let inside = f
+                .table
+                .time
+                .iter()
+                .filter(|t| (t0..=t1).contains(*t))
+                .count();
+            if inside < 2 {
+                warnings.push(format!(
+                    "{}: {inside} of its rows (times {}–{} s) within the time span of {} ({}–{} s): nothing of it is drawn",
+                    r.display(),
+                    crate::io::readable(r0),
+                    crate::io::readable(r1),
+                    path.display(),
+                    crate::io::readable(t0),
+                    crate::io::readable(t1)
+                ));
+            }
         }
         files.push(f);
     }

@@ -413,9 +413,13 @@ pub struct SolveReport {
     /// Where collocation's points were evaluated: "rust-native" or
     /// "simbody" ([`crate::transcription::Backend`]).
     pub backend: &'static str,
+    /// The SQP's Hessian mode (`hessian_mode` in the JSON).
+    #[serde(rename = "hessian_mode")]
     pub hessian: HessianMode,
     /// The Hessian as a study names it ("exact", "exact-block-diagonal",
-    /// "exact-inertia-corrected", "bfgs"; `--hessian`).
+    /// "exact-inertia-corrected", "bfgs"; `--hessian`): `hessian` in the
+    /// JSON, as in the study file.
+    #[serde(rename = "hessian")]
     pub hessian_option: &'static str,
     /// The problem solved (the study's `problem`): bounds on t_f (s), the
     /// number of eq. 4's rows, and whether the rows Ẏ_C ≥ 0 at every node

@@ -1054,8 +1054,18 @@ fn check_name(name: &str) -> Result<(), String> {
             "'{name}' starts with '.', which would hide the result files"
         ));
     }
+    // `leap simulate` writes forward_*.sto, _grf.mot and _summary.json into
+    // the same default directory.
+    if name == SIMULATE_FILE_PREFIX {
+        return Err(format!(
+            "'{name}' names leap simulate's files (forward_grf.mot, forward_summary.json), which the solve would overwrite; choose another name"
+        ));
+    }
     Ok(())
 }
+
+/// The prefix of `leap simulate`'s result files.
+pub const SIMULATE_FILE_PREFIX: &str = "forward";
 
 fn parse_method(method: &str) -> Result<Method, String> {
     match method {
@@ -1286,6 +1296,19 @@ fn apply_hessian(settings: &mut SqpSettings, s: &str) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A solve named as `leap simulate`'s files would overwrite them.
+    #[test]
+    fn a_study_may_not_take_simulates_file_prefix() {
+        let (field, reason) = field_error(r#"{"name": "forward"}"#);
+        assert_eq!(field, "name");
+        assert!(reason.contains("forward_summary.json"), "{reason}");
+        assert!(
+            SolveStudy::from_json_str(r#"{"name": "forward2"}"#, "s.json")
+                .and_then(|s| s.resolve(None))
+                .is_ok()
+        );
+    }
 
     fn field_error(json: &str) -> (String, String) {
         let r = SolveStudy::from_json_str(json, "s.json").and_then(|s| s.resolve(None));
@@ -1533,6 +1556,10 @@ mod tests {
             ("  ", "empty; expected a JSON object"),
             (
                 "<?xml",
+                "an XML file (an OpenSim .osim model or setup file?): leap reads its own JSON files, such as models/jumper.json and the studies models/jump_*.json (models/jumper.osim is written from models/jumper.json, for OpenSim)",
+            ),
+            (
+                "x",
                 "expected a JSON object: expected value at line 1 column 1",
             ),
         ] {

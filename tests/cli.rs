@@ -547,6 +547,48 @@ fn a_closed_or_full_standard_output_is_an_error_not_a_panic() {
     }
 }
 
+/// A closed or full standard error (`2>&1 | head`, `2>/dev/full`) is no
+/// reason to panic: the error or warning that cannot be shown is dropped,
+/// and the exit code is the run's own (it had been 101, a panic in
+/// `eprintln!`).
+#[test]
+fn a_full_standard_error_keeps_the_runs_exit_code() {
+    let dir = std::env::temp_dir().join(format!("leap-cli-stderr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.to_str().unwrap();
+    // A run that warns on standard error (no lift-off by t_max), and one
+    // whose standard output fails too (its error goes to standard error).
+    let warns = ["simulate", "--t-max", "0.05", "--out", out];
+    let run = |args: &[&str], stdout_full: bool| {
+        let full = || std::fs::File::create("/dev/full").unwrap();
+        let mut c = std::process::Command::new(assert_cmd::cargo::cargo_bin("leap"));
+        c.args(args).stderr(full());
+        if stdout_full {
+            c.stdout(full());
+        } else {
+            c.stdout(std::process::Stdio::null());
+        }
+        c.status().unwrap().code()
+    };
+    let normal = Command::cargo_bin("leap")
+        .unwrap()
+        .args(warns)
+        .output()
+        .unwrap();
+    assert!(
+        String::from_utf8_lossy(&normal.stderr).contains("warning"),
+        "the run should warn: {}",
+        String::from_utf8_lossy(&normal.stderr)
+    );
+    assert_eq!(run(&warns, false), normal.status.code());
+    assert_eq!(run(&warns, true), Some(3));
+    assert_eq!(
+        run(&["squat", "--model", "models/jumper_reduced.json"], true),
+        Some(3)
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// `leap analyze` warns when the file breaks Newton's second law (impulse
 /// against momentum change): times scaled by 1e3 had printed an impulse
 /// a thousand times the momentum change without a word. A simulated jump's
@@ -562,7 +604,7 @@ fn analyze_warns_when_impulse_and_momentum_disagree() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let states = dir.join("jump_states.sto");
+    let states = dir.join("forward_states.sto");
     let mut slow = leap::io::StoTable::read(&states).unwrap();
     for t in &mut slow.time {
         *t *= 1e3;
@@ -817,4 +859,33 @@ fn unclear_messages_of_the_second_fuzzing_round_say_what_happened() {
         "{err}"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The model file an OpenSim user has at hand is an `.osim`: refused
+/// naming it as XML and pointing to leap's JSON models (it had read
+/// "expected value at line 1 column 1").
+#[test]
+fn an_osim_model_is_refused_pointing_to_the_json_models() {
+    for args in [
+        vec!["squat", "--model", "models/jumper.osim"],
+        vec!["simulate", "--model", "models/jumper.osim", "--out"],
+        // As a study, too: the likelier slip.
+        vec!["solve", "models/jumper.osim", "--out"],
+        vec!["simulate", "--study", "models/jumper.osim", "--out"],
+    ] {
+        let dir = std::env::temp_dir().join(format!("leap-cli-osim-{}", std::process::id()));
+        let mut cmd = Command::cargo_bin("leap").unwrap();
+        cmd.args(&args);
+        if args.last() == Some(&"--out") {
+            cmd.arg(&dir);
+        }
+        let err = refused(&mut cmd, "an .osim model");
+        assert!(
+            err.contains("jumper.osim")
+                && err.contains("an XML file")
+                && err.contains("models/jumper.json"),
+            "{args:?}: {err}"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

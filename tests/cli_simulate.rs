@@ -61,14 +61,28 @@ fn bang_bang_jump_leaves_the_ground_and_writes_opensim_files() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     for f in [
-        "jump_states.sto",
-        "jump_controls.sto",
-        "jump_grf.mot",
-        "jump_summary.json",
+        "forward_states.sto",
+        "forward_controls.sto",
+        "forward_grf.mot",
+        "forward_summary.json",
     ] {
         assert!(names.contains(&f.to_string()), "{f} not in {names:?}");
     }
     assert_eq!(names.len(), 4, "nothing else is written: {names:?}");
+    // The JSON names every file written, the summary among them.
+    let mut listed: Vec<String> = v["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| {
+            let p = std::path::PathBuf::from(f.as_str().unwrap());
+            p.file_name().unwrap().to_string_lossy().into_owned()
+        })
+        .collect();
+    let mut written = names.clone();
+    listed.sort();
+    written.sort();
+    assert_eq!(listed, written);
     // The controls it wrote drive the same jump when read back.
     let out2 = tmp("sim2");
     let o2 = leap()
@@ -79,7 +93,7 @@ fn bang_bang_jump_leaves_the_ground_and_writes_opensim_files() {
             "--json",
             "--controls",
         ])
-        .arg(out.join("jump_controls.sto"))
+        .arg(out.join("forward_controls.sto"))
         .arg("--out")
         .arg(&out2)
         .output()
@@ -361,7 +375,7 @@ fn a_model_with_duplicate_sphere_names_is_refused() {
 }
 
 /// Results replace what a results directory held, links included: a
-/// symbolic link where `jump_states.sto` goes is replaced by the file, and
+/// symbolic link where `forward_states.sto` goes is replaced by the file, and
 /// the file it pointed to, outside the directory, is left as it was.
 #[cfg(unix)]
 #[test]
@@ -369,7 +383,7 @@ fn results_replace_links_and_never_write_through_them() {
     let out = tmp("links");
     let outside = tmp("links-outside").join("precious.txt");
     std::fs::write(&outside, "not leap's").unwrap();
-    for name in ["jump_states.sto", "jump_summary.json"] {
+    for name in ["forward_states.sto", "forward_summary.json"] {
         let link = out.join(name);
         let _ = std::fs::remove_file(&link);
         std::os::unix::fs::symlink(&outside, &link).unwrap();
@@ -381,11 +395,11 @@ fn results_replace_links_and_never_write_through_them() {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert_eq!(std::fs::read_to_string(&outside).unwrap(), "not leap's");
-    for name in ["jump_states.sto", "jump_summary.json"] {
+    for name in ["forward_states.sto", "forward_summary.json"] {
         let meta = std::fs::symlink_metadata(out.join(name)).unwrap();
         assert!(meta.file_type().is_file(), "{name} is still a link");
     }
-    let states = std::fs::read_to_string(out.join("jump_states.sto")).unwrap();
+    let states = std::fs::read_to_string(out.join("forward_states.sto")).unwrap();
     assert!(states.contains("endheader"), "{states}");
     let _ = std::fs::remove_dir_all(&out);
     let _ = std::fs::remove_dir_all(outside.parent().unwrap());
@@ -599,7 +613,7 @@ fn controls_in_milliseconds_are_warned_of_and_late_ones_refused() {
     let change = v["final_com_height_change_m"].as_f64().unwrap();
     let a = leap()
         .arg("analyze")
-        .arg(out.join("jump_states.sto"))
+        .arg(out.join("forward_states.sto"))
         .args(["--window", "0", "0.5", "--json"])
         .output()
         .unwrap();
@@ -660,7 +674,7 @@ fn commands_find_the_default_model_outside_the_source_tree() {
     );
     let here = std::env::current_dir().unwrap();
     run(&["simulate", "--out", "out"]);
-    run(&["analyze", "out/jump_states.sto", "--json"]);
+    run(&["analyze", "out/forward_states.sto", "--json"]);
     let err = refused(
         leap()
             .current_dir(&dir)
@@ -707,9 +721,160 @@ fn controls_columns_that_name_no_muscle_are_warned_of() {
     assert!(!err.contains("not read"), "{err}");
     assert_eq!(v["jump_height_m"], plain["jump_height_m"]);
     // leap's own controls file, both legs.
-    let own = out.join("jump_controls.sto");
+    let own = out.join("forward_controls.sto");
     let (v, err) = run(own.to_str().unwrap());
     assert!(!err.contains("not read"), "{err}");
     assert_eq!(v["unread_controls_columns"], serde_json::json!([]));
     let _ = std::fs::remove_dir_all(&out);
+}
+
+/// A lift-off with the centre of mass moving down is a fall: the vasti and
+/// soleus alone unload the feet while the body drops, and the "jump" was
+/// reported as −17 cm without a word.
+#[test]
+fn a_lift_off_while_falling_is_warned_of() {
+    let dir = tmp("falling");
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/models/jumper.json");
+    let study = dir.join("two_muscles.json");
+    std::fs::write(
+        &study,
+        format!(
+            r#"{{"model": "{model}", "bang_bang": {{"on": ["vas_int_r", "soleus_r"], "on_time": 0.0, "off_time": 0.3}}}}"#
+        ),
+    )
+    .unwrap();
+    let o = simulate_study(&study, &dir.join("out"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let vy = v["liftoff_com_velocity_mps"].as_f64().unwrap();
+    assert!(vy < 0.0, "the body falls at lift-off: {vy}");
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("a fall, not a jump"), "{err}");
+    assert_eq!(v["liftoff_while_falling"], true, "{v}");
+    // The default extensors jump: no such warning.
+    let study = dir.join("extensors.json");
+    // The README's example: Feldberg's steps overshoot an activation of 1
+    // by about 1e-4, which `leap analyze` and guesses had refused.
+    std::fs::write(
+        &study,
+        format!(
+            r#"{{"model": "{model}", "integrator": "RungeKuttaFeldberg", "bang_bang": {{"on_time": 0.0, "off_time": 0.3}}}}"#
+        ),
+    )
+    .unwrap();
+    let o = simulate_study(&study, &dir.join("out"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("a fall"));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["liftoff_while_falling"], false, "{v}");
+    let o = leap()
+        .arg("analyze")
+        .arg(dir.join("out/forward_states.sto"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A states file in degrees without `inDegrees=yes` (a slip when writing
+/// one by hand) gives non-finite forces: the refusal names the coordinates
+/// outside their ranges and the likely cause, where it had named no
+/// column.
+#[test]
+fn states_in_degrees_without_the_header_key_are_refused_naming_the_cause() {
+    let out = tmp("degrees_unsaid");
+    let o = leap()
+        .args(["simulate", "--t-max", "0.2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let m =
+        leap::model::Model::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/models/jumper.json"))
+            .unwrap();
+    let (_, eq) = leap::ode::StateEquation::opensim(&m, false).unwrap();
+    let angular = leap::io::angular_columns(&eq);
+    let mut t = leap::io::StoTable::read(&out.join("forward_states.sto")).unwrap();
+    // Degrees written, the header left saying nothing (radians).
+    for (k, label) in t.labels.iter().enumerate() {
+        if angular.contains(label) {
+            t.rows.iter_mut().for_each(|r| r[k] = r[k].to_degrees());
+        }
+    }
+    t.metadata.remove("inDegrees");
+    let file = out.join("degrees.sto");
+    t.write_sto(&file).unwrap();
+    let o = leap().arg("analyze").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("knee_angle_r")
+            && err.contains("outside its range")
+            && err.contains("inDegrees=yes"),
+        "{err}"
+    );
+    // The same file with the key read in radians: analysed.
+    t.metadata.insert("inDegrees".into(), "yes".into());
+    t.write_sto(&file).unwrap();
+    let o = leap().arg("analyze").arg(&file).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // `leap eval` input has no header: its hint says it reads radians.
+    let squat = leap().args(["squat"]).output().unwrap();
+    let mut input: serde_json::Value = serde_json::from_slice(&squat.stdout).unwrap();
+    let (_, sym) = leap::ode::StateEquation::opensim(&m, true).unwrap();
+    let sym_angular = leap::io::angular_columns(&sym);
+    for (name, v) in input["state"].as_object_mut().unwrap() {
+        if sym_angular.contains(name) {
+            *v = serde_json::json!(v.as_f64().unwrap().to_degrees());
+        }
+    }
+    let eval_in = out.join("eval_degrees.json");
+    std::fs::write(&eval_in, input.to_string()).unwrap();
+    let o = leap()
+        .arg("eval")
+        .arg("--input")
+        .arg(&eval_in)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("outside its range") && err.contains("leap eval reads coordinates in radians"),
+        "{err}"
+    );
+    // A window ends on the row of its end time, written a hair later
+    // (report times summed step by step: 0.1500000000000001).
+    let states = out.join("forward_states.sto");
+    let o = leap()
+        .arg("analyze")
+        .arg(&states)
+        .args(["--window", "0.05", "0.15", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let a: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let end = a["budget"]["end_s"].as_f64().unwrap();
+    assert!((end - 0.15).abs() < 1e-12, "the window ended at {end}");
+    // The symmetric analysis's rows stand for both legs; --full's for one
+    // muscle each.
+    for (full, says) in [
+        (false, "work of the muscles on both sides"),
+        (true, "work of each muscle"),
+    ] {
+        let mut c = leap();
+        c.arg("analyze").arg(&states);
+        if full {
+            c.arg("--full");
+        }
+        let o = c.output().unwrap();
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(o.status.success() && text.contains(says), "{full}: {text}");
+    }
+    std::fs::remove_dir_all(&out).ok();
 }

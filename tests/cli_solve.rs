@@ -476,7 +476,9 @@ fn hermite_simpson_solves_with_exact_element_hessians() {
     );
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["scheme"].as_str(), Some("hermite-simpson"), "{v}");
-    assert_eq!(v["hessian"].as_str(), Some("exact_convexified"), "{v}");
+    // Named as the study names it, the SQP's mode beside it.
+    assert_eq!(v["hessian"].as_str(), Some("exact"), "{v}");
+    assert_eq!(v["hessian_mode"].as_str(), Some("exact_convexified"), "{v}");
     assert_ne!(v["status"].as_str(), Some("invalid_problem"), "{v}");
     assert!(v["iterations"].as_u64().unwrap() >= 1, "{v}");
     let _ = std::fs::remove_dir_all(&out);
@@ -1069,7 +1071,8 @@ fn shooting_solve_writes_its_files_and_agrees_with_its_forward_check() {
     // 8 no-descent rows, 8 × (7 + 7 + 10) state bounds.
     assert_eq!(v["variables"].as_u64(), Some(81));
     assert_eq!(v["constraints"].as_u64(), Some(7 + 1 + 8 + 8 * 24));
-    assert_eq!(v["hessian"], "partitioned_bfgs", "{v}");
+    assert_eq!(v["hessian"], "bfgs", "{v}");
+    assert_eq!(v["hessian_mode"], "partitioned_bfgs", "{v}");
     assert_eq!(v["shooting"]["derivatives"], "forward-sensitivity", "{v}");
     assert!(
         v["shooting"]["counters"]["point_jacobians"].as_u64() > Some(0),
@@ -1333,10 +1336,10 @@ fn unwritable_result_files_are_refused_before_the_solve() {
         "{err}"
     );
     let err = refused("simulate_blocked", &["simulate"], &|d| {
-        std::fs::create_dir_all(d.join("jump_grf.mot")).unwrap()
+        std::fs::create_dir_all(d.join("forward_grf.mot")).unwrap()
     });
     assert!(
-        err.contains("jump_grf.mot: a directory of that name exists"),
+        err.contains("forward_grf.mot: a directory of that name exists"),
         "{err}"
     );
 }

@@ -65,20 +65,23 @@ fn leap_files_hold_every_state_and_control_of_the_model() {
         &sim,
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let states = StoTable::read(&sim.join("jump_states.sto")).unwrap();
+    let states = StoTable::read(&sim.join("forward_states.sto")).unwrap();
     // The columns in the order OpenSim read them, and as many as its
     // Storage (the GUI's reader) loaded with time.
     assert_eq!(states.labels, strings(&g["states_file_columns"]));
     let storage = |f: &str| g["storage"][f]["columns"].as_u64().unwrap() as usize;
-    assert_eq!(states.labels.len() + 1, storage("simulate/jump_states.sto"));
+    assert_eq!(
+        states.labels.len() + 1,
+        storage("simulate/forward_states.sto")
+    );
     let labels: BTreeSet<String> = states.labels.iter().cloned().collect();
     assert_eq!(labels.len(), states.labels.len(), "a column twice");
     assert_eq!(labels, state_variables);
-    let c = StoTable::read(&sim.join("jump_controls.sto")).unwrap();
+    let c = StoTable::read(&sim.join("forward_controls.sto")).unwrap();
     assert_eq!(c.labels, strings(&g["controls_file_columns"]));
-    assert_eq!(c.labels.len() + 1, storage("simulate/jump_controls.sto"));
-    let grf = StoTable::read(&sim.join("jump_grf.mot")).unwrap();
-    assert_eq!(grf.labels.len() + 1, storage("simulate/jump_grf.mot"));
+    assert_eq!(c.labels.len() + 1, storage("simulate/forward_controls.sto"));
+    let grf = StoTable::read(&sim.join("forward_grf.mot")).unwrap();
+    assert_eq!(grf.labels.len() + 1, storage("simulate/forward_grf.mot"));
     assert_eq!(c.labels.iter().cloned().collect::<BTreeSet<_>>(), controls);
     assert_eq!(c.labels.len(), controls.len());
 

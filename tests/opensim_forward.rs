@@ -69,8 +69,8 @@ fn simulate(integrator: &str, name: &str) -> (Value, StoTable, StoTable) {
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: Value = serde_json::from_slice(&o.stdout).unwrap();
-    let states = StoTable::read(&out.join("jump_states.sto")).unwrap();
-    let grf = StoTable::read(&out.join("jump_grf.mot")).unwrap();
+    let states = StoTable::read(&out.join("forward_states.sto")).unwrap();
+    let grf = StoTable::read(&out.join("forward_grf.mot")).unwrap();
     let _ = std::fs::remove_dir_all(&out);
     (summary, states, grf)
 }

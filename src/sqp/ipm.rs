@@ -1232,13 +1232,13 @@ impl Ipm {
                         (a, b)
                     }
                 });
-                eprintln!(
+                crate::errln!(
                     "    largest primal residual: row {wr} ({}) {wv:.2e}, s {:.2e} z {:.2e}",
                     if wr < ne { "equality" } else { "inequality" },
                     s[wr],
                     z[wr]
                 );
-                eprintln!(
+                crate::errln!(
                     "ipm {it:3} pobj {pobj:+.6e} rp {:.1e} rd {:.1e} gap {gap:.1e} mu {mu:.1e}",
                     norm_inf(&rp) / scale_p,
                     norm_inf(&rd) / scale_d
@@ -1323,7 +1323,7 @@ impl Ipm {
             }
             let alpha = (0.99 * alpha_max).min(1.0);
             if verbose {
-                eprintln!(
+                crate::errln!(
                     "    alpha_aff {alpha_a:.3} sigma {sigma:.2e} alpha {alpha:.3} correctors {correctors}"
                 );
             }

@@ -1499,7 +1499,7 @@ impl<'s> Solver<'s> {
             qp.set_warm_start(settings.qp_warm_start);
             if settings.verbose {
                 let (nv, rows, nnz_p, nnz_a) = qp.size();
-                eprintln!(
+                crate::errln!(
                     "{} QP: {nv} variables, {rows} rows, nnz(P) {nnz_p}, nnz(A) {nnz_a}",
                     if elastic { "elastic" } else { "plain" }
                 );
@@ -2213,7 +2213,7 @@ impl<'s> Solver<'s> {
                     }
                     if alpha == 1.0 && st.verbose_line_search {
                         let (v0s, _) = self.pb.violation(&p.c);
-                        eprintln!("  rejected full step: Δf {:.3e} (gᵀd {:.3e}), ν·Δviol {:.3e} (viol {:.3e} → {:.3e}), |d| {:.3e}, Δ {:.3e}", f - p.f, gd, nu * (v1 - v0s), v0s, v1, dnorm, delta);
+                        crate::errln!("  rejected full step: Δf {:.3e} (gᵀd {:.3e}), ν·Δviol {:.3e} (viol {:.3e} → {:.3e}), |d| {:.3e}, Δ {:.3e}", f - p.f, gd, nu * (v1 - v0s), v0s, v1, dnorm, delta);
                         let mut worst: Vec<(f64, usize)> = (0..m)
                             .map(|i| {
                                 let viol =
@@ -2223,7 +2223,7 @@ impl<'s> Solver<'s> {
                             .collect();
                         worst.sort_by(|a, b| b.0.total_cmp(&a.0));
                         for &(dv, i) in worst.iter().take(6) {
-                            eprintln!("    {:.3e} {}", dv, nlp.constraint_name(i));
+                            crate::errln!("    {:.3e} {}", dv, nlp.constraint_name(i));
                         }
                     }
                     // Second-order correction (Nocedal & Wright §18.3)
@@ -2389,9 +2389,9 @@ impl<'s> Solver<'s> {
         rec.time_s = start.elapsed().as_secs_f64();
         if self.settings.verbose {
             if rec.iter.is_multiple_of(10) {
-                eprintln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta  ratio    alpha  ls  qp_it  qp_mode   lg(rg)  penalty  time_s");
+                crate::errln!("iter    objective    inf_pr   inf_du    compl    ||d||  delta  ratio    alpha  ls  qp_it  qp_mode   lg(rg)  penalty  time_s");
             }
-            eprintln!(
+            crate::errln!(
                 "{:4} {:14.7e} {:8.2e} {:8.2e} {:8.2e} {:8.2e} {:6.0e} {:6.2} {:8.2e} {:3} {:6} {:8} {:>6} {:8.2e} {:7.2}",
                 rec.iter, rec.objective, rec.inf_pr, rec.inf_du, rec.complementarity, rec.step_norm, rec.step_bound, rec.model_ratio, rec.alpha, rec.ls_trials, rec.qp_iterations, rec.qp_mode, lg_rg(rec.hessian_shift), rec.penalty, rec.time_s
             );
