@@ -949,20 +949,17 @@ pub fn pre_4_state_names(eq: &StateEquation) -> std::collections::HashMap<String
 
 /// Rename the columns of `t` that carry a pre-4.0 state name (`names`,
 /// [`pre_4_state_names`]) to its absolute path, where `t` has no column of
-/// that path already; the renamed columns' (old, new) labels.
+/// that path already.
 pub fn use_absolute_state_names(
     t: &mut StoTable,
     names: &std::collections::HashMap<String, String>,
-) -> Vec<(String, String)> {
+) {
     let present: std::collections::HashSet<String> = t.labels.iter().cloned().collect();
-    let mut renamed = Vec::new();
     for label in &mut t.labels {
         if let Some(path) = names.get(label.as_str()).filter(|p| !present.contains(*p)) {
-            renamed.push((label.clone(), path.clone()));
             *label = path.clone();
         }
     }
-    renamed
 }
 
 /// What a file's columns mean for the model: which are rotational

@@ -2,6 +2,7 @@
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use leap::study::SIMULATE_FILE_PREFIX;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -738,6 +739,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let m = leap::model::Model::from_file(&model)?;
             let (_, eq) = leap::ode::StateEquation::opensim(&m, false)?;
             let columns = leap::io::ModelColumns::of(&eq);
+            // Read first, so that a missing trajectory is named as such.
             let (text, panels, warnings) =
                 leap::report::report(&trajectory, &ref_files, bilateral, &columns)?;
             let output = output.unwrap_or_else(|| leap::report::default_output(&trajectory));
@@ -959,12 +961,6 @@ fn at_most(n: usize, limit: usize) -> Result<usize, String> {
     }
 }
 
-/// The stem of `leap simulate`'s files (`forward_states.sto`,
-/// `forward_controls.sto`, `forward_grf.mot`, `forward_summary.json`):
-/// apart from `leap solve`'s `jump_*` in the same default directory, whose
-/// `jump_grf.mot` and `jump_summary.json` a simulation had overwritten.
-const SIMULATE_NAME: &str = leap::study::SIMULATE_FILE_PREFIX;
-
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     study: Option<PathBuf>,
@@ -1078,8 +1074,8 @@ fn simulate(
         }
         e => e,
     })?;
-    let mut files = leap::simulate::trajectory_files(SIMULATE_NAME).to_vec();
-    files.push(format!("{SIMULATE_NAME}_summary.json"));
+    let mut files = leap::simulate::trajectory_files(SIMULATE_FILE_PREFIX).to_vec();
+    files.push(format!("{SIMULATE_FILE_PREFIX}_summary.json"));
     leap::solve::check_result_files(&out_dir, &files)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
     let m = leap::model::Model::from_file(&model_path)?;
@@ -1181,7 +1177,7 @@ fn simulate(
     };
     match result {
         Ok((summary, traj)) => {
-            let files = write_trajectory(&eq, &traj, &out_dir, SIMULATE_NAME)?;
+            let files = write_trajectory(&eq, &traj, &out_dir, SIMULATE_FILE_PREFIX)?;
             let mut v = serde_json::to_value(&summary)?;
             // Without a lift-off there is no jump: the JSON says so as the
             // text does ("-"), and keeps the COM's change apart.
@@ -1242,7 +1238,7 @@ fn simulate(
                     }
                 }
             }
-            let summary_file = out_dir.join(format!("{SIMULATE_NAME}_summary.json"));
+            let summary_file = out_dir.join(format!("{SIMULATE_FILE_PREFIX}_summary.json"));
             v["files"] = serde_json::json!(files
                 .iter()
                 .chain(std::iter::once(&summary_file))
@@ -1301,14 +1297,14 @@ fn simulate(
             Ok(ExitCode::SUCCESS)
         }
         Err(failure) => {
-            let files = write_trajectory(&eq, &failure.trajectory, &out_dir, SIMULATE_NAME)?;
+            let files = write_trajectory(&eq, &failure.trajectory, &out_dir, SIMULATE_FILE_PREFIX)?;
             let names = eq.state_names();
             let state: serde_json::Map<String, serde_json::Value> = names
                 .iter()
                 .zip(&failure.state)
                 .map(|(n, v)| (n.clone(), serde_json::json!(v)))
                 .collect();
-            let summary_file = out_dir.join(format!("{SIMULATE_NAME}_summary.json"));
+            let summary_file = out_dir.join(format!("{SIMULATE_FILE_PREFIX}_summary.json"));
             let v = serde_json::json!({"status": "failed", "time": failure.t, "cause": failure.cause, "state": state,
                 "files": files.iter().chain(std::iter::once(&summary_file)).map(|p| p.display().to_string()).collect::<Vec<_>>()});
             leap::io::write_output(&summary_file, serde_json::to_string_pretty(&v)?)

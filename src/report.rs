@@ -5,7 +5,8 @@
 //! excitations, then any other column (a `.mot`'s ground forces, Moco's
 //! multipliers), three panels a row; reference files drawn first and
 //! thicker beneath the trajectory, over the trajectory's time span; the y
-//! axis held to [0, 1] where the data lie in it; with `bilateral` a right
+//! axis held to [0, 1] for activations, excitations and normalized tendon
+//! forces that lie in it; with `bilateral` a right
 //! and a left column (`_r`, `_l`, also inside a name: `ground_force_l_vx`)
 //! in one panel, the left dashed. Unlike Moco, each coordinate's values and
 //! speeds are sections of their own, and Moco's parameter columns (one
@@ -519,20 +520,26 @@ fn line_style(k: usize) -> ShapeStyle {
     }
 }
 
-/// The text of the tick at `v` on an axis over `(lo, hi)`: with the
-/// decimals of the ticks' spacing, as plotters places them (every tick
-/// apart and alike; plotters' own text repeated "-0.4352" over a span of
-/// 1e-6, and wrote "800.0"), in scientific notation far from 1. A zero
-/// that rounding left negative (a tick at -5.6e-17 of a range from -0.7 to
-/// 0.2) reads "0", not "-0".
-fn tick_label(v: f64, (lo, hi): Range) -> String {
+/// How an axis over `(lo, hi)` writes its ticks: the spacing plotters
+/// places them at ({1, 2, 5}·10^m; NaN where it places fewer than two)
+/// and the axis's largest magnitude ([`tick_label`]).
+fn tick_spacing((lo, hi): Range) -> (f64, f64) {
     let ticks = plotters::coord::types::RangedCoordf64::from(lo..hi).key_points(TICKS);
     let step = ticks
         .windows(2)
         .map(|w| w[1] - w[0])
         .filter(|d| *d > 0.0)
         .fold(f64::INFINITY, f64::min);
-    let magnitude = lo.abs().max(hi.abs());
+    (step, lo.abs().max(hi.abs()))
+}
+
+/// The text of the tick at `v` on an axis of `(step, magnitude)`
+/// ([`tick_spacing`]): with the decimals of the ticks' spacing (every tick
+/// apart and alike; plotters' own text repeated "-0.4352" over a span of
+/// 1e-6, and wrote "800.0"), in scientific notation far from 1. A zero
+/// that rounding left negative (a tick at -5.6e-17 of a range from -0.7 to
+/// 0.2) reads "0", not "-0".
+fn tick_label(v: f64, (step, magnitude): (f64, f64)) -> String {
     // The spacing is {1, 2, 5}·10^m: m, kept from rounding just below.
     let m = (step.log10() + 1e-9).floor();
     let text = if !(step > 0.0 && step.is_finite()) {
@@ -561,6 +568,7 @@ fn draw_panel<DB: DrawingBackend>(
     (t0, t1): (f64, f64),
     (y0, y1): (f64, f64),
 ) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
+    let (x_ticks, y_ticks) = (tick_spacing((t0, t1)), tick_spacing((y0, y1)));
     let mut chart = ChartBuilder::on(area)
         .caption(&p.title, ("sans-serif", 14))
         .margin(8)
@@ -575,8 +583,8 @@ fn draw_panel<DB: DrawingBackend>(
         .y_desc(p.y_label.as_str())
         .x_labels(TICKS)
         .y_labels(TICKS)
-        .x_label_formatter(&|v| tick_label(*v, (t0, t1)))
-        .y_label_formatter(&|v| tick_label(*v, (y0, y1)))
+        .x_label_formatter(&|v| tick_label(*v, x_ticks))
+        .y_label_formatter(&|v| tick_label(*v, y_ticks))
         .label_style(("sans-serif", 11))
         .light_line_style(WHITE)
         .draw()?;

@@ -1064,7 +1064,10 @@ fn check_name(name: &str) -> Result<(), String> {
     Ok(())
 }
 
-/// The prefix of `leap simulate`'s result files.
+/// The prefix of `leap simulate`'s result files (`forward_states.sto`,
+/// `forward_controls.sto`, `forward_grf.mot`, `forward_summary.json`):
+/// apart from `leap solve`'s `jump_*` in the same default directory, whose
+/// `jump_grf.mot` and `jump_summary.json` a simulation had overwritten.
 pub const SIMULATE_FILE_PREFIX: &str = "forward";
 
 fn parse_method(method: &str) -> Result<Method, String> {
