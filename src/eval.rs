@@ -113,6 +113,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             }
             Ok(())
         };
+    let pre_4 = crate::io::pre_4_state_names(eq);
     let is_copy = |c: &str, copies: &[(String, usize)]| copies.iter().any(|(l, _)| l == c);
     let known = |c: &str| {
         states.iter().chain(&controls).any(|n| n == c)
@@ -133,6 +134,18 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         let (_, header) = lines
             .next()
             .ok_or_else(|| err("line 1".into(), "empty file".into()))?;
+        // A spreadsheet in a locale with a decimal comma exports with
+        // semicolons; some tools write tabs.
+        if !header.contains(',') {
+            for (sep, what) in [('\t', "tabs"), (';', "semicolons")] {
+                if header.contains(sep) {
+                    return Err(err(
+                        "header".into(),
+                        format!("separated by {what}: leap eval reads CSV separated by commas, with '.' as the decimal point"),
+                    ));
+                }
+            }
+        }
         // Labels may be quoted, as spreadsheets write them.
         let cols: Vec<&str> = header
             .split(',')
@@ -150,11 +163,17 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 ),
             ));
         }
+        // The documented optional time column (as leap's and OpenSim's
+        // tables lead with) is not read.
         for (k, c) in cols.iter().enumerate() {
-            if !known(c) {
+            if !known(c) && *c != "time" {
                 return Err(err(
                     "header".into(),
-                    format!("unknown column '{c}' (column {}): not a state or excitation of this model's system", k + 1),
+                    format!(
+                        "unknown column '{c}' (column {}): {}",
+                        k + 1,
+                        unknown_name_reason(c, &pre_4)
+                    ),
                 ));
             }
         }
@@ -325,7 +344,10 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                     })?;
                     given.push((k.clone(), v));
                 } else if !names.contains(k) {
-                    return Err(err(place(&format!("{named}.{k}")), "unknown name".into()));
+                    return Err(err(
+                        place(&format!("{named}.{k}")),
+                        format!("unknown name: {}", unknown_name_reason(k, &pre_4)),
+                    ));
                 }
             }
             names
@@ -359,6 +381,23 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
 
 /// The physical range of the inputs: activations (to 1e-6) and excitations
 /// in [0, 1], fibre lengths positive. (name, reason) of the first outside it.
+/// Why `name` is not one of the system's state or control names, with what
+/// was probably meant: the OpenSim 4 path of a pre-4.0 name (`soleus_r`,
+/// `knee_angle_r_u`, `<muscle>.activation`).
+fn unknown_name_reason(name: &str, pre_4: &std::collections::HashMap<String, String>) -> String {
+    if let Some(path) = pre_4.get(name) {
+        let units = if path.starts_with("/jointset/") {
+            ", in radians"
+        } else {
+            ""
+        };
+        return format!(
+            "a pre-4.0 name; leap eval reads OpenSim 4's state and control paths: '{path}'{units}"
+        );
+    }
+    "not a state or excitation of this model's system (`leap squat` prints the names)".into()
+}
+
 fn check_ranges(
     states: &[String],
     controls: &[String],

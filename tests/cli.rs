@@ -447,8 +447,9 @@ fn zero_repeats_are_refused() {
     );
 }
 
-/// A CSV as spreadsheets write it (byte-order mark, quoted labels) reads
-/// as the same evaluation as the JSON input.
+/// A CSV as spreadsheets write it (byte-order mark, quoted labels, a
+/// leading time column, which is not read) reads as the same evaluation
+/// as the JSON input.
 #[test]
 fn eval_reads_a_spreadsheet_csv() {
     let (dir, squat) = squat_input("eval-csv");
@@ -469,7 +470,11 @@ fn eval_reads_a_spreadsheet_csv() {
     let csv = dir.join("squat.csv");
     std::fs::write(
         &csv,
-        format!("\u{feff}{}\n{}\n", labels.join(","), values.join(",")),
+        format!(
+            "\u{feff}\"time\",{}\n0.5,{}\n",
+            labels.join(","),
+            values.join(",")
+        ),
     )
     .unwrap();
     let json = dir.join("squat.json");
@@ -514,6 +519,38 @@ fn eval_reads_a_spreadsheet_csv() {
             err.contains("header") && err.contains(want),
             "{name}: {err}"
         );
+    }
+    // A semicolon-separated export, and a pre-4.0 name (OpenSim 3's
+    // `soleus_r` for the excitation): refused with what was meant.
+    let pre_4: Vec<String> = labels
+        .iter()
+        .map(|l| l.replace("/forceset/soleus_r\"", "soleus_r\""))
+        .collect();
+    for (name, text, want) in [
+        (
+            "semicolons",
+            format!("{}\n{}\n", labels.join(";"), values.join(";")),
+            "separated by semicolons",
+        ),
+        (
+            "pre-4",
+            format!("{}\n{}\n", pre_4.join(","), values.join(",")),
+            "'soleus_r' (column",
+        ),
+    ] {
+        let bad = dir.join(format!("{name}.csv"));
+        std::fs::write(&bad, text).unwrap();
+        let err = refused(
+            Command::cargo_bin("leap")
+                .unwrap()
+                .args(["eval", "--input"])
+                .arg(&bad),
+            name,
+        );
+        assert!(err.contains(want), "{name}: {err}");
+        if name == "pre-4" {
+            assert!(err.contains("'/forceset/soleus_r'"), "{err}");
+        }
     }
     std::fs::remove_dir_all(&dir).ok();
 }
