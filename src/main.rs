@@ -296,6 +296,7 @@ enum BenchCommand {
     StateEquation {
         #[command(flatten)]
         model: ModelFile,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -305,6 +306,7 @@ enum BenchCommand {
         /// Runs of the whole set per mode (the median is reported).
         #[arg(long, default_value_t = 5, value_parser = bench_repeats)]
         repeats: usize,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -322,6 +324,7 @@ enum BenchCommand {
         /// Turn off clarabel's equilibration of the QPs.
         #[arg(long)]
         no_equilibrate: bool,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -335,6 +338,7 @@ enum BenchCommand {
         /// with forward sensitivities, 23 s with central differences).
         #[arg(long, default_value_t = 3, value_parser = bench_iterations)]
         iterations: usize,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -360,6 +364,7 @@ enum BenchCommand {
         /// a sweep, not on one solve.
         #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
         num_mesh_intervals: Vec<i64>,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
@@ -368,6 +373,7 @@ enum BenchCommand {
     Integrators {
         #[command(flatten)]
         model: ModelFile,
+        /// Print one JSON object instead of a table.
         #[arg(long)]
         json: bool,
     },
