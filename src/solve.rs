@@ -1638,6 +1638,14 @@ impl SolveReport {
                             .map(|t| format!("{t:.3} s"))
                             .unwrap_or_else(|| "— (no lift-off)".into())
                     ));
+                    // As `leap simulate` warns: feet leaving the ground
+                    // under a falling body are a fall, not a jump.
+                    if let Some(vy) = sm.liftoff_com_velocity_mps.filter(|&vy| vy < 0.0) {
+                        s.push_str(&format!(
+                            "  warning: in the forward check the feet left the ground with the centre of mass moving down at {:.3} m/s: a fall, not a jump\n",
+                            -vy
+                        ));
+                    }
                     if self.forward_check_agrees == Some(false) {
                         s.push_str(&format!(
                             "  warning: the forward check misses the prediction by more than {:.0} cm: the predicted jump does not hold for the model (a solve stopped early, or on a converged one the discretisation error of {:.1} ms intervals, which the optimizer exploits over a long push-off); do not read the predicted height as the model's\n",

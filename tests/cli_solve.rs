@@ -1229,35 +1229,90 @@ fn ctrl_c_stops_a_solve_and_writes_its_results() {
 /// the table warns in words.
 #[test]
 fn a_forward_check_that_misses_is_flagged_and_warned_of() {
-    let (_, out, _) = small_solve_in_fresh_dirs("weak_src", &["--max-iterations", "3"]);
+    let (v, stdout) = solve_from_excitations("weak", |_| 0.01);
+    let d = v["forward_check_difference_m"].as_f64().unwrap();
+    assert!(
+        d.abs() > 0.01,
+        "forward check within 1 cm ({d} m): the case does not test the warning"
+    );
+    assert_eq!(v["forward_check_agrees"].as_bool(), Some(false), "{v}");
+    assert!(
+        stdout.contains("warning: the forward check misses the prediction by more than 1 cm"),
+        "{stdout}"
+    );
+    // A body that jumps rises at lift-off: no falling warning here.
+    assert!(
+        v["forward_check"]["summary"]["liftoff_com_velocity_mps"]
+            .as_f64()
+            .unwrap()
+            > 0.0,
+        "{v}"
+    );
+    assert!(!stdout.contains("a fall, not a jump"), "{stdout}");
+}
+
+/// As `leap simulate` warns of it, a forward check whose feet leave the
+/// ground under a falling body is called a fall: vas_int and soleus
+/// alone, fully excited (`leap simulate`'s case; the lift-off velocity is
+/// negative in the JSON).
+#[test]
+fn a_forward_check_that_falls_is_warned_of() {
+    let (v, stdout) = solve_from_excitations("falling", |m| {
+        if m.starts_with("vas_int") || m.starts_with("soleus") {
+            1.0
+        } else {
+            0.01
+        }
+    });
+    let vy = v["forward_check"]["summary"]["liftoff_com_velocity_mps"]
+        .as_f64()
+        .unwrap();
+    assert!(vy < 0.0, "the case does not fall: lift-off velocity {vy}");
+    assert!(
+        stdout.contains(
+            "in the forward check the feet left the ground with the centre of mass moving down"
+        ),
+        "{stdout}"
+    );
+}
+
+/// One SQP iteration of the 4-interval solve from a 3-iteration solution
+/// whose excitations are replaced by `excitation(muscle)` (its states
+/// kept): the summary JSON and the printed table.
+fn solve_from_excitations(
+    name: &str,
+    excitation: impl Fn(&str) -> f64,
+) -> (serde_json::Value, String) {
+    let (_, out, _) = small_solve_in_fresh_dirs(&format!("{name}_src"), &["--max-iterations", "3"]);
     let text = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let end = lines.iter().position(|l| l == "endheader").unwrap();
     let labels: Vec<String> = lines[end + 1].split('\t').map(String::from).collect();
     // Excitations are the columns named /forceset/<muscle> alone.
-    let excitation: Vec<usize> = (0..labels.len())
-        .filter(|&k| {
+    let excitations: Vec<(usize, &str)> = (0..labels.len())
+        .filter_map(|k| {
             labels[k]
                 .strip_prefix("/forceset/")
-                .is_some_and(|m| !m.contains('/'))
+                .filter(|m| !m.contains('/'))
+                .map(|m| (k, m))
         })
         .collect();
     // Both legs' columns: 24 muscles per leg.
-    assert_eq!(excitation.len(), 48);
+    assert_eq!(excitations.len(), 48);
     for l in lines
         .iter_mut()
         .skip(end + 2)
         .filter(|l| !l.trim().is_empty())
     {
         let mut f: Vec<String> = l.split('\t').map(String::from).collect();
-        for &k in &excitation {
-            f[k] = "0.01".into();
+        for &(k, m) in &excitations {
+            f[k] = excitation(m).to_string();
         }
         *l = f.join("\t");
     }
-    let guess = out.join("weak_guess.sto");
+    let guess = out.join(format!("{name}_guess.sto"));
     std::fs::write(&guess, lines.join("\n")).unwrap();
-    let out2 = fresh_dir("weak_out");
+    let out2 = fresh_dir(&format!("{name}_out"));
     let o = Command::cargo_bin("leap")
         .unwrap()
         .args([
@@ -1273,20 +1328,11 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
         .arg(&out2)
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&o.stdout);
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out2.join("jump_summary.json")).unwrap())
             .unwrap();
-    let d = v["forward_check_difference_m"].as_f64().unwrap();
-    assert!(
-        d.abs() > 0.01,
-        "forward check within 1 cm ({d} m): the case does not test the warning"
-    );
-    assert_eq!(v["forward_check_agrees"].as_bool(), Some(false), "{v}");
-    assert!(
-        stdout.contains("warning: the forward check misses the prediction by more than 1 cm"),
-        "{stdout}"
-    );
+    (v, stdout)
 }
 
 /// A result file that cannot be written is found before the solve: a
