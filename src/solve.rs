@@ -86,6 +86,13 @@ pub enum SolveError {
         file: PathBuf,
         error: std::io::Error,
     },
+    /// A result file could not be written after others of this run were.
+    #[error("{error} (this run's result files written before it: {written}; an earlier run's result files removed, so that none is read as this run's: {removed})")]
+    Partial {
+        error: Box<SolveError>,
+        written: String,
+        removed: String,
+    },
     /// A study setting the model cannot take.
     #[error("{origin}: {field}: {reason}")]
     Setting {
@@ -255,6 +262,7 @@ fn clear_qp_dumps(
 /// file that cannot be written had lost the summary after a whole solve.
 pub fn check_result_files(dir: &Path, files: &[String]) -> Result<(), std::io::Error> {
     check_results_dir(dir)?;
+    check_writable(dir)?;
     match files.iter().map(|f| dir.join(f)).find(|p| p.is_dir()) {
         Some(p) => Err(std::io::Error::new(
             std::io::ErrorKind::AlreadyExists,
@@ -264,6 +272,60 @@ pub fn check_result_files(dir: &Path, files: &[String]) -> Result<(), std::io::E
             ),
         )),
         None => Ok(()),
+    }
+}
+
+/// Whether files can be created in `dir`, or, where it does not exist yet,
+/// in its nearest existing ancestor (where it will be created): a probe
+/// file is created and removed. A read-only results directory had lost a
+/// whole solve, refused only when its first result was written.
+fn check_writable(dir: &Path) -> Result<(), std::io::Error> {
+    let mut at = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    while !at.exists() {
+        match at.parent() {
+            Some(p) if !p.as_os_str().is_empty() => at = p,
+            _ => {
+                at = Path::new(".");
+                break;
+            }
+        }
+    }
+    if !at.is_dir() {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::AlreadyExists,
+            format!(
+                "cannot create the results directory: {} is a file",
+                at.display()
+            ),
+        ));
+    }
+    let probe = at.join(format!(".leap-write-probe-{}", std::process::id()));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(_) => {
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        // Another leap of this process id's probe (not this process's own).
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+        Err(e) => Err(std::io::Error::new(
+            e.kind(),
+            if at == dir {
+                format!("cannot write into the results directory: {e}")
+            } else {
+                format!(
+                    "cannot create the results directory in {}: {e}",
+                    at.display()
+                )
+            },
+        )),
     }
 }
 
@@ -797,7 +859,85 @@ fn run_shooting(
 /// The output files of either method: the solution at the nodes, the
 /// ground forces `grf` (times and forces), the iteration history, the
 /// forward check and the summary.
+///
+/// A write that fails part-way (a full disk) would leave this run's first
+/// files beside an earlier run's others, read as one solve: the earlier
+/// run's result files (those older than this run's writing) are removed
+/// too, and the error lists what this run wrote and what was removed.
 fn finish(
+    config: &SolveConfig,
+    ocp: &Arc<JumpOcp>,
+    mesh: &MeshTrajectory,
+    result: &SqpResult,
+    report: SolveReport,
+    grf: (&[f64], &[[f64; 12]]),
+    progress: &mut dyn FnMut(&str),
+) -> Result<SolveReport, SolveError> {
+    let (dir, name) = (&config.output_directory, &config.name);
+    // Each result file as it was: every write replaces its file by a new
+    // one (`io::write_output_with`), so a file this run wrote is another.
+    let identity = |f: &str| {
+        dir.join(f)
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .map(|m| (m.modified().ok(), file_id(&m)))
+    };
+    let before: Vec<(String, _)> = result_files(name)
+        .into_iter()
+        .map(|f| {
+            let id = identity(&f);
+            (f, id)
+        })
+        .collect();
+    let error = match write_results(config, ocp, mesh, result, report, grf, progress) {
+        Ok(report) => return Ok(report),
+        Err(e) => e,
+    };
+    let (mut written, mut removed) = (Vec::new(), Vec::new());
+    for (f, was) in before {
+        match identity(&f) {
+            None => {}
+            Some(now) if Some(now) != was => written.push(f),
+            Some(_) => {
+                if std::fs::remove_file(dir.join(&f)).is_ok() {
+                    removed.push(f);
+                }
+            }
+        }
+    }
+    if written.is_empty() {
+        return Err(error);
+    }
+    let list = |v: &[String]| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    Err(SolveError::Partial {
+        error: Box::new(error),
+        written: list(&written),
+        removed: list(&removed),
+    })
+}
+
+/// A file's identity on its file system (its inode on Unix).
+fn file_id(m: &std::fs::Metadata) -> u64 {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        m.ino()
+    }
+    #[cfg(not(unix))]
+    {
+        m.len()
+    }
+}
+
+/// [`finish`]'s writing.
+fn write_results(
     config: &SolveConfig,
     ocp: &Arc<JumpOcp>,
     mesh: &MeshTrajectory,

@@ -1388,6 +1388,88 @@ fn unwritable_result_files_are_refused_before_the_solve() {
         err.contains("forward_grf.mot: a directory of that name exists"),
         "{err}"
     );
+    // A results directory that cannot be created (no file can be created
+    // in /proc, not even by root): refused before the solve, naming the
+    // field; it had been found when the first result was written.
+    for args in [&solve[..], &["simulate"]] {
+        let out = format!("/proc/leap-results-{}", std::process::id());
+        let o = Command::cargo_bin("leap")
+            .unwrap()
+            .args(args)
+            .args(["--out", &out])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains("cannot create the results directory in /proc") && !err.contains("SQP"),
+            "{args:?}: {err}"
+        );
+        if args[0] == "solve" {
+            assert!(err.contains("output_directory (--out)"), "{err}");
+        }
+    }
+}
+
+/// A result file that cannot be written after others were (a full disk;
+/// here a file-size limit that the forward check's states exceed, with
+/// SIGXFSZ ignored so that the write fails instead of the process): the
+/// error names what this run wrote, and the earlier run's other result
+/// files are removed, so that the directory holds no mix of two solves.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_write_failing_part_way_leaves_no_mix_of_two_solves() {
+    let (_, out, _) = small_solve_in_fresh_dirs("partial", &["--max-iterations", "2"]);
+    let before = files_in(&out);
+    assert!(
+        before.iter().any(|f| f.contains("forward_states")),
+        "{before:?}"
+    );
+    let solution = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
+    let forward_size = std::fs::metadata(out.join("jump_forward_states.sto"))
+        .unwrap()
+        .len();
+    // bash's ulimit -f counts kibibytes: below the forward states, above
+    // the solution.
+    let limit_kib = forward_size / 1024 / 2;
+    assert!(limit_kib * 1024 > solution.len() as u64 * 2);
+    let o = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {limit_kib}; exec \"$0\" \"$@\""
+        ))
+        .arg(assert_cmd::cargo::cargo_bin("leap"))
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "3",
+            "--out",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("jump_forward_states.sto: File too large")
+            && err.contains("written before it: jump_solution.sto, jump_grf.mot, jump_history.csv")
+            && err.contains("jump_summary.json"),
+        "{err}"
+    );
+    let after = files_in(&out);
+    assert_eq!(
+        after,
+        ["jump_grf.mot", "jump_history.csv", "jump_solution.sto"]
+            .map(String::from)
+            .to_vec(),
+        "{err}"
+    );
+    // This run's solution (3 iterations, not the earlier 2).
+    let now = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
+    assert_ne!(now, solution);
+    let _ = std::fs::remove_dir_all(&out);
 }
 
 /// `problem.activation_dynamics_smoothing` blends Thelen2003Muscle's switch
