@@ -1061,6 +1061,13 @@ fn check_name(name: &str) -> Result<(), String> {
             "'{name}' names leap simulate's files (forward_grf.mot, forward_summary.json), which the solve would overwrite; choose another name"
         ));
     }
+    // A study's forward check writes <name>_forward_grf.mot: the ground
+    // forces file of a study named <name>_forward.
+    if let Some(other) = name.strip_suffix("_forward") {
+        return Err(format!(
+            "'{name}' ends in '_forward': its {name}_grf.mot is the forward check's ground forces file of a study named '{other}', which the solves would overwrite and remove in turn; choose another name"
+        ));
+    }
     Ok(())
 }
 
@@ -1311,6 +1318,31 @@ mod tests {
                 .and_then(|s| s.resolve(None))
                 .is_ok()
         );
+        // Nor one whose result files are another study's forward check:
+        // jump_forward_grf.mot.
+        let (field, reason) = field_error(r#"{"name": "jump_forward"}"#);
+        assert_eq!(field, "name");
+        assert!(
+            reason.contains("jump_forward_grf.mot") && reason.contains("'jump'"),
+            "{reason}"
+        );
+        // Every pair of names other than these writes disjoint files.
+        let names = ["jump", "jump_forward_states", "forward_x", "a_forwardb"];
+        for a in names {
+            assert!(check_name(a).is_ok(), "{a}");
+            for b in names.iter().filter(|&&b| b != a) {
+                let (fa, fb) = (crate::solve::result_files(a), crate::solve::result_files(b));
+                assert!(fa.iter().all(|f| !fb.contains(f)), "{a} {b}");
+            }
+            let sim: Vec<String> = crate::simulate::trajectory_files(SIMULATE_FILE_PREFIX)
+                .iter()
+                .map(|f| f.to_string())
+                .chain([format!("{SIMULATE_FILE_PREFIX}_summary.json")])
+                .collect();
+            assert!(crate::solve::result_files(a)
+                .iter()
+                .all(|f| !sim.contains(f)));
+        }
     }
 
     fn field_error(json: &str) -> (String, String) {
