@@ -184,6 +184,9 @@ impl StateEquation {
         }
         check_path_lengths(model, &system, &multibody, smoothing)?;
         check_standing_pose(model, &system, &multibody)?;
+        if symmetric && !model.symmetry.is_empty() {
+            check_contact_mirror(model, &system, &multibody)?;
+        }
         let mut muscles = Vec::new();
         let mut multiplicity = Vec::new();
         for (i, m) in model.muscles.iter().enumerate() {
@@ -777,16 +780,7 @@ fn check_mirror(
     }
     let rest = vec![0.0; system.nq()];
     let mut ws = mb.workspace::<f64>();
-    for k in 0..4 {
-        let q: Vec<f64> = system
-            .coordinates
-            .iter()
-            .map(|&c| {
-                let [lo, hi] = model.coordinates[c].range;
-                let s = 0.5 + 0.4 * ((k * 7 + c) as f64).sin();
-                lo + s * (hi - lo).min(3.0)
-            })
-            .collect();
+    for q in mirror_sample_poses(model, system) {
         let view = ModelView::at(mb, &mut ws, &system.q_of_model_coordinate, &q, &rest);
         let sm = PathSmoothing::Smooth { delta: 0.02 };
         let li = model.muscles[i]
@@ -806,6 +800,91 @@ fn check_mirror(
                 b.name,
                 a.name
             )));
+        }
+    }
+    Ok(())
+}
+
+/// The symmetric poses at which mirror images are compared: the same
+/// spread of each coordinate's range (at most 3 rad or m of it) per sample.
+fn mirror_sample_poses(model: &Model, system: &SystemSpec) -> Vec<Vec<f64>> {
+    (0..4)
+        .map(|k| {
+            system
+                .coordinates
+                .iter()
+                .map(|&c| {
+                    let [lo, hi] = model.coordinates[c].range;
+                    let s = 0.5 + 0.4 * ((k * 7 + c) as f64).sin();
+                    lo + s * (hi - lo).min(3.0)
+                })
+                .collect()
+        })
+        .collect()
+}
+
+/// In the symmetric system both legs move as one, which a model whose
+/// contact is not symmetric cannot do (one foot bearing the body would roll
+/// it): at each sample pose every contact sphere must have a mirror image,
+/// one of the same radius at the same x and y, its z mirrored about the
+/// spheres' middle plane (itself, for a sphere on that plane).
+fn check_contact_mirror(
+    model: &Model,
+    system: &SystemSpec,
+    mb: &Multibody,
+) -> Result<(), OdeError> {
+    let Some(contact) = model.contact.as_ref() else {
+        return Ok(());
+    };
+    if contact.spheres.is_empty() {
+        return Ok(());
+    }
+    let rest = vec![0.0; system.nq()];
+    let mut ws = mb.workspace::<f64>();
+    for q in mirror_sample_poses(model, system) {
+        mb.set_state(&mut ws, &q, &rest);
+        let centres: Vec<[f64; 3]> = contact
+            .spheres
+            .iter()
+            .map(|sp| mb.model_point_position(&ws, sp.body, sp.location))
+            .collect();
+        let middle = centres.iter().map(|c| c[2]).sum::<f64>() / centres.len() as f64;
+        const TOL: f64 = 1e-9;
+        for (i, (a, sa)) in centres.iter().zip(&contact.spheres).enumerate() {
+            let mirrored = centres.iter().zip(&contact.spheres).any(|(b, sb)| {
+                (a[0] - b[0]).abs() <= TOL
+                    && (a[1] - b[1]).abs() <= TOL
+                    && (a[2] + b[2] - 2.0 * middle).abs() <= TOL
+                    && sa.radius == sb.radius
+            });
+            // (Fails on NaN too.)
+            if !mirrored {
+                let want = [a[0], a[1], 2.0 * middle - a[2]];
+                let distance = |b: &[f64; 3]| {
+                    ((b[0] - want[0]).powi(2) + (b[1] - want[1]).powi(2) + (b[2] - want[2]).powi(2))
+                        .sqrt()
+                };
+                let nearest = centres
+                    .iter()
+                    .zip(&contact.spheres)
+                    .filter(|(_, sb)| sb.name != sa.name)
+                    .min_by(|x, y| distance(x.0).total_cmp(&distance(y.0)))
+                    .map(|(b, sb)| {
+                        format!(
+                            "; the nearest, '{}' (radius {} m), is {:.1} mm from it",
+                            sb.name,
+                            sb.radius,
+                            1e3 * distance(b)
+                        )
+                    })
+                    .unwrap_or_default();
+                return Err(OdeError::Symmetry(format!(
+                    "{}: forces.contact.spheres[{i}]: sphere '{}' (radius {} m) has no mirror image: the symmetric system moves both legs as one, so every contact sphere needs a partner of the same radius at the same x and y and the mirrored z about the spheres' middle plane{nearest} (at a sample pose of the coordinates); give the left foot the right foot's spheres with z negated, or solve the full system",
+                    model.file.display(),
+                    sa.name,
+                    sa.radius,
+                )));
+            }
         }
     }
     Ok(())

@@ -821,8 +821,9 @@ fn an_error_echoing_a_huge_input_is_bounded() {
     assert!(err.contains(file.to_str().unwrap()), "{err}");
     assert!(err.contains("characters left out]"), "{err}");
     assert!(
-        err.trim_end()
-            .ends_with("not a state or excitation of this model's system"),
+        err.trim_end().ends_with(
+            "not a state or excitation of this model's system (`leap squat` prints the names)"
+        ),
         "{}",
         &err[err.len().saturating_sub(300)..]
     );

@@ -2,6 +2,7 @@
 //! check values, and every broken file gives an error naming file and field.
 
 use leap::model::{Model, ModelError};
+use leap::path::PathSmoothing;
 use leap::spline::{SimmSpline, SplineData};
 
 #[test]
@@ -543,6 +544,84 @@ fn contact_spheres_need_distinct_names_and_at_least_one() {
     let e = refused(&v);
     assert_eq!(e.field(), "forces.contact.spheres");
     assert!(e.to_string().contains("no contact spheres"), "{e}");
+}
+
+/// The symmetric system moves both legs as one: a left foot whose spheres
+/// are gone, raised or moved (each a model of one-footed contact, which
+/// would roll the body) is refused by the symmetric system, naming the
+/// sphere; the full system takes such a model. Mirror images pass, and so
+/// does a sphere on the middle plane (a mirror image of itself).
+#[test]
+fn the_symmetric_system_needs_mirrored_contact_spheres() {
+    let build = |v: &serde_json::Value, symmetric: bool| {
+        let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+        leap::ode::StateEquation::new(&m, symmetric, PathSmoothing::Smooth { delta: 0.02 })
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    let v = jumper_json();
+    build(&v, true).unwrap();
+    let spheres = v["forces"]["contact"]["spheres"]
+        .as_array()
+        .unwrap()
+        .clone();
+    let left = |s: &serde_json::Value| s["name"].as_str().unwrap().ends_with("_l");
+    // Only the right foot's spheres.
+    let mut w = v.clone();
+    w["forces"]["contact"]["spheres"] =
+        serde_json::json!(spheres.iter().filter(|s| !left(s)).collect::<Vec<_>>());
+    let e = build(&w, true).unwrap_err();
+    assert!(
+        e.contains(
+            "forces.contact.spheres[0]: sphere 'heel_lat_r' (radius 0.032 m) has no mirror image"
+        ),
+        "{e}"
+    );
+    build(&w, false).unwrap();
+    // One left sphere moved by 1 mm in x, or with another radius.
+    for (field, k, delta) in [("location", 0, 1e-3), ("radius", usize::MAX, 1e-3)] {
+        let mut w = v.clone();
+        let i = spheres.iter().position(|s| s["name"] == "meta1_l").unwrap();
+        let s = &mut w["forces"]["contact"]["spheres"][i];
+        if k == usize::MAX {
+            s[field] = (s[field].as_f64().unwrap() + delta).into();
+        } else {
+            s[field][k] = (s[field][k].as_f64().unwrap() + delta).into();
+        }
+        let e = build(&w, true).unwrap_err();
+        assert!(e.contains("has no mirror image"), "{field}: {e}");
+    }
+    // A sphere under the pelvis's middle plane, both legs' z mirrored
+    // about it: its own mirror image.
+    let mut w = v.clone();
+    let mut extra = spheres[0].clone();
+    extra["name"] = "heel_mid_r".into();
+    extra["location"][2] = serde_json::json!(0.0);
+    let right_calcn_z: f64 = {
+        let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+        let eq =
+            leap::ode::StateEquation::new(&m, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
+        let mut ws = eq.multibody.workspace::<f64>();
+        let q = vec![0.0; eq.nq()];
+        eq.multibody.set_state(&mut ws, &q, &q);
+        let b = m.bodies.iter().position(|b| b.name == "calcn_r").unwrap();
+        eq.multibody.model_point_position(&ws, b, [0.0; 3])[2]
+    };
+    // The right calcaneus lies off the middle plane: a sphere at its
+    // origin's z has no partner, one moved onto the plane has.
+    assert!(right_calcn_z.abs() > 0.01, "{right_calcn_z}");
+    w["forces"]["contact"]["spheres"]
+        .as_array_mut()
+        .unwrap()
+        .push(extra.clone());
+    assert!(build(&w, true).unwrap_err().contains("has no mirror image"));
+    extra["location"][2] = serde_json::json!(-right_calcn_z);
+    let mut w = v.clone();
+    w["forces"]["contact"]["spheres"]
+        .as_array_mut()
+        .unwrap()
+        .push(extra);
+    build(&w, true).unwrap();
 }
 
 /// Refused at load instead of as "the feet do not touch the ground" from
