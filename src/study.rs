@@ -773,6 +773,8 @@ impl SolveStudy {
         if method == Method::Shooting {
             settings.hessian = HessianMode::PartitionedBfgs;
         }
+        check_method_mesh(method, transcription.num_mesh_intervals)
+            .map_err(|r| err("mesh.num_mesh_intervals", r))?;
         if let Some(h) = &self.hessian {
             apply_hessian(&mut settings, h).map_err(|r| err("hessian", r))?;
             check_method_hessian(method, &settings).map_err(|r| err("hessian", r))?;
@@ -991,6 +993,16 @@ impl SolveConfig {
                 r,
             )
         })?;
+        check_method_mesh(self.method, self.transcription.num_mesh_intervals).map_err(|r| {
+            err(
+                if o.num_mesh_intervals.is_some() {
+                    "--num-mesh-intervals"
+                } else {
+                    "--method"
+                },
+                r,
+            )
+        })?;
         if let Some(g) = &o.guess {
             self.guess = parse_guess(g, PathBuf::from(g)).map_err(|r| err("--guess", r))?;
             // A bang-bang guess on the command line replaces the study's
@@ -1101,6 +1113,21 @@ fn parse_shooting_derivatives(name: &str) -> Result<crate::shooting::ShootingDer
 
 /// Shooting has first derivatives only (central differences or forward
 /// sensitivities): its Hessian is BFGS.
+/// The most mesh intervals method "shooting" takes: its sensitivities of
+/// every node's state to every control are dense, 62·24·N² numbers (1.8 GB
+/// for one iteration at 200 intervals, an allocation of 2 GB failing at
+/// 1000), where collocation's Jacobian grows as N.
+pub const MAX_SHOOTING_MESH_INTERVALS: usize = 100;
+
+fn check_method_mesh(method: Method, num_intervals: usize) -> Result<(), String> {
+    if method == Method::Shooting && num_intervals > MAX_SHOOTING_MESH_INTERVALS {
+        return Err(format!(
+            "method 'shooting' takes at most {MAX_SHOOTING_MESH_INTERVALS} mesh intervals, got {num_intervals}: its sensitivities of each node's state to every control grow as N² (1.8 GB at 200 intervals); the paper's shooting used 28"
+        ));
+    }
+    Ok(())
+}
+
 fn check_method_hessian(method: Method, settings: &SqpSettings) -> Result<(), String> {
     if method == Method::Shooting && settings.hessian != HessianMode::PartitionedBfgs {
         return Err(NO_EXACT_HESSIAN.into());
@@ -1877,6 +1904,32 @@ mod tests {
             e.contains("--num-mesh-intervals") && e.contains("no_countermovement_nodes"),
             "{e}"
         );
+    }
+
+    /// Shooting's dense sensitivities grow as N²: its mesh is bounded
+    /// below collocation's, in the study and on the command line.
+    #[test]
+    fn shooting_takes_at_most_its_own_mesh_limit() {
+        let n = MAX_SHOOTING_MESH_INTERVALS + 1;
+        let (f, r) = field_error(&format!(
+            r#"{{"method": "shooting", "mesh": {{"num_mesh_intervals": {n}}}}}"#
+        ));
+        assert_eq!(f, "mesh.num_mesh_intervals");
+        assert!(r.contains("at most 100"), "{r}");
+        resolved(&format!(
+            r#"{{"method": "shooting", "mesh": {{"num_mesh_intervals": {}}}}}"#,
+            n - 1
+        ));
+        // Collocation takes it; --method shooting on such a study does not.
+        let mut c = resolved(&format!(r#"{{"mesh": {{"num_mesh_intervals": {n}}}}}"#));
+        let e = c
+            .apply(&Overrides {
+                method: Some("shooting".into()),
+                ..Default::default()
+            })
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("--method") && e.contains("at most 100"), "{e}");
     }
 
     #[test]
