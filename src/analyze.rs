@@ -226,6 +226,7 @@ pub fn analyze(
     let mut in_contact = false;
     let mut warnings = Vec::new();
     let mut warned = vec![false; eq.nq()];
+    let mut warned_fibre = vec![false; eq.nm()];
     // A window's ends hold the rows a hair beyond them: report times
     // summed step by step (0.2000000000000001) are the rows meant.
     let slack = |t: f64| 1e-9 * (1.0 + t.abs());
@@ -240,6 +241,14 @@ pub fn analyze(
             if !std::mem::replace(&mut warned[k], true) {
                 warnings.push(format!(
                     "at t = {} s, its first row outside: {w}",
+                    crate::io::readable(*t)
+                ));
+            }
+        }
+        for (k, w) in crate::eval::unusual_fibre_lengths(eq, laws, x, false) {
+            if !std::mem::replace(&mut warned_fibre[k], true) {
+                warnings.push(format!(
+                    "at t = {} s, its first such row: {w}",
                     crate::io::readable(*t)
                 ));
             }

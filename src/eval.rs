@@ -497,18 +497,12 @@ pub fn evaluate(
                 activation_rate: info.activation_rate,
             },
         );
-        if let crate::laws::MuscleLaw::Thelen(t) = &laws.muscles[mi] {
-            let lm = x[2 * n + k];
-            if lm < t.min_fiber_length {
-                warnings.push(format!(
-                    "{} = {} m lies below the minimum fibre length {} m: the law holds the fibre there, as OpenSim's Thelen2003Muscle does",
-                    names[2 * n + k],
-                    crate::io::readable(lm),
-                    crate::io::readable(t.min_fiber_length)
-                ));
-            }
-        }
     }
+    warnings.extend(
+        unusual_fibre_lengths(eq, laws, x, true)
+            .into_iter()
+            .map(|(_, w)| w),
+    );
     let contact_forces = match &model.contact {
         Some(c) => c
             .spheres
@@ -612,6 +606,72 @@ pub(crate) fn outside_range_hint(eq: &StateEquation, x: &[f64], degrees: &str) -
             String::new()
         }
     )
+}
+
+/// The carried muscles of state `x` whose fibre length is unusual: (muscle
+/// index in `eq.muscles`, why) of each. Shorter than the Thelen2003Muscle
+/// law's minimum length, where the law holds it, as OpenSim's does (the
+/// tendon then takes the rest of the muscle's length: a force far beyond
+/// F0); or outside [0.2, 2] optimal fibre lengths, the optimizer's
+/// `fiber_length_bounds`, far from where force–length curves are measured
+/// (an unpennated muscle's minimum length is 0, as in OpenSim). Without
+/// `clamp`, the first only where it is the second too (a fast push-off
+/// meets a pennated fibre's minimum length: `leap simulate`'s soleus).
+pub(crate) fn unusual_fibre_lengths(
+    eq: &StateEquation,
+    laws: &OpenSimLaws,
+    x: &[f64],
+    clamp: bool,
+) -> Vec<(usize, String)> {
+    let n = eq.nq();
+    let [lo, hi] = crate::ocp::OcpOptions::default().fiber_length_bounds;
+    let unusual = |k: usize, mi: usize| {
+        let lm = x[2 * n + k];
+        let lopt = eq.model.muscles[mi].spec.optimal_fiber_length;
+        let below_min = match &laws.muscles[mi] {
+            crate::laws::MuscleLaw::Thelen(t) if lm < t.min_fiber_length => {
+                Some(t.min_fiber_length)
+            }
+            _ => None,
+        };
+        let outside = !(lo * lopt..=hi * lopt).contains(&lm);
+        ((clamp && below_min.is_some()) || outside).then_some((lm, lopt, below_min))
+    };
+    // The usual row (`leap analyze` checks every one): no names built.
+    if !eq
+        .muscles
+        .iter()
+        .enumerate()
+        .any(|(k, &mi)| unusual(k, mi).is_some())
+    {
+        return Vec::new();
+    }
+    let names = eq.state_names();
+    eq.muscles
+        .iter()
+        .enumerate()
+        .filter_map(|(k, &mi)| {
+            let (lm, lopt, below_min) = unusual(k, mi)?;
+            let name = &names[2 * n + k];
+            let outside = !(lo * lopt..=hi * lopt).contains(&lm);
+            let mut why = format!(
+                "{name} = {} m is {} optimal fibre lengths",
+                crate::io::readable(lm),
+                crate::io::readable(lm / lopt)
+            );
+            if outside {
+                why += &format!(", outside [{lo}, {hi}] (the optimizer's fiber_length_bounds), far from where force–length curves are measured");
+            }
+            if let Some(min) = below_min {
+                why += &format!(
+                    "{} below the minimum fibre length {} m: the law holds the fibre there, as OpenSim's Thelen2003Muscle does, and the tendon takes the rest of the muscle's length",
+                    if outside { "; and" } else { ", " },
+                    crate::io::readable(min)
+                );
+            }
+            Some((k, why))
+        })
+        .collect()
 }
 
 /// The coordinates of state `x` outside their ranges in the model file

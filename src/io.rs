@@ -474,6 +474,14 @@ impl StoTable {
                 )));
             }
         }
+        // Rates and integrals over time divide by the span and its steps.
+        if let (Some(a), Some(b)) = (self.time.first(), self.time.last()) {
+            if !(b - a).is_finite() {
+                return Err(time_err(format!(
+                    "times from {a:e} to {b:e} s: the span overflows a double"
+                )));
+            }
+        }
         Ok(())
     }
 

@@ -782,6 +782,64 @@ fn a_lift_off_while_falling_is_warned_of() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `leap analyze` of a states file with a fibre far outside what muscles
+/// do (vas_int at 1e-4 m, 0.001 optimal fibre lengths, in one row; its
+/// tendon then takes the muscle's length) warns, naming the column and the
+/// time, where it had reported the row's forces without a word; the file
+/// as simulated does not warn. Times whose span overflows a double are
+/// refused (the analysis had printed NaN and exited 0).
+#[test]
+fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
+    let out = tmp("fibre_warning");
+    let o = leap()
+        .args(["simulate", "--t-max", "0.2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let states = out.join("forward_states.sto");
+    let o = leap().arg("analyze").arg(&states).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("fiber_length"), "{err}");
+    let mut t = leap::io::StoTable::read(&states).unwrap();
+    let row = t.rows.len() / 3;
+    for side in ["r", "l"] {
+        let k = t
+            .labels
+            .iter()
+            .position(|l| *l == format!("/forceset/vas_int_{side}/fiber_length"))
+            .unwrap();
+        t.rows[row][k] = 1e-4;
+    }
+    let file = out.join("short_fibre.sto");
+    t.write_sto(&file).unwrap();
+    let o = leap().arg("analyze").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains(&format!(
+            "at t = {} s, its first such row: /forceset/vas_int_r/fiber_length = 0.0001 m is",
+            leap::io::readable(t.time[row])
+        )) && err.contains("outside [0.2, 2]"),
+        "{err}"
+    );
+    let mut t = leap::io::StoTable::read(&states).unwrap();
+    let n = t.time.len();
+    t.time[0] = -1.7e308;
+    t.time[n - 1] = 1.7e308;
+    t.write_sto(&file).unwrap();
+    let o = leap().arg("analyze").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(
+            "column 'time': times from -1.7e308 to 1.7e308 s: the span overflows a double"
+        ),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&out).ok();
+}
+
 /// A states file in degrees without `inDegrees=yes` (a slip when writing
 /// one by hand) gives non-finite forces: the refusal names the coordinates
 /// outside their ranges and the likely cause, where it had named no
