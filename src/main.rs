@@ -1124,9 +1124,12 @@ fn simulate(
             });
             let on: Vec<bool> = match &bb.on {
                 Some(list) => {
-                    for n in list {
+                    for (i, n) in list.iter().enumerate() {
                         if !names.contains(&n.as_str()) {
                             anyhow::bail!("{where_}bang_bang.on: unknown muscle '{n}' (the symmetric model's muscles are {})", names.join(", "));
+                        }
+                        if let Some(j) = list[..i].iter().position(|m| m == n) {
+                            anyhow::bail!("{where_}bang_bang.on[{i}]: muscle '{n}' named twice (also bang_bang.on[{j}]): a muscle is on or off");
                         }
                     }
                     names.iter().map(|n| list.iter().any(|l| l == n)).collect()

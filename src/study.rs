@@ -823,8 +823,10 @@ impl SolveStudy {
             None => PathBuf::from(DEFAULT_OUTPUT_DIRECTORY),
         };
 
+        // A disabled check's settings are checked too: a slip in them is
+        // found before it is turned on (as with `--no-forward-check`).
         let fc = &self.forward_check;
-        let forward_check = if fc.enabled.unwrap_or(true) {
+        let forward_check = {
             let integrator = match fc.integrator.as_deref() {
                 None => SimbodyIntegrator::RungeKuttaMerson,
                 Some(s) => match parse_integrator(s) {
@@ -840,12 +842,10 @@ impl SolveStudy {
             // t_max is t_f + the flight, unknown before the solve.
             check_integrator_accuracy(accuracy, &IntegratorChoice::Simbody(integrator), None)
                 .map_err(|r| err("forward_check.accuracy", r))?;
-            Some(ForwardCheck {
+            fc.enabled.unwrap_or(true).then_some(ForwardCheck {
                 integrator,
                 accuracy,
             })
-        } else {
-            None
         };
 
         Ok(SolveConfig {
@@ -1594,6 +1594,23 @@ mod tests {
                 .unwrap();
             assert_eq!(c.forward_check.unwrap().accuracy, a);
         }
+        // A disabled check's settings are checked as well.
+        for (json, field) in [
+            (
+                r#"{"enabled": false, "accuracy": 5}"#,
+                "forward_check.accuracy",
+            ),
+            (
+                r#"{"enabled": false, "integrator": "foo"}"#,
+                "forward_check.integrator",
+            ),
+        ] {
+            let (f, _) = field_error(&format!(r#"{{"forward_check": {json}}}"#));
+            assert_eq!(f, field, "{json}");
+        }
+        assert!(resolved(r#"{"forward_check": {"enabled": false}}"#)
+            .forward_check
+            .is_none());
     }
 
     /// serde reads the first value and fills a struct from an array by

@@ -728,6 +728,34 @@ fn controls_columns_that_name_no_muscle_are_warned_of() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A bang-bang pattern names muscles of the model, each once: an unknown
+/// one and a repeated one are refused naming the entry, before anything
+/// is written.
+#[test]
+fn bang_bang_muscles_are_known_and_named_once() {
+    let dir = tmp("bang_bang_names");
+    for (on, want) in [
+        (
+            r#"["soleus_r", "solues_r"]"#,
+            "bang_bang.on: unknown muscle 'solues_r'",
+        ),
+        (
+            r#"["soleus_r", "vas_int_r", "soleus_r"]"#,
+            "bang_bang.on[2]: muscle 'soleus_r' named twice (also bang_bang.on[0])",
+        ),
+    ] {
+        let study = dir.join("study.json");
+        std::fs::write(&study, format!(r#"{{"bang_bang": {{"on": {on}}}}}"#)).unwrap();
+        let out = dir.join("out");
+        let o = simulate_study(&study, &out).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(want), "{err}");
+        assert!(!out.join("forward_states.sto").exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// A lift-off with the centre of mass moving down is a fall: the vasti and
 /// soleus alone unload the feet while the body drops, and the "jump" was
 /// reported as −17 cm without a word.
