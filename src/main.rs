@@ -750,7 +750,8 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 leap::report::report(&trajectory, &ref_files, bilateral, &columns)?;
             let output = output.unwrap_or_else(|| leap::report::default_output(&trajectory));
             leap::report::check_output(&output, &trajectory, &ref_files)?;
-            leap::io::write_output(&output, text).map_err(|e| anyhow::anyhow!("--output: {e}"))?;
+            leap::io::write_output(&output, text)
+                .map_err(|e| anyhow::anyhow!("--output: {}: {e}", output.display()))?;
             for w in &warnings {
                 leap::errln!("warning: {w}");
             }

@@ -599,6 +599,13 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
                 "an XML file (an OpenSim .osim model or setup file?): leap reads its own JSON files, such as models/jumper.json and the studies models/jump_*.json (models/jumper.osim is written from models/jumper.json, for OpenSim)".into(),
             ))
         }
+        // A states, controls or ground forces table, the other files a
+        // solve leaves beside the study.
+        Some(_) if text.lines().take(1000).any(|l| l.trim() == "endheader") => {
+            return Err(document(
+                "an OpenSim storage file (.sto or .mot: a table of states, controls or forces), not a model or study: leap reads its own JSON files, such as models/jumper.json and the studies models/jump_*.json".into(),
+            ))
+        }
         Some(_) => {
             // Say what the document is when it is JSON, else where it is not.
             let reason = match serde_json::from_str::<serde_json::Value>(text) {

@@ -925,4 +925,24 @@ fn an_osim_model_is_refused_pointing_to_the_json_models() {
         );
         std::fs::remove_dir_all(&dir).ok();
     }
+    // A storage file (the other kind a solve leaves about) as a study or
+    // a model: named as such.
+    let dir = std::env::temp_dir().join(format!("leap-cli-sto-model-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let table = dir.join("states.sto");
+    std::fs::write(
+        &table,
+        "states\nversion=1\nnRows=1\nnColumns=2\ninDegrees=no\nendheader\ntime\tx\n0\t1\n",
+    )
+    .unwrap();
+    for args in [vec!["squat", "--model"], vec!["solve"]] {
+        let mut cmd = Command::cargo_bin("leap").unwrap();
+        cmd.args(&args).arg(&table);
+        let err = refused(&mut cmd, "a storage file as a model");
+        assert!(
+            err.contains("states.sto: (document): an OpenSim storage file"),
+            "{args:?}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
