@@ -113,6 +113,9 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec
 pub enum AnalysisError {
     #[error(transparent)]
     Ode(#[from] crate::ode::OdeError),
+    /// The state equation failed at the row of this time.
+    #[error("row at t = {t} s: {e}", t = crate::io::readable(*.0), e = .1)]
+    AtRow(f64, crate::ode::OdeError),
     #[error("no rows between {} s and {} s", crate::io::readable(*.0), crate::io::readable(*.1))]
     EmptyWindow(f64, f64),
     #[error("one row between {} s and {} s (t = {} s): a window needs two rows or more to integrate over", crate::io::readable(*.0), crate::io::readable(*.1), crate::io::readable(*.2))]
@@ -151,7 +154,8 @@ fn sample(
     // which the analysis does not use.
     let u: Vec<f64> = x[2 * n + nm..].to_vec();
     let mut xdot = vec![0.0; eq.nx()];
-    eq.rhs(laws, ws, x, &u, &mut xdot)?;
+    eq.rhs(laws, ws, x, &u, &mut xdot)
+        .map_err(|e| AnalysisError::AtRow(t, e))?;
     let passive_power = eq
         .model
         .ligaments

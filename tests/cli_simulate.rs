@@ -851,6 +851,27 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
         )) && err.contains("outside [0.2, 2]"),
         "{err}"
     );
+    // A fibre of 100 m gives no finite fibre velocity: the error names
+    // the row's time as well as the muscle.
+    for side in ["r", "l"] {
+        let k = t
+            .labels
+            .iter()
+            .position(|l| *l == format!("/forceset/vas_int_{side}/fiber_length"))
+            .unwrap();
+        t.rows[row][k] = 100.0;
+    }
+    t.write_sto(&file).unwrap();
+    let o = leap().arg("analyze").arg(&file).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains(&format!(
+                "row at t = {} s: muscle 'vas_int_r'",
+                leap::io::readable(t.time[row])
+            )),
+        "{err}"
+    );
     let mut t = leap::io::StoTable::read(&states).unwrap();
     let n = t.time.len();
     t.time[0] = -1.7e308;
