@@ -114,6 +114,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
             Ok(())
         };
     let pre_4 = crate::io::pre_4_state_names(eq);
+    let angular = crate::io::angular_columns(eq);
     let is_copy = |c: &str, copies: &[(String, usize)]| copies.iter().any(|(l, _)| l == c);
     let known = |c: &str| {
         states.iter().chain(&controls).any(|n| n == c)
@@ -172,7 +173,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                     format!(
                         "unknown column '{c}' (column {}): {}",
                         k + 1,
-                        unknown_name_reason(c, &pre_4)
+                        unknown_name_reason(c, &pre_4, &angular, None)
                     ),
                 ));
             }
@@ -303,6 +304,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         let mut vector = |key: &str,
                           named: &str,
                           names: &[String],
+                          other_names: &[String],
                           copies: &[(String, usize)]|
          -> Result<Vec<f64>, EvalInputError> {
             if let Some(arr) = item.get(key) {
@@ -346,7 +348,18 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 } else if !names.contains(k) {
                     return Err(err(
                         place(&format!("{named}.{k}")),
-                        format!("unknown name: {}", unknown_name_reason(k, &pre_4)),
+                        format!(
+                            "unknown name: {}",
+                            unknown_name_reason(
+                                k,
+                                &pre_4,
+                                &angular,
+                                Some((named, {
+                                    let p = pre_4.get(k).map(String::as_str).unwrap_or(k);
+                                    other_names.iter().any(|n| n == p)
+                                })),
+                            )
+                        ),
                     ));
                 }
             }
@@ -363,8 +376,8 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 })
                 .collect()
         };
-        let x = vector("x", "state", &states, &state_copies)?;
-        let u = vector("u", "excitation", &controls, &control_copies)?;
+        let x = vector("x", "state", &states, &controls, &state_copies)?;
+        let u = vector("u", "excitation", &controls, &states, &control_copies)?;
         check_ranges(&states, &controls, &x, &u)
             .map_err(|(name, reason)| err(place(&name), reason))?;
         check_copies(&given, &x, &u).map_err(|(name, reason)| err(place(&name), reason))?;
@@ -379,17 +392,33 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
     Ok(out)
 }
 
-/// The physical range of the inputs: activations (to 1e-6) and excitations
-/// in [0, 1], fibre lengths positive. (name, reason) of the first outside it.
 /// Why `name` is not one of the system's state or control names, with what
 /// was probably meant: the OpenSim 4 path of a pre-4.0 name (`soleus_r`,
-/// `knee_angle_r_u`, `<muscle>.activation`).
-fn unknown_name_reason(name: &str, pre_4: &std::collections::HashMap<String, String>) -> String {
-    if let Some(path) = pre_4.get(name) {
-        let units = if path.starts_with("/jointset/") {
-            ", in radians"
+/// `knee_angle_r_u`, `<muscle>.activation`), in radians where `angular`
+/// (the rotational coordinates' columns) holds it; in the JSON form
+/// (`under`: "state" or "excitation") a name of the other kind.
+fn unknown_name_reason(
+    name: &str,
+    pre_4: &std::collections::HashMap<String, String>,
+    angular: &std::collections::HashSet<String>,
+    other_kind: Option<(&str, bool)>,
+) -> String {
+    let path = pre_4.get(name).map(String::as_str).unwrap_or(name);
+    if let Some((under, _)) = other_kind.filter(|&(_, o)| o) {
+        let (what, goes) = if under == "state" {
+            ("an excitation", "excitation")
         } else {
+            ("a state", "state")
+        };
+        return format!("'{path}' is {what}: it goes under '{goes}'");
+    }
+    if path != name {
+        let units = if !angular.contains(path) {
             ""
+        } else if path.ends_with("/speed") {
+            ", in rad/s"
+        } else {
+            ", in radians"
         };
         return format!(
             "a pre-4.0 name; leap eval reads OpenSim 4's state and control paths: '{path}'{units}"
@@ -398,6 +427,8 @@ fn unknown_name_reason(name: &str, pre_4: &std::collections::HashMap<String, Str
     "not a state or excitation of this model's system (`leap squat` prints the names)".into()
 }
 
+/// The physical range of the inputs: activations (to 1e-6) and excitations
+/// in [0, 1], fibre lengths positive. (name, reason) of the first outside it.
 fn check_ranges(
     states: &[String],
     controls: &[String],
@@ -664,8 +695,8 @@ pub(crate) fn unusual_fibre_lengths(
             }
             if let Some(min) = below_min {
                 why += &format!(
-                    "{} below the minimum fibre length {} m: the law holds the fibre there, as OpenSim's Thelen2003Muscle does, and the tendon takes the rest of the muscle's length",
-                    if outside { "; and" } else { ", " },
+                    "{}below the minimum fibre length {} m: the law holds the fibre there, as OpenSim's Thelen2003Muscle does, and the tendon takes the rest of the muscle's length",
+                    if outside { "; and " } else { ", " },
                     crate::io::readable(min)
                 );
             }

@@ -2234,6 +2234,10 @@ pub struct SystemSpec {
     pub q_of_model_coordinate: Vec<usize>,
     /// For each model body, its index in `bodies`.
     pub system_body_of: Vec<usize>,
+    /// For each model body of the left leg that the symmetric system welds
+    /// onto its right partner, that partner (model body index): the two
+    /// frames differ by a shift along z alone.
+    pub mirror_of: Vec<Option<usize>>,
 }
 
 impl SystemSpec {
@@ -2401,6 +2405,7 @@ impl SystemSpec {
             coordinates,
             q_of_model_coordinate: q_of,
             system_body_of: sys_of,
+            mirror_of: mirror_of.iter().map(|m| m.map(|(b, _)| b)).collect(),
         })
     }
 

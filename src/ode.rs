@@ -825,9 +825,13 @@ fn mirror_sample_poses(model: &Model, system: &SystemSpec) -> Vec<Vec<f64>> {
 
 /// In the symmetric system both legs move as one, which a model whose
 /// contact is not symmetric cannot do (one foot bearing the body would roll
-/// it): at each sample pose every contact sphere must have a mirror image,
-/// one of the same radius at the same x and y, its z mirrored about the
-/// spheres' middle plane (itself, for a sphere on that plane).
+/// it): every contact sphere of the left leg (a body the system welds onto
+/// its right partner, or one fixed below such a body: the calcaneus and
+/// toes below the talus) needs a sphere of the right leg of the same radius
+/// at the same place in the plane (x and y in the ground frame; the legs'
+/// frames then coincide in the plane), and every sphere of the right leg
+/// one of the left. z does not act in the plane and is not compared; a
+/// sphere on a midline body (the pelvis) needs no partner.
 fn check_contact_mirror(
     model: &Model,
     system: &SystemSpec,
@@ -836,56 +840,94 @@ fn check_contact_mirror(
     let Some(contact) = model.contact.as_ref() else {
         return Ok(());
     };
-    if contact.spheres.is_empty() {
-        return Ok(());
+    // The side of each body: that of the nearest welded body (left) or
+    // weld partner (right) on its way to the ground.
+    #[derive(Clone, Copy, PartialEq)]
+    enum Side {
+        Left,
+        Right,
+        Middle,
     }
-    let rest = vec![0.0; system.nq()];
-    let mut ws = mb.workspace::<f64>();
-    for q in mirror_sample_poses(model, system) {
-        mb.set_state(&mut ws, &q, &rest);
-        let centres: Vec<[f64; 3]> = contact
-            .spheres
-            .iter()
-            .map(|sp| mb.model_point_position(&ws, sp.body, sp.location))
-            .collect();
-        let middle = centres.iter().map(|c| c[2]).sum::<f64>() / centres.len() as f64;
-        const TOL: f64 = 1e-9;
-        for (i, (a, sa)) in centres.iter().zip(&contact.spheres).enumerate() {
-            let mirrored = centres.iter().zip(&contact.spheres).any(|(b, sb)| {
-                (a[0] - b[0]).abs() <= TOL
-                    && (a[1] - b[1]).abs() <= TOL
-                    && (a[2] + b[2] - 2.0 * middle).abs() <= TOL
-                    && sa.radius == sb.radius
-            });
-            // (Fails on NaN too.)
-            if !mirrored {
-                let want = [a[0], a[1], 2.0 * middle - a[2]];
-                let distance = |b: &[f64; 3]| {
-                    ((b[0] - want[0]).powi(2) + (b[1] - want[1]).powi(2) + (b[2] - want[2]).powi(2))
-                        .sqrt()
-                };
-                let nearest = centres
-                    .iter()
-                    .zip(&contact.spheres)
-                    .filter(|(_, sb)| sb.name != sa.name)
-                    .min_by(|x, y| distance(x.0).total_cmp(&distance(y.0)))
-                    .map(|(b, sb)| {
-                        format!(
-                            "; the nearest, '{}' (radius {} m), is {:.1} mm from it",
-                            sb.name,
-                            sb.radius,
-                            1e3 * distance(b)
-                        )
-                    })
-                    .unwrap_or_default();
-                return Err(OdeError::Symmetry(format!(
-                    "{}: forces.contact.spheres[{i}]: sphere '{}' (radius {} m) has no mirror image: the symmetric system moves both legs as one, so every contact sphere needs a partner of the same radius at the same x and y and the mirrored z about the spheres' middle plane{nearest} (at a sample pose of the coordinates); give the left foot the right foot's spheres with z negated, or solve the full system",
-                    model.file.display(),
-                    sa.name,
-                    sa.radius,
-                )));
-            }
+    let nb = model.bodies.len();
+    let mut own = vec![Side::Middle; nb];
+    for (left, right) in system.mirror_of.iter().enumerate() {
+        if let Some(r) = *right {
+            own[left] = Side::Left;
+            own[r] = Side::Right;
         }
+    }
+    let parent_of = |b: usize| {
+        model
+            .joints
+            .iter()
+            .find(|j| j.child == b)
+            .and_then(|j| j.parent)
+    };
+    let side: Vec<Side> = (0..nb)
+        .map(|b| {
+            let mut at = Some(b);
+            // At most nb steps: the joint tree has no loops.
+            for _ in 0..=nb {
+                match at {
+                    Some(c) if own[c] != Side::Middle => return own[c],
+                    Some(c) => at = parent_of(c),
+                    None => break,
+                }
+            }
+            Side::Middle
+        })
+        .collect();
+    let defaults: Vec<f64> = model.coordinates.iter().map(|c| c.default_value).collect();
+    let q = system.q_from_model(&defaults);
+    let mut ws = mb.workspace::<f64>();
+    mb.set_state(&mut ws, &q, &vec![0.0; q.len()]);
+    let at: Vec<[f64; 3]> = contact
+        .spheres
+        .iter()
+        .map(|sp| mb.model_point_position(&ws, sp.body, sp.location))
+        .collect();
+    const TOL: f64 = 1e-9;
+    for (i, a) in contact.spheres.iter().enumerate() {
+        let other = match side[a.body] {
+            Side::Left => Side::Right,
+            Side::Right => Side::Left,
+            Side::Middle => continue,
+        };
+        let distance = |j: usize| (at[i][0] - at[j][0]).hypot(at[i][1] - at[j][1]);
+        let candidates: Vec<usize> = (0..contact.spheres.len())
+            .filter(|&j| side[contact.spheres[j].body] == other)
+            .collect();
+        // (Fails on NaN too.)
+        if candidates
+            .iter()
+            .any(|&j| distance(j) <= TOL && contact.spheres[j].radius == a.radius)
+        {
+            continue;
+        }
+        let nearest = candidates
+            .iter()
+            .min_by(|&&x, &&y| distance(x).total_cmp(&distance(y)))
+            .map(|&j| {
+                format!(
+                    "; the nearest, '{}' (radius {} m), lies {:.1} mm away in the plane",
+                    contact.spheres[j].name,
+                    contact.spheres[j].radius,
+                    1e3 * distance(j)
+                )
+            })
+            .unwrap_or_else(|| "; the other leg has no spheres".into());
+        let leg = if side[a.body] == Side::Left {
+            "left"
+        } else {
+            "right"
+        };
+        return Err(OdeError::Symmetry(format!(
+            "{}: forces.contact.spheres[{i}]: sphere '{}' of the {leg} leg (on '{}', radius {} m) has no mirror image: the symmetric system moves both legs as one, so each foot needs the other's spheres, of the same radius at the same x and y (z negated){nearest}; give both feet the same spheres, or use the full system (`leap eval --full`, `leap squat --full`, `leap analyze --full`)",
+            model.file.display(),
+            a.name,
+            model.bodies[a.body].name,
+            a.radius,
+        )));
     }
     Ok(())
 }

@@ -313,7 +313,8 @@ fn check_writable(dir: &Path) -> Result<(), std::io::Error> {
             let _ = std::fs::remove_file(&probe);
             Ok(())
         }
-        // Another leap of this process id's probe (not this process's own).
+        // A probe of the same name left by an earlier process of this id,
+        // or another thread's: the directory takes files.
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
         Err(e) => Err(std::io::Error::new(
             e.kind(),
@@ -897,6 +898,8 @@ fn finish(
     let (mut written, mut removed) = (Vec::new(), Vec::new());
     for (f, was) in before {
         match identity(&f) {
+            // Removed as stale before the write that failed.
+            None if was.is_some() => removed.push(f),
             None => {}
             Some(now) if Some(now) != was => written.push(f),
             Some(_) => {

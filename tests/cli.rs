@@ -551,6 +551,27 @@ fn eval_reads_a_spreadsheet_csv() {
             assert!(err.contains("'/forceset/soleus_r'"), "{err}");
         }
     }
+    // In the JSON form, an excitation put under "state" is named as one.
+    let mut misplaced = squat.clone();
+    let v = misplaced["excitation"]
+        .as_object_mut()
+        .unwrap()
+        .remove("/forceset/soleus_r")
+        .unwrap();
+    misplaced["state"]["/forceset/soleus_r"] = v;
+    let bad = dir.join("misplaced.json");
+    std::fs::write(&bad, misplaced.to_string()).unwrap();
+    let err = refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(&bad),
+        "misplaced",
+    );
+    assert!(
+        err.contains("state./forceset/soleus_r: unknown name: '/forceset/soleus_r' is an excitation: it goes under 'excitation'"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

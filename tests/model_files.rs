@@ -549,8 +549,9 @@ fn contact_spheres_need_distinct_names_and_at_least_one() {
 /// The symmetric system moves both legs as one: a left foot whose spheres
 /// are gone, raised or moved (each a model of one-footed contact, which
 /// would roll the body) is refused by the symmetric system, naming the
-/// sphere; the full system takes such a model. Mirror images pass, and so
-/// does a sphere on the middle plane (a mirror image of itself).
+/// sphere and the body it lacks a partner on; the full system takes such a
+/// model. A sphere's z does not act in the plane (moved along z it still
+/// mirrors), and a sphere on a midline body (the pelvis) needs no partner.
 #[test]
 fn the_symmetric_system_needs_mirrored_contact_spheres() {
     let build = |v: &serde_json::Value, symmetric: bool| {
@@ -572,51 +573,46 @@ fn the_symmetric_system_needs_mirrored_contact_spheres() {
         serde_json::json!(spheres.iter().filter(|s| !left(s)).collect::<Vec<_>>());
     let e = build(&w, true).unwrap_err();
     assert!(
-        e.contains(
-            "forces.contact.spheres[0]: sphere 'heel_lat_r' (radius 0.032 m) has no mirror image"
-        ),
+        e.contains("forces.contact.spheres[0]: sphere 'heel_lat_r' of the right leg (on 'calcn_r', radius 0.032 m) has no mirror image")
+            && e.contains("the other leg has no spheres"),
         "{e}"
     );
     build(&w, false).unwrap();
-    // One left sphere moved by 1 mm in x, or with another radius.
-    for (field, k, delta) in [("location", 0, 1e-3), ("radius", usize::MAX, 1e-3)] {
+    let i = spheres.iter().position(|s| s["name"] == "meta1_l").unwrap();
+    // One left sphere moved by 1 mm in x or y, or with another radius:
+    // refused, naming the pair (meta1_r, the first checked, and meta1_l
+    // 1 mm off).
+    for (field, k) in [("location", 0), ("location", 1), ("radius", 3)] {
         let mut w = v.clone();
-        let i = spheres.iter().position(|s| s["name"] == "meta1_l").unwrap();
         let s = &mut w["forces"]["contact"]["spheres"][i];
-        if k == usize::MAX {
-            s[field] = (s[field].as_f64().unwrap() + delta).into();
+        if field == "radius" {
+            s[field] = (s[field].as_f64().unwrap() + 1e-3).into();
         } else {
-            s[field][k] = (s[field][k].as_f64().unwrap() + delta).into();
+            s[field][k] = (s[field][k].as_f64().unwrap() + 1e-3).into();
         }
         let e = build(&w, true).unwrap_err();
-        assert!(e.contains("has no mirror image"), "{field}: {e}");
+        assert!(e.contains("has no mirror image"), "{field} {k}: {e}");
+        if field == "location" {
+            assert!(
+                e.contains("sphere 'meta1_r' of the right leg")
+                    && e.contains("'meta1_l' (radius 0.032 m), lies 1.0 mm away in the plane"),
+                "{e}"
+            );
+        }
     }
-    // A sphere under the pelvis's middle plane, both legs' z mirrored
-    // about it: its own mirror image.
+    // Moved along z: it still mirrors.
+    let mut w = v.clone();
+    let z = w["forces"]["contact"]["spheres"][i]["location"][2]
+        .as_f64()
+        .unwrap();
+    w["forces"]["contact"]["spheres"][i]["location"][2] = (z + 0.05).into();
+    build(&w, true).unwrap();
+    // A sphere on the pelvis, a midline body: no partner needed.
     let mut w = v.clone();
     let mut extra = spheres[0].clone();
-    extra["name"] = "heel_mid_r".into();
-    extra["location"][2] = serde_json::json!(0.0);
-    let right_calcn_z: f64 = {
-        let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
-        let eq =
-            leap::ode::StateEquation::new(&m, true, PathSmoothing::Smooth { delta: 0.02 }).unwrap();
-        let mut ws = eq.multibody.workspace::<f64>();
-        let q = vec![0.0; eq.nq()];
-        eq.multibody.set_state(&mut ws, &q, &q);
-        let b = m.bodies.iter().position(|b| b.name == "calcn_r").unwrap();
-        eq.multibody.model_point_position(&ws, b, [0.0; 3])[2]
-    };
-    // The right calcaneus lies off the middle plane: a sphere at its
-    // origin's z has no partner, one moved onto the plane has.
-    assert!(right_calcn_z.abs() > 0.01, "{right_calcn_z}");
-    w["forces"]["contact"]["spheres"]
-        .as_array_mut()
-        .unwrap()
-        .push(extra.clone());
-    assert!(build(&w, true).unwrap_err().contains("has no mirror image"));
-    extra["location"][2] = serde_json::json!(-right_calcn_z);
-    let mut w = v.clone();
+    extra["name"] = "pelvis_sphere".into();
+    extra["body"] = "pelvis".into();
+    extra["location"] = serde_json::json!([0.0, 0.5, 0.0]);
     w["forces"]["contact"]["spheres"]
         .as_array_mut()
         .unwrap()
