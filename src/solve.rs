@@ -902,11 +902,8 @@ fn finish(
             None if was.is_some() => removed.push(f),
             None => {}
             Some(now) if Some(now) != was => written.push(f),
-            Some(_) => {
-                if std::fs::remove_file(dir.join(&f)).is_ok() {
-                    removed.push(f);
-                }
-            }
+            Some(_) if std::fs::remove_file(dir.join(&f)).is_ok() => removed.push(f),
+            Some(_) => {}
         }
     }
     if written.is_empty() {

@@ -446,6 +446,17 @@ fn zero_repeats_are_refused() {
     );
 }
 
+/// `leap eval --input <file>`, refused: its stderr.
+fn eval_refused(file: &std::path::Path, what: &str) -> String {
+    refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--input"])
+            .arg(file),
+        what,
+    )
+}
+
 /// A CSV as spreadsheets write it (byte-order mark, quoted labels, a
 /// leading time column, which is not read) reads as the same evaluation
 /// as the JSON input.
@@ -507,13 +518,7 @@ fn eval_reads_a_spreadsheet_csv() {
             ),
         )
         .unwrap();
-        let err = refused(
-            Command::cargo_bin("leap")
-                .unwrap()
-                .args(["eval", "--input"])
-                .arg(&bad),
-            name,
-        );
+        let err = eval_refused(&bad, name);
         assert!(
             err.contains("header") && err.contains(want),
             "{name}: {err}"
@@ -539,13 +544,7 @@ fn eval_reads_a_spreadsheet_csv() {
     ] {
         let bad = dir.join(format!("{name}.csv"));
         std::fs::write(&bad, text).unwrap();
-        let err = refused(
-            Command::cargo_bin("leap")
-                .unwrap()
-                .args(["eval", "--input"])
-                .arg(&bad),
-            name,
-        );
+        let err = eval_refused(&bad, name);
         assert!(err.contains(want), "{name}: {err}");
         if name == "pre-4" {
             assert!(err.contains("'/forceset/soleus_r'"), "{err}");
@@ -561,13 +560,7 @@ fn eval_reads_a_spreadsheet_csv() {
     misplaced["state"]["/forceset/soleus_r"] = v;
     let bad = dir.join("misplaced.json");
     std::fs::write(&bad, misplaced.to_string()).unwrap();
-    let err = refused(
-        Command::cargo_bin("leap")
-            .unwrap()
-            .args(["eval", "--input"])
-            .arg(&bad),
-        "misplaced",
-    );
+    let err = eval_refused(&bad, "misplaced");
     assert!(
         err.contains("state./forceset/soleus_r: unknown name: '/forceset/soleus_r' is an excitation: it goes under 'excitation'"),
         "{err}"
@@ -826,13 +819,7 @@ fn an_error_echoing_a_huge_input_is_bounded() {
     let file = dir.join("huge.csv");
     let label = "x".repeat(200_000);
     std::fs::write(&file, format!("{label}\n0\n")).unwrap();
-    let err = refused(
-        Command::cargo_bin("leap")
-            .unwrap()
-            .args(["eval", "--input"])
-            .arg(&file),
-        "huge label",
-    );
+    let err = eval_refused(&file, "huge label");
     assert!(
         err.chars().count() < leap::io::MAX_MESSAGE_CHARS + 100,
         "{} characters",
@@ -863,25 +850,13 @@ fn unclear_messages_of_the_second_fuzzing_round_say_what_happened() {
     std::fs::write(&txt, "a,b\n1,2\n").unwrap();
     let json = dir.join("input.json");
     std::fs::write(&json, "a,b\n1,2\n").unwrap();
-    let err = refused(
-        Command::cargo_bin("leap")
-            .unwrap()
-            .args(["eval", "--input"])
-            .arg(&txt),
-        "csv as txt",
-    );
+    let err = eval_refused(&txt, "csv as txt");
     assert!(
         err.contains(&format!("{}: line 1, column 1: ", txt.display()))
             && err.contains("(read as JSON: only a file whose name ends in .csv is read as CSV)"),
         "{err}"
     );
-    let err = refused(
-        Command::cargo_bin("leap")
-            .unwrap()
-            .args(["eval", "--input"])
-            .arg(&json),
-        "csv as json",
-    );
+    let err = eval_refused(&json, "csv as json");
     assert!(
         err.contains(&format!("{}: line 1, column 1: ", json.display()))
             && !err.contains("read as JSON"),

@@ -18,6 +18,17 @@ fn simulate_study(study: &std::path::Path, out: &std::path::Path) -> Command {
     cmd
 }
 
+/// `leap simulate --t-max 0.2 --out <out>` (the default study's first
+/// 0.2 s), which must succeed.
+fn simulate_push_off(out: &std::path::Path) {
+    let o = leap()
+        .args(["simulate", "--t-max", "0.2", "--out"])
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 fn tmp(name: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("leap-cli-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
@@ -819,12 +830,7 @@ fn a_lift_off_while_falling_is_warned_of() {
 #[test]
 fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
     let out = tmp("fibre_warning");
-    let o = leap()
-        .args(["simulate", "--t-max", "0.2", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    simulate_push_off(&out);
     let states = out.join("forward_states.sto");
     let o = leap().arg("analyze").arg(&states).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
@@ -896,12 +902,7 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
 #[test]
 fn states_in_degrees_without_the_header_key_are_refused_naming_the_cause() {
     let out = tmp("degrees_unsaid");
-    let o = leap()
-        .args(["simulate", "--t-max", "0.2", "--out"])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    simulate_push_off(&out);
     let m =
         leap::model::Model::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/models/jumper.json"))
             .unwrap();
