@@ -1075,7 +1075,8 @@ fn check_name(name: &str) -> Result<(), String> {
     }
     // A study's forward check writes <name>_forward_grf.mot: the ground
     // forces file of a study named <name>_forward.
-    if let Some(other) = name.strip_suffix("_forward") {
+    // (A name of "_forward" alone shadows no study: names are not empty.)
+    if let Some(other) = name.strip_suffix("_forward").filter(|o| !o.is_empty()) {
         return Err(format!(
             "'{name}' ends in '_forward': its {name}_grf.mot is the forward check's ground forces file of a study named '{other}', which the solves would overwrite and remove in turn; choose another name"
         ));
@@ -1355,7 +1356,7 @@ mod tests {
             "{reason}"
         );
         // Every pair of names other than these writes disjoint files.
-        let names = ["jump", "jump_forward_states", "forward_x", "a_forwardb"];
+        let names = ["jump", "jump_forward_states", "forward_x", "a_forwardb", "_forward"];
         for a in names {
             assert!(check_name(a).is_ok(), "{a}");
             for b in names.iter().filter(|&&b| b != a) {
