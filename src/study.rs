@@ -1356,7 +1356,13 @@ mod tests {
             "{reason}"
         );
         // Every pair of names other than these writes disjoint files.
-        let names = ["jump", "jump_forward_states", "forward_x", "a_forwardb", "_forward"];
+        let names = [
+            "jump",
+            "jump_forward_states",
+            "forward_x",
+            "a_forwardb",
+            "_forward",
+        ];
         for a in names {
             assert!(check_name(a).is_ok(), "{a}");
             for b in names.iter().filter(|&&b| b != a) {
