@@ -350,15 +350,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                         place(&format!("{named}.{k}")),
                         format!(
                             "unknown name: {}",
-                            unknown_name_reason(
-                                k,
-                                &pre_4,
-                                &angular,
-                                Some((named, {
-                                    let p = pre_4.get(k).map(String::as_str).unwrap_or(k);
-                                    other_names.iter().any(|n| n == p)
-                                })),
-                            )
+                            unknown_name_reason(k, &pre_4, &angular, Some((named, other_names)))
                         ),
                     ));
                 }
@@ -396,15 +388,16 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
 /// was probably meant: the OpenSim 4 path of a pre-4.0 name (`soleus_r`,
 /// `knee_angle_r_u`, `<muscle>.activation`), in radians where `angular`
 /// (the rotational coordinates' columns) holds it; in the JSON form
-/// (`under`: "state" or "excitation") a name of the other kind.
+/// (`other`: the key it was given under, "state" or "excitation", and the
+/// other kind's names) a name of the other kind.
 fn unknown_name_reason(
     name: &str,
     pre_4: &std::collections::HashMap<String, String>,
     angular: &std::collections::HashSet<String>,
-    other_kind: Option<(&str, bool)>,
+    other: Option<(&str, &[String])>,
 ) -> String {
     let path = pre_4.get(name).map(String::as_str).unwrap_or(name);
-    if let Some((under, _)) = other_kind.filter(|&(_, o)| o) {
+    if let Some((under, _)) = other.filter(|(_, names)| names.iter().any(|n| n == path)) {
         let (what, goes) = if under == "state" {
             ("an excitation", "excitation")
         } else {
@@ -655,38 +648,36 @@ pub(crate) fn unusual_fibre_lengths(
     clamp: bool,
 ) -> Vec<(usize, String)> {
     let n = eq.nq();
-    let [lo, hi] = crate::ocp::OcpOptions::default().fiber_length_bounds;
-    let unusual = |k: usize, mi: usize| {
-        let lm = x[2 * n + k];
-        let lopt = eq.model.muscles[mi].spec.optimal_fiber_length;
-        let below_min = match &laws.muscles[mi] {
-            crate::laws::MuscleLaw::Thelen(t) if lm < t.min_fiber_length => {
-                Some(t.min_fiber_length)
-            }
-            _ => None,
-        };
-        let outside = !(lo * lopt..=hi * lopt).contains(&lm);
-        ((clamp && below_min.is_some()) || outside).then_some((lm, lopt, below_min))
-    };
-    // The usual row (`leap analyze` checks every one): no names built.
-    if !eq
+    let [lo, hi] = crate::ocp::DEFAULT_FIBER_LENGTH_BOUNDS;
+    // (muscle, l_M, l_opt, the law's minimum where below it, outside).
+    let found: Vec<(usize, f64, f64, Option<f64>, bool)> = eq
         .muscles
         .iter()
         .enumerate()
-        .any(|(k, &mi)| unusual(k, mi).is_some())
-    {
+        .filter_map(|(k, &mi)| {
+            let lm = x[2 * n + k];
+            let lopt = eq.model.muscles[mi].spec.optimal_fiber_length;
+            let below_min = match &laws.muscles[mi] {
+                crate::laws::MuscleLaw::Thelen(t) if lm < t.min_fiber_length => {
+                    Some(t.min_fiber_length)
+                }
+                _ => None,
+            };
+            let outside = !(lo * lopt..=hi * lopt).contains(&lm);
+            ((clamp && below_min.is_some()) || outside).then_some((k, lm, lopt, below_min, outside))
+        })
+        .collect();
+    if found.is_empty() {
+        // The usual row (`leap analyze` checks every one): no names built.
         return Vec::new();
     }
     let names = eq.state_names();
-    eq.muscles
-        .iter()
-        .enumerate()
-        .filter_map(|(k, &mi)| {
-            let (lm, lopt, below_min) = unusual(k, mi)?;
-            let name = &names[2 * n + k];
-            let outside = !(lo * lopt..=hi * lopt).contains(&lm);
+    found
+        .into_iter()
+        .map(|(k, lm, lopt, below_min, outside)| {
             let mut why = format!(
-                "{name} = {} m is {} optimal fibre lengths",
+                "{} = {} m is {} optimal fibre lengths",
+                names[2 * n + k],
                 crate::io::readable(lm),
                 crate::io::readable(lm / lopt)
             );
@@ -700,7 +691,7 @@ pub(crate) fn unusual_fibre_lengths(
                     crate::io::readable(min)
                 );
             }
-            Some((k, why))
+            (k, why)
         })
         .collect()
 }

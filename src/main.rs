@@ -1195,15 +1195,12 @@ fn simulate(
                 v["jump_height_m"] = serde_json::Value::Null;
                 v["final_com_height_change_m"] = serde_json::json!(summary.jump_height_m);
             }
-            // Feet that leave the ground under a falling body (muscles too
-            // weak, or switched off early) give no jump, whatever the
-            // height after: say so, as for no lift-off.
-            let falling = summary.liftoff_com_velocity_mps.filter(|&vy| vy < 0.0);
+            // A fall gives no jump: say so, as for no lift-off.
+            let falling = summary.falling_at_liftoff();
             v["liftoff_while_falling"] = serde_json::json!(falling.is_some());
-            if let Some(vy) = falling {
+            if let Some(v_down) = falling {
                 leap::errln!(
-                    "warning: the feet left the ground with the centre of mass moving down at {:.3} m/s: a fall, not a jump (the jump height is the apex after lift-off against the standing height)",
-                    -vy
+                    "warning: the feet left the ground with the centre of mass moving down at {v_down:.3} m/s: a fall, not a jump (the jump height is the apex after lift-off against the standing height)"
                 );
             }
             if let Some((a, b)) = controls_range {

@@ -155,13 +155,16 @@ pub const DEFAULT_ACTIVATION_SMOOTHING: f64 = 200.0;
 /// above the fibre-length bound (0.4 mm for soleus).
 pub const FIBER_CLAMP_BAND: f64 = 0.02;
 
+/// [`OcpOptions::fiber_length_bounds`]' default, in optimal fibre lengths.
+pub const DEFAULT_FIBER_LENGTH_BOUNDS: [f64; 2] = [0.2, 2.0];
+
 impl Default for OcpOptions {
     fn default() -> Self {
         OcpOptions {
             smoothing: PathSmoothing::Smooth { delta: 0.02 },
             final_time_bounds: [0.1, 1.0],
             speed_bound: 30.0,
-            fiber_length_bounds: [0.2, 2.0],
+            fiber_length_bounds: DEFAULT_FIBER_LENGTH_BOUNDS,
             min_fiber_length_margin: 1e-3,
             no_countermovement_nodes: 7,
             no_com_descent: true,

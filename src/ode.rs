@@ -780,7 +780,16 @@ fn check_mirror(
     }
     let rest = vec![0.0; system.nq()];
     let mut ws = mb.workspace::<f64>();
-    for q in mirror_sample_poses(model, system) {
+    for k in 0..4 {
+        let q: Vec<f64> = system
+            .coordinates
+            .iter()
+            .map(|&c| {
+                let [lo, hi] = model.coordinates[c].range;
+                let s = 0.5 + 0.4 * ((k * 7 + c) as f64).sin();
+                lo + s * (hi - lo).min(3.0)
+            })
+            .collect();
         let view = ModelView::at(mb, &mut ws, &system.q_of_model_coordinate, &q, &rest);
         let sm = PathSmoothing::Smooth { delta: 0.02 };
         let li = model.muscles[i]
@@ -803,24 +812,6 @@ fn check_mirror(
         }
     }
     Ok(())
-}
-
-/// The symmetric poses at which mirror images are compared: the same
-/// spread of each coordinate's range (at most 3 rad or m of it) per sample.
-fn mirror_sample_poses(model: &Model, system: &SystemSpec) -> Vec<Vec<f64>> {
-    (0..4)
-        .map(|k| {
-            system
-                .coordinates
-                .iter()
-                .map(|&c| {
-                    let [lo, hi] = model.coordinates[c].range;
-                    let s = 0.5 + 0.4 * ((k * 7 + c) as f64).sin();
-                    lo + s * (hi - lo).min(3.0)
-                })
-                .collect()
-        })
-        .collect()
 }
 
 /// In the symmetric system both legs move as one, which a model whose

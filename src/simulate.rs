@@ -117,6 +117,18 @@ pub struct JumpSummary {
     pub accuracy: f64,
 }
 
+impl JumpSummary {
+    /// The speed (m/s, positive) at which the centre of mass moved down
+    /// when the feet left the ground, if it did: a fall, not a jump
+    /// (muscles too weak, or switched off early), whatever the height
+    /// after.
+    pub fn falling_at_liftoff(&self) -> Option<f64> {
+        self.liftoff_com_velocity_mps
+            .filter(|&vy| vy < 0.0)
+            .map(|vy| -vy)
+    }
+}
+
 /// A recorded trajectory: times, states, controls and ground forces.
 #[derive(Debug, Clone, Default)]
 pub struct Trajectory {

@@ -1778,12 +1778,10 @@ impl SolveReport {
                             .map(|t| format!("{t:.3} s"))
                             .unwrap_or_else(|| "— (no lift-off)".into())
                     ));
-                    // As `leap simulate` warns: feet leaving the ground
-                    // under a falling body are a fall, not a jump.
-                    if let Some(vy) = sm.liftoff_com_velocity_mps.filter(|&vy| vy < 0.0) {
+                    // As `leap simulate` warns.
+                    if let Some(v_down) = sm.falling_at_liftoff() {
                         s.push_str(&format!(
-                            "  warning: in the forward check the feet left the ground with the centre of mass moving down at {:.3} m/s: a fall, not a jump\n",
-                            -vy
+                            "  warning: in the forward check the feet left the ground with the centre of mass moving down at {v_down:.3} m/s: a fall, not a jump\n"
                         ));
                     }
                     if self.forward_check_agrees == Some(false) {

@@ -1940,7 +1940,8 @@ mod tests {
             r#"{{"method": "shooting", "mesh": {{"num_mesh_intervals": {n}}}}}"#
         ));
         assert_eq!(f, "mesh.num_mesh_intervals");
-        assert!(r.contains("at most 100"), "{r}");
+        let limit = format!("at most {MAX_SHOOTING_MESH_INTERVALS} mesh intervals");
+        assert!(r.contains(&limit), "{r}");
         resolved(&format!(
             r#"{{"method": "shooting", "mesh": {{"num_mesh_intervals": {}}}}}"#,
             n - 1
@@ -1954,7 +1955,7 @@ mod tests {
             })
             .unwrap_err()
             .to_string();
-        assert!(e.contains("--method") && e.contains("at most 100"), "{e}");
+        assert!(e.contains("--method") && e.contains(&limit), "{e}");
     }
 
     #[test]

@@ -837,14 +837,15 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
     assert!(o.status.success() && !err.contains("fiber_length"), "{err}");
     let mut t = leap::io::StoTable::read(&states).unwrap();
     let row = t.rows.len() / 3;
-    for side in ["r", "l"] {
-        let k = t
-            .labels
-            .iter()
-            .position(|l| *l == format!("/forceset/vas_int_{side}/fiber_length"))
-            .unwrap();
-        t.rows[row][k] = 1e-4;
-    }
+    // vas_int's fibre (both legs' columns, which must agree) in one row.
+    let vas_int = |t: &mut leap::io::StoTable, v: f64| {
+        for side in ["r", "l"] {
+            let label = format!("/forceset/vas_int_{side}/fiber_length");
+            let k = t.labels.iter().position(|l| *l == label).unwrap();
+            t.rows[row][k] = v;
+        }
+    };
+    vas_int(&mut t, 1e-4);
     let file = out.join("short_fibre.sto");
     t.write_sto(&file).unwrap();
     let o = leap().arg("analyze").arg(&file).output().unwrap();
@@ -859,14 +860,7 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
     );
     // A fibre of 100 m gives no finite fibre velocity: the error names
     // the row's time as well as the muscle.
-    for side in ["r", "l"] {
-        let k = t
-            .labels
-            .iter()
-            .position(|l| *l == format!("/forceset/vas_int_{side}/fiber_length"))
-            .unwrap();
-        t.rows[row][k] = 100.0;
-    }
+    vas_int(&mut t, 100.0);
     t.write_sto(&file).unwrap();
     let o = leap().arg("analyze").arg(&file).output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
