@@ -231,6 +231,24 @@ pub struct JumpOcp {
     pub control_upper: Vec<f64>,
 }
 
+/// Where the bound of state `i` comes from (for messages): the model's
+/// coordinate range, or one of the problem's settings.
+fn state_bound_source(eq: &StateEquation, i: usize) -> String {
+    let (n, nm) = (eq.nq(), eq.muscles.len());
+    if i < n {
+        format!(
+            "the range of coordinates[{}] in the model file",
+            eq.system.coordinates[i]
+        )
+    } else if i < 2 * n {
+        "the problem's speed_bound".into()
+    } else if i < 2 * n + nm {
+        "the problem's fiber_length_bounds times the optimal fibre length, above Thelen's minimum fibre length by min_fiber_length_margin".into()
+    } else {
+        format!("activations lie in [{MIN_ACTIVATION}, 1]")
+    }
+}
+
 impl JumpOcp {
     /// The jump of `model`'s symmetric system from the static squat of its
     /// `squat` pose.
@@ -341,25 +359,13 @@ impl JumpOcp {
         let names = eq.state_names();
         for i in 0..nx {
             if !(lo[i] <= squat.x[i] && squat.x[i] <= hi[i]) {
-                let bound = if i < n {
-                    format!(
-                        "the range of coordinates[{}] in the model file",
-                        eq.system.coordinates[i]
-                    )
-                } else if i < 2 * n {
-                    "the problem's speed_bound".into()
-                } else if i < 2 * n + nm {
-                    "the problem's fiber_length_bounds times the optimal fibre length, above Thelen's minimum fibre length by min_fiber_length_margin".into()
-                } else {
-                    format!("activations lie in [{MIN_ACTIVATION}, 1]")
-                };
                 return Err(OcpError::StartOutOfBounds(Box::new(StartOutOfBounds {
                     file: eq.model.file.display().to_string(),
                     name: names[i].clone(),
                     value: squat.x[i],
                     lower: lo[i],
                     upper: hi[i],
-                    bound,
+                    bound: state_bound_source(&eq, i),
                 })));
             }
         }
@@ -400,6 +406,11 @@ impl JumpOcp {
 
     pub fn nq(&self) -> usize {
         self.eq.nq()
+    }
+
+    /// Where state `i`'s bound comes from (for messages).
+    pub fn state_bound_source(&self, i: usize) -> String {
+        state_bound_source(&self.eq, i)
     }
     pub fn nm(&self) -> usize {
         self.eq.nm()

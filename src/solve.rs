@@ -39,7 +39,7 @@ use crate::study::{
     backend_name, fiber_dynamics_name, scheme_name, ForwardCheck, GuessChoice, Method,
     ProblemSettings, SolveConfig,
 };
-use crate::transcription::{MeshTrajectory, Transcription, TranscriptionError};
+use crate::transcription::{GuessProjection, MeshTrajectory, Transcription, TranscriptionError};
 use serde::Serialize;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -524,6 +524,10 @@ pub struct SolveReport {
     /// Columns of the guess file that look like excitations but name no
     /// muscle of the model (a misspelt muscle): not read.
     pub unread_guess_columns: Vec<String>,
+    /// States of the guess file outside the problem's bounds, projected
+    /// into them before the solve (a file in degrees read as radians, a
+    /// solution of a model with other ranges).
+    pub guess_projected_states: Vec<GuessProjection>,
 }
 
 /// IPOPT's return status for an SQP status (what Moco writes as `status`).
@@ -630,6 +634,7 @@ pub fn run(
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
     let mut unread_guess = Vec::new();
+    let mut guess_projected = Vec::new();
     let (guess, guess_name, guess_jump) = match &config.guess {
         GuessChoice::BangBang => {
             progress("initial guess: the bang-bang jump, integrated on the mesh");
@@ -659,7 +664,7 @@ pub fn run(
                 "initial guess: {}, its excitations integrated on the mesh",
                 p.display()
             ));
-            let (mut v, unread) = guess_from_file_with(&tr, p, false)?;
+            let (mut v, unread, _) = guess_from_file_with(&tr, p, false)?;
             unread_guess = unread;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 SolveError::Guess {
@@ -672,8 +677,9 @@ pub fn run(
         }
         GuessChoice::File(p) => {
             progress(&format!("initial guess: {}", p.display()));
-            let (v, unread) = guess_from_file_with(&tr, p, true)?;
+            let (v, unread, projected) = guess_from_file_with(&tr, p, true)?;
             unread_guess = unread;
+            guess_projected = projected;
             (v, p.display().to_string(), None)
         }
     };
@@ -701,6 +707,7 @@ pub fn run(
     report.guess_jump_height_m = guess_jump;
     report.guess_mesh_integration = mesh_integration;
     report.unread_guess_columns = unread_guess;
+    report.guess_projected_states = guess_projected;
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
@@ -1274,6 +1281,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         output_files: Vec::new(),
         removed_stale_files: Vec::new(),
         unread_guess_columns: Vec::new(),
+        guess_projected_states: Vec::new(),
     }
 }
 
@@ -1347,7 +1355,7 @@ pub fn solution_table(
 /// and strictly increasing over at least 2 rows, every value used finite,
 /// activations in [0, 1] and fibre lengths positive.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, true).map(|(v, _)| v)
+    guess_from_file_with(tr, path, true).map(|g| g.0)
 }
 
 /// The guess of a file's excitations alone (a solution, or a controls file
@@ -1357,16 +1365,17 @@ pub fn guess_from_excitations_file(
     tr: &Transcription,
     path: &Path,
 ) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, false).map(|(v, _)| v)
+    guess_from_file_with(tr, path, false).map(|g| g.0)
 }
 
-/// The guess and the file's excitation-like columns that name no muscle of
-/// the model (not read; [`crate::io::unread_excitation_columns`]).
+/// The guess, the file's excitation-like columns that name no muscle of
+/// the model (not read; [`crate::io::unread_excitation_columns`]) and the
+/// states that lay outside their bounds (projected into them).
 fn guess_from_file_with(
     tr: &Transcription,
     path: &Path,
     with_states: bool,
-) -> Result<(Vec<f64>, Vec<String>), SolveError> {
+) -> Result<(Vec<f64>, Vec<String>, Vec<GuessProjection>), SolveError> {
     // Without states, the file's state columns are not read; they are
     // checked only to be finite (`Controls::from_table`).
     let t = if with_states {
@@ -1395,10 +1404,10 @@ fn guess_from_file_with(
         .map(|&m| eq.model.muscles[m].spec.name.as_str())
         .collect();
     let controls = Controls::from_table(&t, path, &muscles)?.values;
-    let v = tr
+    let (v, projected) = tr
         .guess_from_trajectory(&t.time, &states, &controls, tf)
         .map_err(|e| bad(e.to_string()))?;
-    Ok((v, unread_guess_columns(&eq.model, &t)))
+    Ok((v, unread_guess_columns(&eq.model, &t), projected))
 }
 
 /// A guess file's t_f, its last time: the file must start at 0 (the
@@ -1906,6 +1915,12 @@ impl SolveReport {
                 self.guess,
                 self.unread_guess_columns.len(),
                 self.unread_guess_columns.join(", ")
+            ));
+        }
+        for p in &self.guess_projected_states {
+            s.push_str(&format!(
+                "  warning: {}: {p}; projected into the bounds\n",
+                self.guess
             ));
         }
         if !self.removed_stale_files.is_empty() {

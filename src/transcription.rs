@@ -1165,6 +1165,50 @@ pub struct MeshIntegration {
     pub worst_state: usize,
 }
 
+/// A state of a guess that lay outside its bounds at some nodes and was
+/// projected into them ([`Transcription::guess_from_trajectory`]): at how
+/// many nodes, and the farthest value with its time and bounds.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct GuessProjection {
+    /// The state's OpenSim path.
+    pub name: String,
+    pub nodes: usize,
+    pub value: f64,
+    pub time_s: f64,
+    pub lower: f64,
+    pub upper: f64,
+    /// Where the bound comes from.
+    pub bound: String,
+    /// A rotational coordinate's value or speed whose farthest value, read
+    /// as degrees, lies within the bounds: a file in degrees whose header
+    /// does not say so.
+    pub likely_degrees: bool,
+}
+
+impl std::fmt::Display for GuessProjection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        use crate::io::readable;
+        write!(
+            f,
+            "{} lies outside [{}, {}] ({}) at {} node(s), farthest {} at t = {:.4} s",
+            self.name,
+            readable(self.lower),
+            readable(self.upper),
+            self.bound,
+            self.nodes,
+            readable(self.value),
+            self.time_s
+        )?;
+        if self.likely_degrees {
+            write!(
+                f,
+                " (in degrees? a .sto in degrees says inDegrees=yes in its header)"
+            )?;
+        }
+        Ok(())
+    }
+}
+
 /// Newton on one interval's defects in [`Transcription::integrate_on_mesh`]:
 /// the tolerance on the largest defect, the iteration limit and the step
 /// halvings per iteration.
@@ -1795,14 +1839,15 @@ impl Transcription {
 
     /// An initial guess from a trajectory (times increasing, from 0, states
     /// and excitations per time) resampled linearly onto the mesh for final
-    /// time `tf`, then clipped into the variable bounds (t_f too).
+    /// time `tf`, then clipped into the variable bounds (t_f too), with the
+    /// states that lay outside them.
     pub fn guess_from_trajectory(
         &self,
         time: &[f64],
         states: &[Vec<f64>],
         controls: &[Vec<f64>],
         tf: f64,
-    ) -> Result<Vec<f64>, TranscriptionError> {
+    ) -> Result<(Vec<f64>, Vec<GuessProjection>), TranscriptionError> {
         if time.is_empty() || time.len() != states.len() || time.len() != controls.len() {
             return Err(TranscriptionError::Guess(format!(
                 "{} times, {} states and {} controls; need equally many, at least one",
@@ -1878,10 +1923,59 @@ impl Transcription {
         let n = v.len();
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
+        let projected = self.states_out_of_bounds(&v, &lo, &hi);
         for i in 0..n {
             v[i] = v[i].clamp(lo[i], hi[i]);
         }
-        Ok(v)
+        Ok((v, projected))
+    }
+
+    /// The states of variable vector `v` outside their bounds `lo`, `hi`
+    /// (beyond rounding: 1e-9 relative), one entry per state over the nodes.
+    fn states_out_of_bounds(&self, v: &[f64], lo: &[f64], hi: &[f64]) -> Vec<GuessProjection> {
+        let names = self.ocp.eq.state_names();
+        let angular = crate::io::angular_columns(&self.ocp.eq);
+        let times = self.mesh_times(self.final_time(v));
+        let mut out: Vec<GuessProjection> = Vec::new();
+        for i in 0..self.nx {
+            let mut entry: Option<GuessProjection> = None;
+            let mut largest = 0.0;
+            for (k, &t) in times.iter().enumerate() {
+                let Some(j) = self.state_index(k, i) else {
+                    continue;
+                };
+                let excess = (lo[j] - v[j]).max(v[j] - hi[j]);
+                let tol = 1e-9 * (1.0 + lo[j].abs().max(hi[j].abs()));
+                if !(excess > tol) {
+                    continue;
+                }
+                let e = entry.get_or_insert_with(|| GuessProjection {
+                    name: names
+                        .get(i)
+                        .cloned()
+                        .unwrap_or_else(|| format!("state {i}")),
+                    nodes: 0,
+                    value: v[j],
+                    time_s: t,
+                    lower: lo[j],
+                    upper: hi[j],
+                    bound: self.ocp.state_bound_source(i),
+                    likely_degrees: false,
+                });
+                e.nodes += 1;
+                if excess > largest {
+                    largest = excess;
+                    e.value = v[j];
+                    e.time_s = t;
+                }
+            }
+            if let Some(e) = &mut entry {
+                e.likely_degrees = angular.contains(&e.name)
+                    && (e.lower..=e.upper).contains(&e.value.to_radians());
+            }
+            out.extend(entry);
+        }
+        out
     }
 
     /// The bang-bang guess: the built-in bang-bang jump integrated forward
@@ -1898,7 +1992,7 @@ impl Transcription {
                 summary.final_time_s
             ))
         })?;
-        let v = self.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, tf)?;
+        let (v, _) = self.guess_from_trajectory(&traj.time, &traj.states, &traj.controls, tf)?;
         Ok((v, summary))
     }
 

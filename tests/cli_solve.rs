@@ -433,6 +433,8 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     assert_eq!(v2["num_mesh_intervals"].as_u64(), Some(6));
     assert!(v2["forward_jump_height_m"].is_null());
     assert!(v2["guess"].as_str().unwrap().ends_with("jump_solution.sto"));
+    // A solution lies within the problem's bounds: nothing projected.
+    assert_eq!(v2["guess_projected_states"], serde_json::json!([]));
     let sol2 = StoTable::read(&out2.join("jump_solution.sto")).unwrap();
     assert_eq!(sol2.time.len(), 7);
 

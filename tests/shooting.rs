@@ -392,7 +392,7 @@ fn shooting_rows_are_collocations_rows_at_the_same_nodes() {
         },
     )
     .unwrap();
-    let x = tr
+    let (x, _) = tr
         .guess_from_trajectory(&time, &nodes.states, &controls, tf)
         .unwrap();
     let mut c_tr = vec![0.0; tr.num_constraints()];

@@ -489,6 +489,64 @@ fn settings_errors_name_what_is_wrong() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("state 1 has 10 values"), "{e}");
+    // A state outside its bounds is projected into them and reported: the
+    // knee angle rising to the squat's in degrees (×180/π) after t = 0.25 s,
+    // so outside at the last nodes alone; the squat lies within every bound.
+    let knee = ocp
+        .eq
+        .state_names()
+        .iter()
+        .position(|n| n.ends_with("/knee_angle_r/value"))
+        .unwrap();
+    let mut bent = x0.clone();
+    bent[knee] = x0[knee].to_degrees();
+    let (tf, times) = (0.3, [0.0, 0.25, 0.3]);
+    let (v, projected) = tr
+        .guess_from_trajectory(
+            &times,
+            &[x0.clone(), x0.clone(), bent.clone()],
+            &[u0.clone(), u0.clone(), u0.clone()],
+            tf,
+        )
+        .unwrap();
+    let mesh = tr.mesh_times(tf);
+    let (lo, hi) = (ocp.state_lower[knee], ocp.state_upper[knee]);
+    // The resampled knee angle at each node, as the guess interpolates it.
+    let resampled = |t: f64| {
+        if t <= 0.25 {
+            x0[knee]
+        } else {
+            x0[knee] + (t - 0.25) / 0.05 * (bent[knee] - x0[knee])
+        }
+    };
+    let outside = mesh[1..]
+        .iter()
+        .filter(|&&t| !(lo..=hi).contains(&resampled(t)))
+        .count();
+    assert!(0 < outside && outside < mesh.len() - 1, "{outside}");
+    assert_eq!(projected.len(), 1, "{projected:?}");
+    let p = &projected[0];
+    assert_eq!(p.name, ocp.eq.state_names()[knee]);
+    assert_eq!(p.nodes, outside);
+    assert_eq!((p.lower, p.upper), (lo, hi));
+    assert!(p.likely_degrees, "{p}");
+    assert!(p.to_string().contains("inDegrees=yes"), "{p}");
+    assert!(p.bound.contains("coordinates["), "{}", p.bound);
+    // Projected: every node's knee angle within its bounds.
+    for k in 1..mesh.len() {
+        let j = tr.state_index(k, knee).unwrap();
+        assert!((lo..=hi).contains(&v[j]), "node {k}: {}", v[j]);
+    }
+    // The squat alone: nothing projected.
+    let (_, projected) = tr
+        .guess_from_trajectory(
+            &[0.0, tf],
+            &[x0.clone(), x0.clone()],
+            &[u0.clone(), u0.clone()],
+            tf,
+        )
+        .unwrap();
+    assert!(projected.is_empty(), "{projected:?}");
     // Evaluation errors instead of panics.
     let mut tr = tr;
     let mut c = vec![0.0; 3];
@@ -544,7 +602,7 @@ fn jacobian_matches_finite_differences_other_schemes() {
             scheme,
             ..Default::default()
         });
-        let x = tr
+        let (x, _) = tr
             .guess_from_trajectory(
                 &traj.time,
                 &traj.states,
