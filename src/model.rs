@@ -1225,7 +1225,15 @@ impl Model {
                         translation_y: ty,
                     }
                 }
-                JointSpec::Weld { .. } => JointKind::Weld,
+                JointSpec::Weld { .. } => {
+                    if parent_idx.is_none() {
+                        return Err(err(
+                            p("parent"),
+                            "a weld joint must have a body as its parent, not ground: leap's multibody systems have no fixed bodies (leave a fixed platform or force plate out of the model; its ground contact is the half-space's)".into(),
+                        ));
+                    }
+                    JointKind::Weld
+                }
             };
             joints.push(Joint {
                 name: name.to_string(),

@@ -528,6 +528,31 @@ fn joint_and_path_point_fields_are_checked_against_their_type() {
 }
 
 /// `leap eval` reports contact forces per sphere name.
+/// A body welded to ground (a platform, a force plate) had passed the
+/// checks and panicked in every command that built the multibody system.
+#[test]
+fn a_weld_to_ground_is_refused_naming_the_joint() {
+    let mut v = jumper_json();
+    v["bodies"].as_array_mut().unwrap().push(serde_json::json!({
+        "name": "platform", "mass": 10.0, "mass_center": [0.0, 0.0, 0.0],
+        "inertia": [0.1, 0.1, 0.1, 0.0, 0.0, 0.0]
+    }));
+    let joints = v["joints"].as_array_mut().unwrap();
+    joints.push(serde_json::json!({
+        "type": "weld", "name": "ground_platform", "parent": "ground",
+        "child": "platform", "location_in_parent": [0.0, 0.0, 0.0]
+    }));
+    let j = joints.len() - 1;
+    let e = refused(&v).to_string();
+    assert!(
+        e.contains(&format!("joints[{j}].parent")) && e.contains("weld"),
+        "{e}"
+    );
+    // The same body welded to the pelvis is a model leap takes.
+    v["joints"][j]["parent"] = "pelvis".into();
+    Model::from_json_str(&v.to_string(), "m.json").unwrap();
+}
+
 #[test]
 fn contact_spheres_need_distinct_names_and_at_least_one() {
     let mut v = jumper_json();
