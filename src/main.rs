@@ -1337,10 +1337,22 @@ fn solve(
     use std::sync::atomic::{AtomicBool, Ordering};
     // Ctrl-C stops the SQP at its next iteration and writes the results of
     // its last iterate (status user_requested_stop); a second one exits.
+    // Once the results are being written (a few seconds, with the forward
+    // check), one more Ctrl-C is needed: quitting then leaves this run's
+    // first files beside an earlier run's others.
     let interrupt = std::sync::Arc::new(AtomicBool::new(false));
-    let flag = interrupt.clone();
+    let writing = std::sync::Arc::new(AtomicBool::new(false));
+    let (flag, writes, warned) = (interrupt.clone(), writing.clone(), AtomicBool::new(false));
     let handler = ctrlc::set_handler(move || {
-        if flag.swap(true, Ordering::Relaxed) {
+        let again = flag.swap(true, Ordering::Relaxed);
+        if writes.load(Ordering::Relaxed) {
+            if !warned.swap(true, Ordering::Relaxed) {
+                leap::errln!("leap solve: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
+                return;
+            }
+            std::process::exit(130);
+        }
+        if again {
             std::process::exit(130);
         }
         leap::errln!("leap solve: interrupted: stopping at the next iteration and writing the results (Ctrl-C again to quit at once)");
@@ -1349,6 +1361,7 @@ fn solve(
     config.apply(&overrides)?;
     if handler.is_ok() {
         config.settings.interrupt = Some(interrupt);
+        config.writing = Some(writing);
     }
     let chatty = !json && !quiet;
     let verbose = force_log || (chatty && std::io::stderr().is_terminal());

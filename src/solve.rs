@@ -881,6 +881,9 @@ fn finish(
     grf: (&[f64], &[[f64; 12]]),
     progress: &mut dyn FnMut(&str),
 ) -> Result<SolveReport, SolveError> {
+    if let Some(w) = &config.writing {
+        w.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
     let (dir, name) = (&config.output_directory, &config.name);
     // Each result file as it was: every write replaces its file by a new
     // one (`io::write_output_with`), so a file this run wrote is another.

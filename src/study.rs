@@ -464,6 +464,9 @@ pub struct SolveConfig {
     /// The collocation-only settings the study names (fields), for
     /// `ignored` when `--method shooting` overrides it.
     collocation_named: Vec<&'static str>,
+    /// Raised when the solve starts writing its results (set by `leap
+    /// solve`, whose Ctrl-C handler then lets them be finished).
+    pub writing: Option<std::sync::Arc<std::sync::atomic::AtomicBool>>,
 }
 
 /// Command-line overrides of a study (`leap solve --...`); paths relative
@@ -865,6 +868,7 @@ impl SolveStudy {
             hessian_given: self.hessian.is_some(),
             ignored: Vec::new(),
             collocation_named,
+            writing: None,
         })
     }
 }

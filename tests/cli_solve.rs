@@ -1223,6 +1223,63 @@ fn ctrl_c_stops_a_solve_and_writes_its_results() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A Ctrl-C that comes while the results are being written (a double tap:
+/// the first stopped the SQP) lets them be finished, with a word, instead
+/// of quitting with this run's first files beside an earlier run's others.
+#[test]
+fn a_second_ctrl_c_while_writing_lets_the_results_finish() {
+    use std::io::BufRead;
+    let out = fresh_dir("interrupted_writing");
+    let bin = assert_cmd::cargo::cargo_bin("leap");
+    let mut child = std::process::Command::new(bin)
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "10",
+            "--max-iterations",
+            "1000",
+            "--out",
+        ])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let id = child.id().to_string();
+    let sigint = || {
+        let ok = std::process::Command::new("kill")
+            .args(["-INT", &id])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+    };
+    let mut lines = Vec::new();
+    for line in std::io::BufReader::new(child.stderr.take().unwrap()).lines() {
+        let line = line.unwrap();
+        // Once in the SQP, and once in the forward check.
+        if line.starts_with("leap solve: SQP:") || line.starts_with("leap solve: forward check:") {
+            sigint();
+        }
+        lines.push(line);
+    }
+    let status = child.wait().unwrap();
+    let err = lines.join("\n");
+    assert_eq!(status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("interrupted while writing the results: finishing them"),
+        "{err}"
+    );
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("jump_summary.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["status"], "user_requested_stop", "{v}");
+    for f in v["output_files"].as_array().unwrap() {
+        assert!(Path::new(f.as_str().unwrap()).is_file(), "{f} missing");
+    }
+    assert!(v["forward_jump_height_m"].is_number(), "{v}");
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 /// The forward check is the reader's guard against a predicted jump that
 /// does not hold for the model. A solve stopped after one iteration from a
 /// guess whose excitations were set to the minimum (its states kept: a
