@@ -549,6 +549,38 @@ impl StateEquation {
         Ok(())
     }
 
+    /// The contact spheres' forces alone at state `x` (they depend on q and
+    /// q̇ only) into `ws.sphere_force`, as [`Self::rhs`] leaves them: the
+    /// ground forces of a state whose muscles cannot be evaluated (an
+    /// explicit fibre velocity that does not exist).
+    pub fn contact_forces<L: ForceLaws<f64>>(
+        &self,
+        laws: &L,
+        ws: &mut StateWorkspace<f64>,
+        x: &[f64],
+    ) -> Result<(), OdeError> {
+        let n = self.nq();
+        if x.len() != self.nx() {
+            return Err(OdeError::Length {
+                what: "x",
+                got: x.len(),
+                want: self.nx(),
+            });
+        }
+        self.multibody.set_state(&mut ws.mb, &x[..n], &x[n..2 * n]);
+        let view = ModelView {
+            mb: &self.multibody,
+            ws: &ws.mb,
+            q_of: &self.system.q_of_model_coordinate,
+        };
+        if let Some(contact) = &self.model.contact {
+            for (k, sp) in contact.spheres.iter().enumerate() {
+                ws.sphere_force[k] = sphere_force(laws, &view, k, sp).0;
+            }
+        }
+        Ok(())
+    }
+
     /// The forces of every element at the state `view` shows, into `sink`;
     /// muscle rates into `zdot` = [d l^M/dt, da/dt]. Shared by both backends.
     #[allow(clippy::too_many_arguments)]
@@ -582,17 +614,7 @@ impl StateEquation {
         // Foot-ground contact.
         if let Some(contact) = &self.model.contact {
             for (k, sp) in contact.spheres.iter().enumerate() {
-                let loc = [
-                    S::from(sp.location[0]),
-                    S::from(sp.location[1]),
-                    S::from(sp.location[2]),
-                ];
-                let p = view.position(sp.body, loc);
-                // Simbody's contact point is mid-overlap, R − δ/2 below the
-                // centre; its slip includes the foot's rotation.
-                let p_contact = [p[0], (p[1] - sp.radius) * 0.5, p[2]];
-                let v = view.velocity(sp.body, view.station_at(sp.body, p_contact));
-                let (f, at) = laws.sphere(k, p, v);
+                let (f, at) = sphere_force(laws, view, k, sp);
                 out.sphere_force[k] = f;
                 if f.iter().any(|c| c.re() != 0.0) {
                     let station = view.station_at(sp.body, at);
@@ -634,6 +656,27 @@ impl StateEquation {
         }
         Ok(())
     }
+}
+
+/// Contact sphere `k`'s force and point of application (ground) at the
+/// state `view` shows.
+fn sphere_force<S: Scalar, L: ForceLaws<S>, K: BodyKinematics<S>>(
+    laws: &L,
+    view: &K,
+    k: usize,
+    sp: &crate::model::Sphere,
+) -> ([S; 3], [S; 3]) {
+    let loc = [
+        S::from(sp.location[0]),
+        S::from(sp.location[1]),
+        S::from(sp.location[2]),
+    ];
+    let p = view.position(sp.body, loc);
+    // Simbody's contact point is mid-overlap, R − δ/2 below the centre; its
+    // slip includes the foot's rotation.
+    let p_contact = [p[0], (p[1] - sp.radius) * 0.5, p[2]];
+    let v = view.velocity(sp.body, view.station_at(sp.body, p_contact));
+    laws.sphere(k, p, v)
 }
 
 /// Where [`StateEquation::apply_forces`] reports per-element results.

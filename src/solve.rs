@@ -1288,19 +1288,18 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
     }
 }
 
-/// Ground reaction forces per foot at each node (NaN where f(x, u) fails).
+/// Ground reaction forces per foot at each node, from the contact alone.
 pub fn node_grf(ocp: &JumpOcp, mesh: &MeshTrajectory) -> Vec<[f64; 12]> {
     let mut ws = ocp.eq.workspace::<f64>();
-    let mut xdot = vec![0.0; ocp.nx()];
+    // The contact forces alone: a node whose muscles have no explicit fibre
+    // velocity (a DeGroote muscle of implicit fibre dynamics at a = 0) still
+    // has its ground forces.
     mesh.states
         .iter()
-        .zip(&mesh.controls)
-        .map(
-            |(x, u)| match ocp.eq.rhs(&ocp.laws, &mut ws, x, u, &mut xdot) {
-                Ok(()) => grf_of(&ocp.eq, &ws, x),
-                Err(_) => [f64::NAN; 12],
-            },
-        )
+        .map(|x| match ocp.eq.contact_forces(&ocp.laws, &mut ws, x) {
+            Ok(()) => grf_of(&ocp.eq, &ws, x),
+            Err(_) => [f64::NAN; 12],
+        })
         .collect()
 }
 

@@ -316,3 +316,43 @@ fn simbody_state_equation_matches_rust_native() {
         );
     }
 }
+
+/// The contact forces alone ([`StateEquation::contact_forces`], which the
+/// ground forces of a solution's nodes take) are those of the whole state
+/// equation: equal where it evaluates, and there where it cannot. A
+/// DeGrooteFregly2016Muscle at zero activation under tendon tension has no
+/// explicit fibre velocity; a DeGroote solve's last node had written NaN
+/// ground forces and been reported still on the ground.
+#[test]
+fn contact_forces_alone_are_the_state_equations() {
+    let model = Model::from_file("models/jumper.json").unwrap();
+    let (laws, eq) = StateEquation::opensim(&model, true).unwrap();
+    let (x, u) = symmetric_state(&eq, 3);
+    let mut ws = eq.workspace::<f64>();
+    let mut xdot = vec![0.0; eq.nx()];
+    eq.rhs(&laws, &mut ws, &x, &u, &mut xdot).unwrap();
+    let full = ws.sphere_force.clone();
+    assert!(full.iter().any(|f| f[1] > 0.0), "no sphere in contact");
+    let mut alone = eq.workspace::<f64>();
+    eq.contact_forces(&laws, &mut alone, &x).unwrap();
+    assert_eq!(alone.sphere_force, full);
+
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    v["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    let dg = Model::from_json_str(&v.to_string(), "jumper_degroote.json").unwrap();
+    let (dg_laws, dg_eq) = StateEquation::opensim(&dg, true).unwrap();
+    let (n, nm) = (dg_eq.nq(), dg_eq.nm());
+    let mut x0 = x.clone();
+    for a in &mut x0[2 * n + nm..] {
+        *a = 0.0;
+    }
+    let mut ws = dg_eq.workspace::<f64>();
+    let e = dg_eq
+        .rhs(&dg_laws, &mut ws, &x0, &vec![0.0; nm], &mut xdot)
+        .unwrap_err();
+    assert!(e.to_string().contains("fibre velocity"), "{e}");
+    let mut alone = dg_eq.workspace::<f64>();
+    dg_eq.contact_forces(&dg_laws, &mut alone, &x0).unwrap();
+    assert_eq!(alone.sphere_force, full);
+}
