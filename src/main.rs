@@ -1393,7 +1393,14 @@ fn solve(
             }
         };
         if let Some(solution) = named("_solution.sto") {
+            // The forward check's states only when it ran through (a failed
+            // one writes what it reached, down to its first row).
+            let ran = report
+                .forward_check
+                .as_ref()
+                .is_some_and(|f| f.summary.is_some());
             let forward = named("_forward_states.sto")
+                .filter(|_| ran)
                 .map(|f| format!(" --ref-files {}", arg(f)))
                 .unwrap_or_default();
             outln!("  plots: leap report {}{forward}", arg(solution));

@@ -1280,6 +1280,56 @@ fn a_second_ctrl_c_while_writing_lets_the_results_finish() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A forward check that fails (a DeGrooteFregly2016Muscle model, whose
+/// explicit fibre dynamics Simbody cannot integrate) writes the states it
+/// reached, but the plotting command `leap solve` prints does not offer
+/// them as the reference: a failed check's file can hold a single row,
+/// which `leap report` refuses.
+#[test]
+fn a_failed_forward_check_is_not_offered_as_the_plots_reference() {
+    let dir = fresh_dir("dg-forward");
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    let dg = dir.join("dg.json");
+    std::fs::write(&dg, model.to_string()).unwrap();
+    let (_, v) = small_solve(
+        &dir,
+        &dir.join("guess"),
+        &["--no-forward-check", "--max-iterations", "2"],
+    );
+    let guess = v["output_files"][0].as_str().unwrap().to_string();
+    assert!(guess.ends_with("_solution.sto"), "{guess}");
+    let out = dir.join("out");
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "solve",
+            "--num-mesh-intervals",
+            "6",
+            "--max-iterations",
+            "1",
+        ])
+        .args(["--model".as_ref(), dg.as_os_str()])
+        .args(["--guess", &guess])
+        .args(["--out".as_ref(), out.as_os_str()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{text}");
+    assert!(text.contains("forward check (Simbody): failed"), "{text}");
+    assert!(out.join("jump_forward_states.sto").is_file());
+    let plots = text
+        .lines()
+        .find(|l| l.contains("plots: leap report"))
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        plots.contains("jump_solution.sto") && !plots.contains("--ref-files"),
+        "{plots}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// The forward check is the reader's guard against a predicted jump that
 /// does not hold for the model. A solve stopped after one iteration from a
 /// guess whose excitations were set to the minimum (its states kept: a
