@@ -26,6 +26,13 @@ use std::path::Path;
 /// Activation at or above which a muscle counts as saturated.
 pub const SATURATED_ACTIVATION: f64 = 0.95;
 
+/// Peak shortening speed over v_max · l_opt beyond which `leap analyze`
+/// warns that the states do not fit the model: the force–velocity curve
+/// ends at v_max (the default jump's vasti reach 1.00, Thelen's linear
+/// extension below zero force), and a DeGroote solution read with the
+/// default Thelen model gave 7.3.
+pub const IMPOSSIBLE_SHORTENING_RATIO: f64 = 1.5;
+
 /// One muscle-tendon unit over the window.
 #[derive(Debug, Clone, Serialize)]
 pub struct MuscleWork {
@@ -309,6 +316,23 @@ pub fn analyze(
             positive_work_j: positive,
             net_work_j: net,
         });
+    }
+    // A Hill muscle's fibre cannot shorten much faster than v_max: states
+    // whose fibre lengths do are another muscle law's or model's.
+    let mut too_fast: Vec<&MuscleWork> = muscles
+        .iter()
+        .filter(|m| m.peak_shortening_ratio > IMPOSSIBLE_SHORTENING_RATIO)
+        .collect();
+    too_fast.sort_by(|a, b| b.peak_shortening_ratio.total_cmp(&a.peak_shortening_ratio));
+    if !too_fast.is_empty() {
+        let list: Vec<String> = too_fast
+            .iter()
+            .map(|m| format!("{} {:.2}", m.name, m.peak_shortening_ratio))
+            .collect();
+        warnings.push(format!(
+            "fibres shorten faster than the model's muscles can, in times their maximum contraction velocity: {}; the file's fibre lengths do not fit this model (were they written with another model or muscle_model? give it with --model)",
+            list.join(", ")
+        ));
     }
     muscles.sort_by(|a, b| b.net_work_j.total_cmp(&a.net_work_j));
     let passive = trapezoid(&|s| s.passive_power);

@@ -1319,7 +1319,7 @@ fn simulate(
             if json {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             }
-            leap::errln!("error: integration failed at t = {} s: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
+            leap::errln!("error: integration stopped at t = {} s, the last state it reached: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
             Ok(ExitCode::from(1))
         }
     }

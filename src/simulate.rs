@@ -142,8 +142,9 @@ pub struct Trajectory {
 
 /// A simulation stopped early: the cause, where, and what was computed.
 #[derive(Debug, thiserror::Error)]
-#[error("integration failed at t = {t}: {cause}")]
+#[error("integration stopped at t = {t} s, the last state it reached: {cause}")]
 pub struct SimulationFailure {
+    /// The time of the last state reached (the failing step's start).
     pub t: f64,
     pub state: Vec<f64>,
     pub cause: String,

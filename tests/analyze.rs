@@ -103,6 +103,8 @@ fn push_off_impulse_equals_the_momentum_change_and_the_jump_matches_the_simulati
         a.budget.end_s
     );
     assert_push_off_consistent(&a, 2e-3, s.jump_height_m, "simulation");
+    // The model's own states: every fibre within its force–velocity curve.
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
     assert!(
         a.to_text().starts_with("push-off from 0.000 s"),
         "{}",
@@ -218,6 +220,37 @@ fn absurd_states_are_warned_of_or_refused_and_one_row_windows_refused() {
     );
     let fine = analyze(&eq, &laws, &time, &vec![x0.clone(); 3], None).unwrap();
     assert!(fine.warnings.is_empty(), "{:?}", fine.warnings);
+    // A fibre stretched to 1.8 l_opt (within the optimizer's bounds) over
+    // a slack tendon: its passive force exceeds the tendon's, so the
+    // force–velocity curve is read below zero, far beyond v_max. States
+    // of another muscle model read with this one look so (a DeGroote
+    // solution's soleus read with Thelen's: 7.3 v_max).
+    let vas = eq
+        .muscles
+        .iter()
+        .position(|&m| eq.model.muscles[m].spec.name == "vas_int_r")
+        .unwrap();
+    let spec = &eq.model.muscles[eq.muscles[vas]].spec;
+    let mut stretched = vec![x0.clone(); 3];
+    for x in &mut stretched {
+        x[col("/forceset/vas_int_r/fiber_length")] = 1.8 * spec.optimal_fiber_length;
+    }
+    let a = analyze(&eq, &laws, &time, &stretched, None).unwrap();
+    let m = a.muscles.iter().find(|m| m.name == "vas_int_r").unwrap();
+    assert!(
+        m.peak_shortening_ratio > leap::analyze::IMPOSSIBLE_SHORTENING_RATIO,
+        "{}",
+        m.peak_shortening_ratio
+    );
+    assert_eq!(a.warnings.len(), 1, "{:?}", a.warnings);
+    assert!(
+        a.warnings[0].starts_with(&format!(
+            "fibres shorten faster than the model's muscles can, in times their maximum contraction velocity: vas_int_r {:.2};",
+            m.peak_shortening_ratio
+        )),
+        "{:?}",
+        a.warnings
+    );
     let mut fast = vec![x0.clone(); 3];
     fast[1][col("/jointset/ground_pelvis/pelvis_ty/speed")] = 1e300;
     let e = analyze(&eq, &laws, &time, &fast, None)
