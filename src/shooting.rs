@@ -1194,8 +1194,12 @@ fn run_tasks<S, T: Send>(
     };
     let threads = threads.min(tasks.len()).max(1);
     let results: Vec<Result<Vec<T>, EvalError>> = std::thread::scope(|scope| {
-        let handles: Vec<_> = (0..threads).map(|_| scope.spawn(work)).collect();
-        handles
+        // A thread the system refuses (a process limit) leaves its tasks
+        // to the others, and to this thread if none started.
+        let handles: Vec<_> = (0..threads)
+            .filter_map(|_| std::thread::Builder::new().spawn_scoped(scope, work).ok())
+            .collect();
+        let mut results: Vec<_> = handles
             .into_iter()
             .map(|h| {
                 h.join().unwrap_or_else(|_| {
@@ -1205,7 +1209,11 @@ fn run_tasks<S, T: Send>(
                     ))
                 })
             })
-            .collect()
+            .collect();
+        if results.is_empty() {
+            results.push(work());
+        }
+        results
     });
     let mut all = Vec::new();
     for r in results {

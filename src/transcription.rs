@@ -1062,31 +1062,58 @@ fn node_f<'a>(
 }
 
 /// Run `jobs` on `workers`, the first on this thread and each other on a
-/// scoped thread of its own. The first error in job order is returned; a
-/// thread that panicked is an error at point `lo`.
+/// scoped thread of its own (on this thread too where the system refuses
+/// the thread). The first error in job order is returned; a thread that
+/// panicked is an error at point `lo`.
 fn run_jobs<W: Send, J: Send>(
     workers: &mut [W],
     jobs: impl Iterator<Item = J>,
     lo: usize,
     run: &(impl Fn(&mut W, J) -> Result<(), (usize, String)> + Sync),
 ) -> Result<(), (usize, String)> {
+    // Each job in a slot that its thread takes: a job whose thread the
+    // system refuses (a process limit) stays there, and this thread runs
+    // it after the first.
+    let slots: Vec<std::sync::Mutex<Option<(&mut W, J)>>> = workers
+        .iter_mut()
+        .zip(jobs)
+        .map(|p| std::sync::Mutex::new(Some(p)))
+        .collect();
+    let run_slot = |slot: &std::sync::Mutex<Option<(&mut W, J)>>| match slot
+        .lock()
+        .ok()
+        .and_then(|mut g| g.take())
+    {
+        Some((w, j)) => run(w, j),
+        None => Ok(()),
+    };
     std::thread::scope(|s| {
-        let mut pairs = workers.iter_mut().zip(jobs);
-        let first = pairs.next();
-        let handles: Vec<_> = pairs.map(|(w, j)| s.spawn(move || run(w, j))).collect();
-        let mut res = match first {
-            Some((w, j)) => run(w, j),
-            None => Ok(()),
-        };
-        for h in handles {
+        let mut handles = Vec::new();
+        let mut here = Vec::new();
+        for (i, slot) in slots.iter().enumerate() {
+            let spawned = (i > 0)
+                .then(|| {
+                    std::thread::Builder::new()
+                        .spawn_scoped(s, move || run_slot(slot))
+                        .ok()
+                })
+                .flatten();
+            match spawned {
+                Some(h) => handles.push((i, h)),
+                None => here.push(i),
+            }
+        }
+        // Results in job order: the first error is the first job's.
+        let mut results: Vec<(usize, Result<(), (usize, String)>)> =
+            here.into_iter().map(|i| (i, run_slot(&slots[i]))).collect();
+        for (i, h) in handles {
             let r = h
                 .join()
                 .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
-            if res.is_ok() {
-                res = r;
-            }
+            results.push((i, r));
         }
-        res
+        results.sort_by_key(|(i, _)| *i);
+        results.into_iter().map(|(_, r)| r).collect()
     })
 }
 

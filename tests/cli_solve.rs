@@ -1581,6 +1581,82 @@ fn a_write_failing_part_way_leaves_no_mix_of_two_solves() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// Where the system refuses threads (a process limit, `ulimit -u`), the
+/// work of a refused thread runs on the calling one: each method's solve
+/// ends as it does with threads (the scoped threads of the Jacobians, the
+/// shooting derivatives and the Hessian's convexification had panicked).
+/// As root, whom the limit does not bind, the solve runs as `nobody`.
+#[cfg(target_os = "linux")]
+#[test]
+fn a_system_that_refuses_threads_gets_the_same_solve() {
+    let root = std::process::Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0");
+    use std::os::unix::fs::PermissionsExt;
+    let dir = fresh_dir("no_threads");
+    std::fs::set_permissions(&dir, PermissionsExt::from_mode(0o777)).unwrap();
+    // The binary and the model where `nobody` can read them (the checkout
+    // may lie under a private home).
+    let (bin, model) = (dir.join("leap"), dir.join("jumper.json"));
+    std::fs::copy(assert_cmd::cargo::cargo_bin("leap"), &bin).unwrap();
+    std::fs::copy("models/jumper.json", &model).unwrap();
+    for f in [&bin, &model] {
+        std::fs::set_permissions(f, PermissionsExt::from_mode(0o755)).unwrap();
+    }
+    for method in ["collocation", "shooting"] {
+        let args = [
+            "solve",
+            "--method",
+            method,
+            "--num-mesh-intervals",
+            "4",
+            "--max-iterations",
+            "2",
+            "--no-forward-check",
+            "--json",
+            "--out",
+        ];
+        let run = |limited: bool| {
+            let out = dir.join(format!("{method}_{limited}"));
+            let mut c = if limited && root {
+                let mut c = std::process::Command::new("setpriv");
+                c.args(["--reuid=65534", "--regid=65534", "--clear-groups", "bash"]);
+                c
+            } else {
+                std::process::Command::new("bash")
+            };
+            let limit = if limited { "ulimit -u 1; " } else { "" };
+            let o = c
+                .arg("-c")
+                .arg(format!("{limit}exec \"$0\" \"$@\""))
+                .arg(&bin)
+                .args(args)
+                .arg(&out)
+                .arg("--model")
+                .arg(&model)
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&o.stderr).to_string();
+            assert_eq!(
+                o.status.code(),
+                Some(1),
+                "{method}, limited {limited}: {err}"
+            );
+            let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+            v
+        };
+        let (free, limited) = (run(false), run(true));
+        assert_eq!(limited["status"], "iteration_limit", "{method}: {limited}");
+        assert_eq!(limited["objective"], free["objective"], "{method}");
+        assert_eq!(
+            limited["max_constraint_violation"], free["max_constraint_violation"],
+            "{method}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `problem.activation_dynamics_smoothing` blends Thelen2003Muscle's switch
 /// for the optimizer; on a DeGrooteFregly2016Muscle model, whose smooth
 /// switch is the model's own, it is refused naming the study and the field

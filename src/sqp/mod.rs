@@ -931,18 +931,26 @@ fn convexify_elements(
     for (e, pair) in elements.iter().zip(blocks.iter_mut()).enumerate() {
         parts[e % threads].push(pair);
     }
-    std::thread::scope(|s| {
-        let mut parts = parts.into_iter();
-        let first = parts.next();
-        for part in parts {
-            s.spawn(move || {
-                for (el, b) in part {
-                    one(el, b);
-                }
-            });
-        }
-        for (el, b) in first.into_iter().flatten() {
+    // Each part in a slot that its thread takes: a part whose thread the
+    // system refuses (a process limit) stays there for this thread.
+    let slots: Vec<std::sync::Mutex<Vec<(&Element, &mut Vec<f64>)>>> =
+        parts.into_iter().map(std::sync::Mutex::new).collect();
+    let run = |slot: &std::sync::Mutex<Vec<(&Element, &mut Vec<f64>)>>| {
+        let part = match slot.lock() {
+            Ok(mut g) => std::mem::take(&mut *g),
+            Err(p) => std::mem::take(&mut *p.into_inner()),
+        };
+        for (el, b) in part {
             one(el, b);
+        }
+    };
+    std::thread::scope(|s| {
+        for slot in slots.iter().skip(1) {
+            // Refused: left in its slot, run below.
+            let _ = std::thread::Builder::new().spawn_scoped(s, move || run(slot));
+        }
+        for slot in &slots {
+            run(slot);
         }
     });
 }
