@@ -664,7 +664,7 @@ pub fn run(
                 "initial guess: {}, its excitations integrated on the mesh",
                 p.display()
             ));
-            let (mut v, unread, _) = guess_from_file_with(&tr, p, false)?;
+            let FileGuess { mut v, unread, .. } = guess_from_file_with(&tr, p, false)?;
             unread_guess = unread;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 SolveError::Guess {
@@ -677,7 +677,11 @@ pub fn run(
         }
         GuessChoice::File(p) => {
             progress(&format!("initial guess: {}", p.display()));
-            let (v, unread, projected) = guess_from_file_with(&tr, p, true)?;
+            let FileGuess {
+                v,
+                unread,
+                projected,
+            } = guess_from_file_with(&tr, p, true)?;
             unread_guess = unread;
             guess_projected = projected;
             (v, p.display().to_string(), None)
@@ -1357,7 +1361,7 @@ pub fn solution_table(
 /// and strictly increasing over at least 2 rows, every value used finite,
 /// activations in [0, 1] and fibre lengths positive.
 pub fn guess_from_file(tr: &Transcription, path: &Path) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, true).map(|g| g.0)
+    guess_from_file_with(tr, path, true).map(|g| g.v)
 }
 
 /// The guess of a file's excitations alone (a solution, or a controls file
@@ -1367,17 +1371,25 @@ pub fn guess_from_excitations_file(
     tr: &Transcription,
     path: &Path,
 ) -> Result<Vec<f64>, SolveError> {
-    guess_from_file_with(tr, path, false).map(|g| g.0)
+    guess_from_file_with(tr, path, false).map(|g| g.v)
 }
 
-/// The guess, the file's excitation-like columns that name no muscle of
-/// the model (not read; [`crate::io::unread_excitation_columns`]) and the
-/// states that lay outside their bounds (projected into them).
+/// A guess read from a file.
+struct FileGuess {
+    v: Vec<f64>,
+    /// The file's excitation-like columns that name no muscle of the model
+    /// (not read; [`crate::io::unread_excitation_columns`]).
+    unread: Vec<String>,
+    /// The states that lay outside their bounds (projected into them).
+    projected: Vec<GuessProjection>,
+}
+
+/// The guess of a file, with its states or without.
 fn guess_from_file_with(
     tr: &Transcription,
     path: &Path,
     with_states: bool,
-) -> Result<(Vec<f64>, Vec<String>, Vec<GuessProjection>), SolveError> {
+) -> Result<FileGuess, SolveError> {
     // Without states, the file's state columns are not read; they are
     // checked only to be finite (`Controls::from_table`).
     let t = if with_states {
@@ -1409,7 +1421,11 @@ fn guess_from_file_with(
     let (v, projected) = tr
         .guess_from_trajectory(&t.time, &states, &controls, tf)
         .map_err(|e| bad(e.to_string()))?;
-    Ok((v, unread_guess_columns(&eq.model, &t), projected))
+    Ok(FileGuess {
+        v,
+        unread: unread_guess_columns(&eq.model, &t),
+        projected,
+    })
 }
 
 /// A guess file's t_f, its last time: the file must start at 0 (the

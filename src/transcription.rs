@@ -1104,8 +1104,7 @@ fn run_jobs<W: Send, J: Send>(
             }
         }
         // Results in job order: the first error is the first job's.
-        let mut results: Vec<(usize, Result<(), (usize, String)>)> =
-            here.into_iter().map(|i| (i, run_slot(&slots[i]))).collect();
+        let mut results: Vec<_> = here.into_iter().map(|i| (i, run_slot(&slots[i]))).collect();
         for (i, h) in handles {
             let r = h
                 .join()
@@ -1113,7 +1112,7 @@ fn run_jobs<W: Send, J: Send>(
             results.push((i, r));
         }
         results.sort_by_key(|(i, _)| *i);
-        results.into_iter().map(|(_, r)| r).collect()
+        results.into_iter().try_for_each(|(_, r)| r)
     })
 }
 
@@ -1973,7 +1972,7 @@ impl Transcription {
                 };
                 let excess = (lo[j] - v[j]).max(v[j] - hi[j]);
                 let tol = 1e-9 * (1.0 + lo[j].abs().max(hi[j].abs()));
-                if !(excess > tol) {
+                if excess.is_nan() || excess <= tol {
                     continue;
                 }
                 let e = entry.get_or_insert_with(|| GuessProjection {

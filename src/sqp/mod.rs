@@ -895,6 +895,9 @@ fn convexify_blocks(
     h.copy_from_slice(&out);
 }
 
+/// One thread's share of [`convexify_elements`]: elements and their blocks.
+type Part<'a> = Vec<(&'a Element, &'a mut Vec<f64>)>;
+
 /// [`convexify`] (or [`convexify_blocks`]) every element's block, on as
 /// many threads as the machine has where the eigenvalue work is large
 /// (on the jump: 28 blocks of 86 × 86, about 20 ms per SQP iteration on
@@ -933,9 +936,8 @@ fn convexify_elements(
     }
     // Each part in a slot that its thread takes: a part whose thread the
     // system refuses (a process limit) stays there for this thread.
-    let slots: Vec<std::sync::Mutex<Vec<(&Element, &mut Vec<f64>)>>> =
-        parts.into_iter().map(std::sync::Mutex::new).collect();
-    let run = |slot: &std::sync::Mutex<Vec<(&Element, &mut Vec<f64>)>>| {
+    let slots: Vec<std::sync::Mutex<Part>> = parts.into_iter().map(std::sync::Mutex::new).collect();
+    let run = |slot: &std::sync::Mutex<Part>| {
         let part = match slot.lock() {
             Ok(mut g) => std::mem::take(&mut *g),
             Err(p) => std::mem::take(&mut *p.into_inner()),
