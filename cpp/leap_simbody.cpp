@@ -449,6 +449,10 @@ double SimbodySystem::energy() {
 namespace {
 std::unique_ptr<Integrator> make_integrator(MultibodySystem& system, std::int32_t method, double accuracy) {
     if (!(accuracy > 0)) throw std::invalid_argument("integrator: accuracy must be positive");
+    // Simbody's error-controlled integrators assert an accuracy below 1
+    // (the process aborts); explicit Euler takes it as its step.
+    if (method != 4 && !(accuracy < 1))
+        throw std::invalid_argument("integrator: accuracy must be below 1");
     std::unique_ptr<Integrator> integ;
     switch (method) {
         case 0: integ.reset(new RungeKuttaMersonIntegrator(system)); break;

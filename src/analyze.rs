@@ -106,6 +106,15 @@ pub struct JumpAnalysis {
 /// at least 2 rows, time strictly increasing, every value finite.
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec<f64>>), StoError> {
     let table = crate::io::read_states(eq, path)?;
+    // Not one state column (ground forces, controls): not a states file.
+    let columns = eq.model_state_columns();
+    if !columns.iter().any(|(l, _)| table.labels.contains(l)) {
+        return Err(StoError::Column {
+            file: path.into(),
+            column: table.labels.first().cloned().unwrap_or_default(),
+            reason: "not a state of the model, nor is any other column: `leap analyze` reads a states file (a solve's `_solution.sto`, a simulation's `_forward_states.sto`), not ground forces or controls".into(),
+        });
+    }
     let missing = if eq.system.symmetric {
         "missing (a states file of this model's symmetric system is needed; `--full` for the full one)"
     } else {

@@ -15,7 +15,9 @@ pub struct BenchRow {
     pub system: String,
     pub backend: String,
     pub what: String,
-    pub nq: usize,
+    /// The evaluation's size: nq for q̈, nx for ẋ = f(x, u)
+    /// ([`DynamicsReport::size_name`]).
+    pub size: usize,
     pub median_ns: f64,
     pub min_ns: f64,
     pub max_ns: f64,
@@ -26,6 +28,9 @@ pub struct BenchRow {
 /// The dynamics benchmark's results.
 #[derive(Debug, Clone, Serialize)]
 pub struct DynamicsReport {
+    /// What is evaluated, and the name of its size ("nq", "nx").
+    pub evaluation: &'static str,
+    pub size_name: &'static str,
     pub model: String,
     pub rows: Vec<BenchRow>,
     /// Simbody median / Rust-native median, per system.
@@ -110,7 +115,7 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
             system: label.into(),
             backend: "rust-native".into(),
             what: "set q, q̇; q̈ = M⁻¹(τ − b)".into(),
-            nq: n,
+            size: n,
             median_ns: med_r,
             min_ns: min_r,
             max_ns: max_r,
@@ -139,7 +144,7 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
             system: label.into(),
             backend: "simbody".into(),
             what: "set q, q̇; realize(Acceleration)".into(),
-            nq: n,
+            size: n,
             median_ns: med_s,
             min_ns: min_s,
             max_ns: max_s,
@@ -149,6 +154,8 @@ pub fn dynamics(model: &Model) -> Result<DynamicsReport, crate::crosscheck::Cros
         speedup.push((label.to_string(), med_s / med_r));
     }
     Ok(DynamicsReport {
+        evaluation: "q̈",
+        size_name: "nq",
         model: model.file.display().to_string(),
         rows,
         speedup,
@@ -161,7 +168,7 @@ impl DynamicsReport {
         let mut t = comfy_table::Table::new();
         t.set_header([
             "system",
-            "nq",
+            self.size_name,
             "backend",
             "evaluation",
             "median ns/call",
@@ -172,7 +179,7 @@ impl DynamicsReport {
         for r in &self.rows {
             t.add_row([
                 r.system.clone(),
-                r.nq.to_string(),
+                r.size.to_string(),
                 r.backend.clone(),
                 r.what.clone(),
                 format!("{:.0}", r.median_ns),
@@ -186,7 +193,12 @@ impl DynamicsReport {
             .iter()
             .map(|(s, r)| format!("{s}: Rust-native {r:.1}× faster than Simbody"))
             .collect();
-        format!("q̈ evaluation, {}\n{t}\n{}", self.model, ratios.join("\n"))
+        format!(
+            "{} evaluation, {}\n{t}\n{}",
+            self.evaluation,
+            self.model,
+            ratios.join("\n")
+        )
     }
 }
 
@@ -240,7 +252,7 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
             system: "symmetric jumper".into(),
             backend: backend.into(),
             what: what.into(),
-            nq: nx,
+            size: nx,
             median_ns: m,
             min_ns: lo,
             max_ns: hi,
@@ -310,6 +322,8 @@ pub fn state_equation(model: &Model) -> Result<DynamicsReport, crate::crosscheck
     ));
     let speedup = vec![("f(x, u)".to_string(), t_sb.0 / m)];
     Ok(DynamicsReport {
+        evaluation: "ẋ = f(x, u)",
+        size_name: "nx",
         model: model.file.display().to_string(),
         rows,
         speedup,
@@ -743,7 +757,11 @@ pub fn solve(
     let (mut variables, mut constraints) = (0, 0);
     for config in &configs {
         for _ in 0..repeats.max(1) {
-            let r = crate::solve::run(config, false, &mut |_| {}).map_err(|e| e.to_string())?;
+            let r = crate::solve::run(config, false, &mut |_| {}).map_err(|e| {
+                // No scratch results left behind by a failed solve.
+                let _ = std::fs::remove_dir_all(&out);
+                e.to_string()
+            })?;
             (variables, constraints) = (r.variables, r.constraints);
             runs.push(SolveBenchRun {
                 num_mesh_intervals: config.transcription.num_mesh_intervals,
@@ -798,7 +816,7 @@ impl SolveBenchReport {
             t.add_row(vec![
                 (k + 1).to_string(),
                 r.num_mesh_intervals.to_string(),
-                format!("{:?}", r.status),
+                r.status.name(),
                 r.iterations.to_string(),
                 format!("{:.1}", r.wall_time_s),
                 format!("{:.3}", r.wall_time_s / r.iterations.max(1) as f64),

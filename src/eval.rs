@@ -242,14 +242,17 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         }
         return Ok(out);
     }
+    let ext = |want: &str| {
+        path.extension()
+            .is_some_and(|x| x.eq_ignore_ascii_case(want))
+    };
     let v: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         err(
             format!("line {}, column {}", e.line(), e.column()),
-            if path
-                .extension()
-                .is_some_and(|x| x.eq_ignore_ascii_case("json"))
-            {
+            if ext("json") {
                 e.to_string()
+            } else if ext("sto") || ext("mot") {
+                format!("{e} (read as JSON: a storage file is not an input of `leap eval`, which takes one state as JSON or rows as CSV; `leap analyze` reads a states .sto)")
             } else {
                 format!("{e} (read as JSON: only a file whose name ends in .csv is read as CSV)")
             },

@@ -1707,10 +1707,7 @@ impl SolveReport {
             } else {
                 format!(", {} backend", self.backend)
             },
-            serde_json::to_value(self.status)
-                .ok()
-                .and_then(|v| v.as_str().map(String::from))
-                .unwrap_or_default(),
+            self.status.name(),
             self.moco_status,
             if self.message.is_empty() {
                 String::new()

@@ -154,6 +154,13 @@ fn broken_states_files_name_file_column_and_row_once() {
     one.rows.truncate(1);
     let mut missing = good.clone();
     missing.labels[k] = "pelvis_ty".into();
+    // Ground forces: no state column at all.
+    let forces = leap::io::StoTable {
+        labels: vec!["ground_force_r_vx".into(), "ground_force_r_vy".into()],
+        time: vec![0.0, 0.01, 0.02],
+        rows: vec![vec![0.0, 700.0]; 3],
+        ..Default::default()
+    };
     let mut bad_header = good.clone();
     bad_header
         .metadata
@@ -171,6 +178,11 @@ fn broken_states_files_name_file_column_and_row_once() {
             "missing",
             missing,
             format!("column '{ty}': missing (a states file of this model's symmetric system is needed; `--full` for the full one)"),
+        ),
+        (
+            "forces",
+            forces,
+            "column 'ground_force_r_vx': not a state of the model, nor is any other column: `leap analyze` reads a states file (a solve's `_solution.sto`, a simulation's `_forward_states.sto`), not ground forces or controls".into(),
         ),
         (
             "bad_header",

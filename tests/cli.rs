@@ -862,6 +862,16 @@ fn unclear_messages_of_the_second_fuzzing_round_say_what_happened() {
             && !err.contains("read as JSON"),
         "{err}"
     );
+    // A storage file (a solution) is pointed to `leap analyze`.
+    let err = eval_refused(
+        std::path::Path::new("tests/data/controls/jump_optimal.sto"),
+        "storage file",
+    );
+    assert!(
+        err.contains("a storage file is not an input of `leap eval`")
+            && err.contains("`leap analyze` reads a states .sto"),
+        "{err}"
+    );
     let err = refused(
         Command::cargo_bin("leap").unwrap().args([
             "paths",

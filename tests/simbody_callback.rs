@@ -199,3 +199,27 @@ fn a_persistent_integration_stops_at_its_step_cap_with_an_error() {
         }
     }
 }
+
+/// An accuracy of 1 or more, which Simbody's error-controlled integrators
+/// assert against (aborting the process), is an error of the bridge; for
+/// explicit Euler, which takes it as its fixed step, it is a step.
+#[test]
+fn an_accuracy_of_one_or_more_is_an_error_not_an_abort() {
+    let model = Model::from_file("models/double_pendulum.json").unwrap();
+    let sys = model.system(false).unwrap();
+    let mut sb = SimbodyModel::with_force(&model, &sys, None).unwrap();
+    sb.set_state(0.0, &[0.5, 0.0], &[0.0, 0.0]).unwrap();
+    sb.set_applied_forces(&[0.0, 0.0], &[]).unwrap();
+    for accuracy in [1.0, 2.5, f64::INFINITY, 0.0, f64::NAN] {
+        let e = sb
+            .integration_start(SimbodyIntegrator::RungeKuttaMerson, accuracy, 1e-12, 1.0, 0)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("integrator: accuracy must be"),
+            "{accuracy}: {e}"
+        );
+    }
+    sb.integration_start(SimbodyIntegrator::ExplicitEuler, 1.5, 1e-12, 1.0, 0)
+        .unwrap();
+}

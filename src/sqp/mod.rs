@@ -353,6 +353,14 @@ pub enum SqpStatus {
 }
 
 impl SqpStatus {
+    /// The snake_case name the JSON gives ("solved", "iteration_limit").
+    pub fn name(self) -> String {
+        serde_json::to_value(self)
+            .ok()
+            .and_then(|v| v.as_str().map(String::from))
+            .unwrap_or_default()
+    }
+
     /// Solved or acceptable.
     pub fn success(self) -> bool {
         matches!(self, SqpStatus::Solved | SqpStatus::Acceptable)
