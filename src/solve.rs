@@ -451,6 +451,10 @@ pub struct SolveReport {
     /// default jump from a slow push-off guess "solved" at 35.5 cm and
     /// jumped 18.9 cm forward).
     pub forward_check_agrees: Option<bool>,
+    /// Whether the forward check's feet left the ground with the centre of
+    /// mass moving down: a fall, not a jump (as `leap simulate`'s
+    /// `liftoff_while_falling`). None without a forward check that ran.
+    pub forward_liftoff_while_falling: Option<bool>,
     pub forward_jump_height_rust_m: Option<f64>,
     pub forward_check: Option<ForwardCheckReport>,
     /// How well the mesh resolves the solution (collocation, with the
@@ -1008,6 +1012,10 @@ fn write_results(
         report.forward_check_agrees = report
             .forward_check_difference_m
             .map(|d| d.abs() <= FORWARD_CHECK_TOLERANCE_M);
+        report.forward_liftoff_while_falling = check
+            .summary
+            .as_ref()
+            .map(|s| s.falling_at_liftoff().is_some());
         report.forward_check = Some(check);
     }
     let p = dir.join(format!("{name}_summary.json"));
@@ -1255,6 +1263,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         dual_infeasibility: r.dual_infeasibility,
         forward_jump_height_m: None,
         forward_check_difference_m: None,
+        forward_liftoff_while_falling: None,
         forward_check_agrees: None,
         forward_jump_height_rust_m: None,
         forward_check: None,

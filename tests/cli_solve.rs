@@ -1358,6 +1358,7 @@ fn a_forward_check_that_misses_is_flagged_and_warned_of() {
         "{v}"
     );
     assert!(!stdout.contains("a fall, not a jump"), "{stdout}");
+    assert_eq!(v["forward_liftoff_while_falling"], false, "{v}");
 }
 
 /// As `leap simulate` warns of it, a forward check whose feet leave the
@@ -1377,6 +1378,7 @@ fn a_forward_check_that_falls_is_warned_of() {
         .as_f64()
         .unwrap();
     assert!(vy < 0.0, "the case does not fall: lift-off velocity {vy}");
+    assert_eq!(v["forward_liftoff_while_falling"], true, "{v}");
     assert!(
         stdout.contains(
             "in the forward check the feet left the ground with the centre of mass moving down"
