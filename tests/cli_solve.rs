@@ -1170,6 +1170,15 @@ fn a_solve_stopped_on_the_ground_says_so() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// Ctrl-C: SIGINT to process `pid`.
+fn sigint(pid: u32) {
+    let sent = std::process::Command::new("kill")
+        .args(["-INT", &pid.to_string()])
+        .status()
+        .unwrap();
+    assert!(sent.success());
+}
+
 /// Ctrl-C (SIGINT) during `leap solve` stops the SQP at its next iteration
 /// and writes the results of its last iterate: status
 /// `user_requested_stop` (IPOPT's `User_Requested_Stop` in the solution
@@ -1194,11 +1203,7 @@ fn ctrl_c_stops_a_solve_and_writes_its_results() {
         .spawn()
         .unwrap();
     std::thread::sleep(std::time::Duration::from_secs(3));
-    let killed = std::process::Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(killed.success());
+    sigint(child.id());
     let o = child.wait_with_output().unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
@@ -1245,20 +1250,13 @@ fn a_second_ctrl_c_while_writing_lets_the_results_finish() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    let id = child.id().to_string();
-    let sigint = || {
-        let ok = std::process::Command::new("kill")
-            .args(["-INT", &id])
-            .status()
-            .unwrap();
-        assert!(ok.success());
-    };
+    let id = child.id();
     let mut lines = Vec::new();
     for line in std::io::BufReader::new(child.stderr.take().unwrap()).lines() {
         let line = line.unwrap();
         // Once in the SQP, and once in the forward check.
         if line.starts_with("leap solve: SQP:") || line.starts_with("leap solve: forward check:") {
-            sigint();
+            sigint(id);
         }
         lines.push(line);
     }
@@ -1280,6 +1278,17 @@ fn a_second_ctrl_c_while_writing_lets_the_results_finish() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// The default model with DeGrooteFregly2016Muscle muscles, written as
+/// `dir/dg.json`.
+fn write_degroote_model(dir: &Path) -> PathBuf {
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    let p = dir.join("dg.json");
+    std::fs::write(&p, model.to_string()).unwrap();
+    p
+}
+
 /// A forward check that fails (a DeGrooteFregly2016Muscle model, whose
 /// explicit fibre dynamics Simbody cannot integrate) writes the states it
 /// reached, but the plotting command `leap solve` prints does not offer
@@ -1288,11 +1297,7 @@ fn a_second_ctrl_c_while_writing_lets_the_results_finish() {
 #[test]
 fn a_failed_forward_check_is_not_offered_as_the_plots_reference() {
     let dir = fresh_dir("dg-forward");
-    let mut model: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
-    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
-    let dg = dir.join("dg.json");
-    std::fs::write(&dg, model.to_string()).unwrap();
+    let dg = write_degroote_model(&dir);
     let (_, v) = small_solve(
         &dir,
         &dir.join("guess"),
@@ -1668,10 +1673,7 @@ fn a_system_that_refuses_threads_gets_the_same_solve() {
 #[test]
 fn activation_smoothing_is_refused_for_de_groote_muscles() {
     let dir = fresh_dir("dg-smoothing");
-    let mut model: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
-    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
-    std::fs::write(dir.join("dg.json"), model.to_string()).unwrap();
+    write_degroote_model(&dir);
     let study = dir.join("study.json");
     std::fs::write(
         &study,
