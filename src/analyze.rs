@@ -106,13 +106,22 @@ pub struct JumpAnalysis {
 /// at least 2 rows, time strictly increasing, every value finite.
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<(Vec<f64>, Vec<Vec<f64>>), StoError> {
     let table = crate::io::read_states(eq, path)?;
-    // Not one state column (ground forces, controls): not a states file.
+    // Not one state column (ground forces, controls, pre-4.0 names).
     let columns = eq.model_state_columns();
     if !columns.iter().any(|(l, _)| table.labels.contains(l)) {
+        let old = crate::io::pre_4_state_names(eq);
+        let renamed = table
+            .labels
+            .iter()
+            .find_map(|l| {
+                old.get(l)
+                    .map(|path| format!("; its '{l}' is the pre-4.0 name of '{path}'"))
+            })
+            .unwrap_or_default();
         return Err(StoError::Column {
             file: path.into(),
-            column: table.labels.first().cloned().unwrap_or_default(),
-            reason: "not a state of the model, nor is any other column: `leap analyze` reads a states file (a solve's `_solution.sto`, a simulation's `_forward_states.sto`), not ground forces or controls".into(),
+            column: table.labels.first().cloned().unwrap_or_else(|| "time".into()),
+            reason: format!("no column of the file names a state of the model by its OpenSim 4 path (/jointset/<joint>/<coordinate>/value, /forceset/<muscle>/fiber_length, …): `leap analyze` reads a states file, a solve's `_solution.sto` or a simulation's `_forward_states.sto`{renamed}"),
         });
     }
     let missing = if eq.system.symmetric {

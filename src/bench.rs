@@ -816,7 +816,7 @@ impl SolveBenchReport {
             t.add_row(vec![
                 (k + 1).to_string(),
                 r.num_mesh_intervals.to_string(),
-                r.status.name(),
+                r.status.name().to_string(),
                 r.iterations.to_string(),
                 format!("{:.1}", r.wall_time_s),
                 format!("{:.3}", r.wall_time_s / r.iterations.max(1) as f64),

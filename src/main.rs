@@ -1319,7 +1319,7 @@ fn simulate(
             if json {
                 outln!("{}", serde_json::to_string_pretty(&v)?);
             }
-            leap::errln!("error: integration stopped at t = {} s, the last state it reached: {} (state and partial results written to {})", failure.t, failure.cause, out_dir.display());
+            leap::errln!("error: integration stopped: {} (the last state reached at t = {} s; it and the partial results written to {})", failure.cause, failure.t, out_dir.display());
             Ok(ExitCode::from(1))
         }
     }
@@ -1345,7 +1345,7 @@ fn solve(
     let (flag, writes, warned) = (interrupt.clone(), writing.clone(), AtomicBool::new(false));
     let handler = ctrlc::set_handler(move || {
         let again = flag.swap(true, Ordering::Relaxed);
-        if writes.load(Ordering::Relaxed) {
+        if writes.load(Ordering::SeqCst) {
             if !warned.swap(true, Ordering::Relaxed) {
                 leap::errln!("leap solve: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
                 return;

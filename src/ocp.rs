@@ -243,7 +243,7 @@ fn state_bound_source(eq: &StateEquation, i: usize) -> String {
     } else if i < 2 * n {
         "the problem's speed_bound".into()
     } else if i < 2 * n + nm {
-        "the problem's fiber_length_bounds times the optimal fibre length, above Thelen's minimum fibre length by min_fiber_length_margin".into()
+        "the problem's fiber_length_bounds times the optimal fibre length, above the muscle law's minimum fibre length by min_fiber_length_margin".into()
     } else {
         format!("activations lie in [{MIN_ACTIVATION}, 1]")
     }

@@ -142,7 +142,7 @@ pub struct Trajectory {
 
 /// A simulation stopped early: the cause, where, and what was computed.
 #[derive(Debug, thiserror::Error)]
-#[error("integration stopped at t = {t} s, the last state it reached: {cause}")]
+#[error("integration stopped: {cause} (the last state reached at t = {t} s)")]
 pub struct SimulationFailure {
     /// The time of the last state reached (the failing step's start).
     pub t: f64,

@@ -890,7 +890,7 @@ fn finish(
     progress: &mut dyn FnMut(&str),
 ) -> Result<SolveReport, SolveError> {
     if let Some(w) = &config.writing {
-        w.store(true, std::sync::atomic::Ordering::Relaxed);
+        w.store(true, std::sync::atomic::Ordering::SeqCst);
     }
     let (dir, name) = (&config.output_directory, &config.name);
     // Each result file as it was: every write replaces its file by a new

@@ -161,6 +161,11 @@ fn broken_states_files_name_file_column_and_row_once() {
         rows: vec![vec![0.0, 700.0]; 3],
         ..Default::default()
     };
+    // States under their pre-4.0 names.
+    let pre_4 = leap::io::StoTable {
+        labels: vec!["knee_angle_r".into(), "knee_angle_r_u".into()],
+        ..forces.clone()
+    };
     let mut bad_header = good.clone();
     bad_header
         .metadata
@@ -182,7 +187,12 @@ fn broken_states_files_name_file_column_and_row_once() {
         (
             "forces",
             forces,
-            "column 'ground_force_r_vx': not a state of the model, nor is any other column: `leap analyze` reads a states file (a solve's `_solution.sto`, a simulation's `_forward_states.sto`), not ground forces or controls".into(),
+            "column 'ground_force_r_vx': no column of the file names a state of the model by its OpenSim 4 path (/jointset/<joint>/<coordinate>/value, /forceset/<muscle>/fiber_length, …): `leap analyze` reads a states file, a solve's `_solution.sto` or a simulation's `_forward_states.sto`".into(),
+        ),
+        (
+            "pre_4",
+            pre_4,
+            "column 'knee_angle_r': no column of the file names a state of the model by its OpenSim 4 path (/jointset/<joint>/<coordinate>/value, /forceset/<muscle>/fiber_length, …): `leap analyze` reads a states file, a solve's `_solution.sto` or a simulation's `_forward_states.sto`; its 'knee_angle_r' is the pre-4.0 name of '/jointset/knee_r/knee_angle_r/value'".into(),
         ),
         (
             "bad_header",

@@ -1611,6 +1611,28 @@ fn a_system_that_refuses_threads_gets_the_same_solve() {
     for f in [&bin, &model] {
         std::fs::set_permissions(f, PermissionsExt::from_mode(0o755)).unwrap();
     }
+    // The limit binds where the solves run: a shell there cannot fork.
+    // (bash sets the limit; dash, exec'd, does not retry a failed fork.)
+    let shell = |limited: bool| {
+        let mut c = if limited && root {
+            let mut c = std::process::Command::new("setpriv");
+            c.args(["--reuid=65534", "--regid=65534", "--clear-groups", "bash"]);
+            c
+        } else {
+            std::process::Command::new("bash")
+        };
+        c.arg("-c");
+        c
+    };
+    let probe = shell(true)
+        .arg("ulimit -u 1; exec sh -c 'true & wait'")
+        .output()
+        .unwrap();
+    assert!(
+        !probe.status.success(),
+        "ulimit -u 1 does not bind here: {}",
+        String::from_utf8_lossy(&probe.stderr)
+    );
     for method in ["collocation", "shooting"] {
         let args = [
             "solve",
@@ -1626,16 +1648,8 @@ fn a_system_that_refuses_threads_gets_the_same_solve() {
         ];
         let run = |limited: bool| {
             let out = dir.join(format!("{method}_{limited}"));
-            let mut c = if limited && root {
-                let mut c = std::process::Command::new("setpriv");
-                c.args(["--reuid=65534", "--regid=65534", "--clear-groups", "bash"]);
-                c
-            } else {
-                std::process::Command::new("bash")
-            };
             let limit = if limited { "ulimit -u 1; " } else { "" };
-            let o = c
-                .arg("-c")
+            let o = shell(limited)
                 .arg(format!("{limit}exec \"$0\" \"$@\""))
                 .arg(&bin)
                 .args(args)

@@ -527,7 +527,6 @@ fn joint_and_path_point_fields_are_checked_against_their_type() {
     );
 }
 
-/// `leap eval` reports contact forces per sphere name.
 /// A body welded to ground (a platform, a force plate) had passed the
 /// checks and panicked in every command that built the multibody system.
 #[test]
@@ -548,11 +547,13 @@ fn a_weld_to_ground_is_refused_naming_the_joint() {
         e.contains(&format!("joints[{j}].parent")) && e.contains("weld"),
         "{e}"
     );
-    // The same body welded to the pelvis is a model leap takes.
+    // The same body welded to the pelvis is a model leap takes, and builds.
     v["joints"][j]["parent"] = "pelvis".into();
-    Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    let m = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    leap::multibody::Multibody::new(&m, &m.system(false).unwrap());
 }
 
+/// `leap eval` reports contact forces per sphere name.
 #[test]
 fn contact_spheres_need_distinct_names_and_at_least_one() {
     let mut v = jumper_json();

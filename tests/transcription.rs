@@ -529,6 +529,8 @@ fn settings_errors_name_what_is_wrong() {
     assert_eq!(p.name, ocp.eq.state_names()[knee]);
     assert_eq!(p.nodes, outside);
     assert_eq!((p.lower, p.upper), (lo, hi));
+    // The farthest is the last node's, the whole degrees value.
+    assert_eq!((p.value, p.time_s), (bent[knee], *mesh.last().unwrap()));
     assert!(p.likely_degrees, "{p}");
     assert!(p.to_string().contains("inDegrees=yes"), "{p}");
     assert!(p.bound.contains("coordinates["), "{}", p.bound);

@@ -354,11 +354,20 @@ pub enum SqpStatus {
 
 impl SqpStatus {
     /// The snake_case name the JSON gives ("solved", "iteration_limit").
-    pub fn name(self) -> String {
-        serde_json::to_value(self)
-            .ok()
-            .and_then(|v| v.as_str().map(String::from))
-            .unwrap_or_default()
+    pub fn name(self) -> &'static str {
+        match self {
+            SqpStatus::Solved => "solved",
+            SqpStatus::Acceptable => "acceptable",
+            SqpStatus::IterationLimit => "iteration_limit",
+            SqpStatus::Infeasible => "infeasible",
+            SqpStatus::Unbounded => "unbounded",
+            SqpStatus::RestorationFailed => "restoration_failed",
+            SqpStatus::LineSearchFailed => "line_search_failed",
+            SqpStatus::NumericalError => "numerical_error",
+            SqpStatus::EvaluationError => "evaluation_error",
+            SqpStatus::InvalidProblem => "invalid_problem",
+            SqpStatus::UserRequestedStop => "user_requested_stop",
+        }
     }
 
     /// Solved or acceptable.
