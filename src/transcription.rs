@@ -1945,54 +1945,48 @@ impl Transcription {
                 us[k][i] = controls[a][i] + s * (controls[b][i] - controls[a][i]);
             }
         }
+        let projected = self.states_out_of_bounds(&xs, &times);
         let mut v = self.pack(&xs, &us, tf)?;
         let n = v.len();
         let (mut lo, mut hi) = (vec![0.0; n], vec![0.0; n]);
         self.variable_bounds(&mut lo, &mut hi);
-        let projected = self.states_out_of_bounds(&v, &lo, &hi);
         for i in 0..n {
             v[i] = v[i].clamp(lo[i], hi[i]);
         }
         Ok((v, projected))
     }
 
-    /// The states of variable vector `v` outside their bounds `lo`, `hi`
-    /// (beyond rounding: 1e-9 relative), one entry per state over the nodes.
-    fn states_out_of_bounds(&self, v: &[f64], lo: &[f64], hi: &[f64]) -> Vec<GuessProjection> {
+    /// The node states `xs` (node 0, the fixed squat, skipped) outside the
+    /// problem's state bounds (beyond rounding: 1e-9 relative), one entry
+    /// per state over the nodes at `times`.
+    fn states_out_of_bounds(&self, xs: &[Vec<f64>], times: &[f64]) -> Vec<GuessProjection> {
+        let (lo, hi) = (&self.ocp.state_lower, &self.ocp.state_upper);
         let names = self.ocp.eq.state_names();
         let angular = crate::io::angular_columns(&self.ocp.eq);
-        let times = self.mesh_times(self.final_time(v));
-        let mut out: Vec<GuessProjection> = Vec::new();
+        let mut out = Vec::new();
         for i in 0..self.nx {
+            let tol = 1e-9 * (1.0 + lo[i].abs().max(hi[i].abs()));
             let mut entry: Option<GuessProjection> = None;
             let mut largest = 0.0;
-            for (k, &t) in times.iter().enumerate() {
-                let Some(j) = self.state_index(k, i) else {
-                    continue;
-                };
-                let excess = (lo[j] - v[j]).max(v[j] - hi[j]);
-                let tol = 1e-9 * (1.0 + lo[j].abs().max(hi[j].abs()));
+            for (x, &t) in xs.iter().zip(times).skip(1) {
+                let excess = (lo[i] - x[i]).max(x[i] - hi[i]);
                 if excess.is_nan() || excess <= tol {
                     continue;
                 }
                 let e = entry.get_or_insert_with(|| GuessProjection {
-                    name: names
-                        .get(i)
-                        .cloned()
-                        .unwrap_or_else(|| format!("state {i}")),
+                    name: names[i].clone(),
                     nodes: 0,
-                    value: v[j],
+                    value: x[i],
                     time_s: t,
-                    lower: lo[j],
-                    upper: hi[j],
+                    lower: lo[i],
+                    upper: hi[i],
                     bound: self.ocp.state_bound_source(i),
                     likely_degrees: false,
                 });
                 e.nodes += 1;
                 if excess > largest {
                     largest = excess;
-                    e.value = v[j];
-                    e.time_s = t;
+                    (e.value, e.time_s) = (x[i], t);
                 }
             }
             if let Some(e) = &mut entry {
