@@ -400,11 +400,7 @@ impl StateEquation {
         out: &mut GivenPaths<S>,
     ) -> Result<(), OdeError> {
         let (n, nm) = (self.nq(), self.nm());
-        for (what, got, want) in [("q", q.len(), n), ("qdot", qd.len(), n)] {
-            if got != want {
-                return Err(OdeError::Length { what, got, want });
-            }
-        }
+        check_lengths([("q", q.len(), n), ("qdot", qd.len(), n)])?;
         out.at.clear();
         out.at.extend(q.iter().chain(qd).map(|v| v.re()));
         out.length.resize(nm, S::zero());
@@ -457,27 +453,11 @@ impl StateEquation {
         xdot: &mut [S],
     ) -> Result<(), OdeError> {
         let (n, nm) = (self.nq(), self.nm());
-        if x.len() != self.nx() {
-            return Err(OdeError::Length {
-                what: "x",
-                got: x.len(),
-                want: self.nx(),
-            });
-        }
-        if u.len() != nm {
-            return Err(OdeError::Length {
-                what: "u",
-                got: u.len(),
-                want: nm,
-            });
-        }
-        if xdot.len() != self.nx() {
-            return Err(OdeError::Length {
-                what: "xdot",
-                got: xdot.len(),
-                want: self.nx(),
-            });
-        }
+        check_lengths([
+            ("x", x.len(), self.nx()),
+            ("u", u.len(), nm),
+            ("xdot", xdot.len(), self.nx()),
+        ])?;
         let (q, rest) = x.split_at(n);
         let (qd, rest) = rest.split_at(n);
         let (lm, act) = rest.split_at(nm);
@@ -560,13 +540,7 @@ impl StateEquation {
         x: &[f64],
     ) -> Result<(), OdeError> {
         let n = self.nq();
-        if x.len() != self.nx() {
-            return Err(OdeError::Length {
-                what: "x",
-                got: x.len(),
-                want: self.nx(),
-            });
-        }
+        check_lengths([("x", x.len(), self.nx())])?;
         self.multibody.set_state(&mut ws.mb, &x[..n], &x[n..2 * n]);
         let view = ModelView {
             mb: &self.multibody,
@@ -655,6 +629,14 @@ impl StateEquation {
             }
         }
         Ok(())
+    }
+}
+
+/// Each (what, length, wanted length) of an evaluation's arguments.
+fn check_lengths<const N: usize>(args: [(&'static str, usize, usize); N]) -> Result<(), OdeError> {
+    match args.into_iter().find(|&(_, got, want)| got != want) {
+        Some((what, got, want)) => Err(OdeError::Length { what, got, want }),
+        None => Ok(()),
     }
 }
 

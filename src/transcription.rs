@@ -1072,8 +1072,8 @@ fn run_jobs<W: Send, J: Send>(
     run: &(impl Fn(&mut W, J) -> Result<(), (usize, String)> + Sync),
 ) -> Result<(), (usize, String)> {
     // Each job in a slot that its thread takes: a job whose thread the
-    // system refuses (a process limit) stays there, and this thread runs
-    // it after the first.
+    // system refuses (a process limit) stays there for this thread, which
+    // runs the first job and then the refused ones in turn.
     let slots: Vec<std::sync::Mutex<Option<(&mut W, J)>>> = workers
         .iter_mut()
         .zip(jobs)
@@ -1088,31 +1088,32 @@ fn run_jobs<W: Send, J: Send>(
         None => Ok(()),
     };
     std::thread::scope(|s| {
-        let mut handles = Vec::new();
-        let mut here = Vec::new();
-        for (i, slot) in slots.iter().enumerate() {
-            let spawned = (i > 0)
-                .then(|| {
-                    std::thread::Builder::new()
-                        .spawn_scoped(s, move || run_slot(slot))
-                        .ok()
-                })
-                .flatten();
-            match spawned {
-                Some(h) => handles.push((i, h)),
-                None => here.push(i),
-            }
-        }
-        // Results in job order: the first error is the first job's.
-        let mut results: Vec<_> = here.into_iter().map(|i| (i, run_slot(&slots[i]))).collect();
-        for (i, h) in handles {
-            let r = h
-                .join()
-                .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into())));
-            results.push((i, r));
-        }
-        results.sort_by_key(|(i, _)| *i);
-        results.into_iter().try_for_each(|(_, r)| r)
+        let handles: Vec<_> = slots
+            .iter()
+            .enumerate()
+            .map(|(i, slot)| {
+                (i > 0)
+                    .then(|| {
+                        std::thread::Builder::new()
+                            .spawn_scoped(s, move || run_slot(slot))
+                            .ok()
+                    })
+                    .flatten()
+            })
+            .collect();
+        // Every job ends (joined or run here) before the first error in job
+        // order is returned.
+        let results: Vec<_> = slots
+            .iter()
+            .zip(handles)
+            .map(|(slot, h)| match h {
+                Some(h) => h
+                    .join()
+                    .unwrap_or_else(|_| Err((lo, "an evaluation thread panicked".into()))),
+                None => run_slot(slot),
+            })
+            .collect();
+        results.into_iter().collect()
     })
 }
 

@@ -872,24 +872,3 @@ fn a_failed_line_search_records_no_step() {
     assert!(last.ls_trials > 1, "{last:?}");
     assert_eq!((last.step_norm, last.alpha), (0.0, 0.0), "{last:?}");
 }
-
-/// The status names the tables print are the JSON's (serde's snake_case).
-#[test]
-fn status_names_are_the_jsons() {
-    use leap::sqp::SqpStatus::*;
-    for s in [
-        Solved,
-        Acceptable,
-        IterationLimit,
-        Infeasible,
-        Unbounded,
-        RestorationFailed,
-        LineSearchFailed,
-        NumericalError,
-        EvaluationError,
-        InvalidProblem,
-        UserRequestedStop,
-    ] {
-        assert_eq!(serde_json::to_value(s).unwrap(), s.name(), "{s:?}");
-    }
-}

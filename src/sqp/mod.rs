@@ -323,9 +323,8 @@ impl Default for SqpSettings {
     }
 }
 
-/// How a solve ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+/// How a solve ended (serialized by [`SqpStatus::name`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SqpStatus {
     /// Converged to the requested tolerances.
     Solved,
@@ -352,8 +351,15 @@ pub enum SqpStatus {
     UserRequestedStop,
 }
 
+impl Serialize for SqpStatus {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
 impl SqpStatus {
-    /// The snake_case name the JSON gives ("solved", "iteration_limit").
+    /// The snake_case name the JSON and the tables give ("solved",
+    /// "iteration_limit").
     pub fn name(self) -> &'static str {
         match self {
             SqpStatus::Solved => "solved",
