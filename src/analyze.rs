@@ -19,8 +19,10 @@
 //! the trapezoidal rule on the file's rows).
 
 use crate::io::StoError;
-use crate::ode::StateEquation;
+use crate::laws::OpenSimLaws;
+use crate::ode::{ForceLaws, MuscleRates, StateEquation};
 use serde::Serialize;
+use std::cell::RefCell;
 use std::path::Path;
 
 /// Activation at or above which a muscle counts as saturated.
@@ -43,7 +45,8 @@ pub struct MuscleWork {
     pub saturated_fraction: f64,
     /// Peak tendon force / maximum isometric force.
     pub peak_force_ratio: f64,
-    /// Peak fibre shortening speed / (v_max · l_opt).
+    /// Peak fibre shortening speed / (v_max · l_opt), over the rows where
+    /// the muscle has a fibre velocity; NaN (null in JSON) where none has.
     pub peak_shortening_ratio: f64,
     /// ∫ max(0, P) dt and ∫ P dt with P = F_T · (−dL_MT/dt), both sides (J).
     pub positive_work_j: f64,
@@ -152,6 +155,53 @@ pub enum AnalysisError {
     NotFinite(f64, &'static str, String),
 }
 
+/// OpenSim's laws as the analysis reads a row: a muscle whose explicit
+/// fibre velocity does not exist there gets NaN for it, flagged in
+/// `missing` (by model muscle), where [`OpenSimLaws`] refuses the whole row.
+/// De Groote's inverted force–velocity curve overflows where no fibre speed
+/// balances the tendon force, as at a collocation solution's nodes, whose
+/// force balances midpoint Euler enforces at the interval midpoints only.
+/// What the analysis integrates (tendon forces, path speeds, ground and
+/// passive forces) needs no fibre velocity.
+struct RowLaws<'a> {
+    laws: &'a OpenSimLaws,
+    missing: RefCell<Vec<bool>>,
+}
+
+impl ForceLaws<f64> for RowLaws<'_> {
+    fn muscle(
+        &self,
+        m: usize,
+        a: f64,
+        lm: f64,
+        lmt: f64,
+        vmt: f64,
+        u: f64,
+    ) -> Result<MuscleRates<f64>, String> {
+        let r = self.laws.raw_muscle_rates(m, a, lm, lmt, vmt, u);
+        if r.fiber_velocity.is_finite() && r.tendon_force.is_finite() {
+            return Ok(r);
+        }
+        if r.tendon_force.is_finite() {
+            if let Some(flag) = self.missing.borrow_mut().get_mut(m) {
+                *flag = true;
+            }
+            return Ok(MuscleRates {
+                fiber_velocity: f64::NAN,
+                ..r
+            });
+        }
+        // The refusal, with its message.
+        self.laws.muscle(m, a, lm, lmt, vmt, u)
+    }
+    fn sphere(&self, k: usize, p: [f64; 3], v: [f64; 3]) -> ([f64; 3], [f64; 3]) {
+        self.laws.sphere(k, p, v)
+    }
+    fn ligament(&self, l: usize, q: f64, qd: f64) -> f64 {
+        self.laws.ligament(l, q, qd)
+    }
+}
+
 /// Per row: what the analysis integrates.
 struct Sample {
     t: f64,
@@ -159,7 +209,9 @@ struct Sample {
     tendon_force: Vec<f64>,
     /// −dL_MT/dt (shortening positive).
     shortening_speed: Vec<f64>,
+    /// NaN where the muscle has none ([`RowLaws`]).
     fiber_velocity: Vec<f64>,
+    fiber_length: Vec<f64>,
     passive_power: f64,
     vertical_grf: f64,
     energy: f64,
@@ -169,7 +221,7 @@ struct Sample {
 
 fn sample(
     eq: &StateEquation,
-    laws: &crate::laws::OpenSimLaws,
+    laws: &RowLaws,
     ws: &mut crate::ode::StateWorkspace<f64>,
     t: f64,
     x: &[f64],
@@ -226,6 +278,7 @@ fn sample(
         tendon_force: ws.tendon_force.clone(),
         shortening_speed: ws.mtu_speed.iter().map(|v| -v).collect(),
         fiber_velocity: xdot[2 * n..2 * n + nm].to_vec(),
+        fiber_length: x[2 * n..2 * n + nm].to_vec(),
         passive_power,
         vertical_grf,
         energy,
@@ -256,6 +309,12 @@ pub fn analyze(
     let mut warnings = Vec::new();
     let mut warned = vec![false; eq.nq()];
     let mut warned_fibre = vec![false; eq.nm()];
+    let row_laws = RowLaws {
+        laws,
+        missing: RefCell::new(vec![false; eq.model.muscles.len()]),
+    };
+    // Per carried muscle: the rows without a fibre velocity, and the first.
+    let mut no_velocity: Vec<(usize, f64)> = vec![(0, f64::NAN); nm];
     // A window's ends hold the rows a hair beyond them: report times
     // summed step by step (0.2000000000000001) are the rows meant.
     let slack = |t: f64| 1e-9 * (1.0 + t.abs());
@@ -282,7 +341,17 @@ pub fn analyze(
                 ));
             }
         }
-        let s = sample(eq, laws, &mut ws, *t, x)?;
+        row_laws.missing.borrow_mut().fill(false);
+        let s = sample(eq, &row_laws, &mut ws, *t, x)?;
+        for (k, &mi) in eq.muscles.iter().enumerate() {
+            if row_laws.missing.borrow()[mi] {
+                let (count, first) = &mut no_velocity[k];
+                if *count == 0 {
+                    *first = *t;
+                }
+                *count += 1;
+            }
+        }
         let fy = s.vertical_grf;
         samples.push(s);
         if window.is_none() {
@@ -319,6 +388,12 @@ pub fn analyze(
             trapezoid(&|s: &Sample| f64::from(u8::from(s.activation[k] >= SATURATED_ACTIVATION)));
         let vmax = spec.max_contraction_velocity * spec.optimal_fiber_length;
         let peak = |f: &dyn Fn(&Sample) -> f64| samples.iter().map(f).fold(f64::MIN, f64::max);
+        // Over the rows with a fibre velocity; NaN if none has one.
+        let peak_shortening = samples
+            .iter()
+            .map(|s| -s.fiber_velocity[k])
+            .filter(|v| !v.is_nan())
+            .fold(f64::NAN, f64::max);
         muscle_work += net;
         muscles.push(MuscleWork {
             name: spec.name.clone(),
@@ -330,26 +405,67 @@ pub fn analyze(
                 0.0
             },
             peak_force_ratio: peak(&|s| s.tendon_force[k]) / spec.max_isometric_force,
-            peak_shortening_ratio: peak(&|s| -s.fiber_velocity[k]) / vmax,
+            peak_shortening_ratio: peak_shortening / vmax,
             positive_work_j: positive,
             net_work_j: net,
         });
     }
     // A Hill muscle's fibre cannot shorten much faster than v_max: states
     // whose fibre lengths do are another muscle law's or model's.
-    let mut too_fast: Vec<&MuscleWork> = muscles
+    // Beside each, how fast its fibre length changes from row to row in
+    // the file: a collocation solution's nodes obey the fibre dynamics
+    // only between them.
+    let mut too_fast: Vec<(usize, &MuscleWork)> = muscles
         .iter()
-        .filter(|m| m.peak_shortening_ratio > IMPOSSIBLE_SHORTENING_RATIO)
+        .enumerate()
+        .filter(|(_, m)| m.peak_shortening_ratio > IMPOSSIBLE_SHORTENING_RATIO)
         .collect();
-    too_fast.sort_by(|a, b| b.peak_shortening_ratio.total_cmp(&a.peak_shortening_ratio));
+    too_fast.sort_by(|a, b| {
+        b.1.peak_shortening_ratio
+            .total_cmp(&a.1.peak_shortening_ratio)
+    });
     if !too_fast.is_empty() {
         let list: Vec<String> = too_fast
             .iter()
-            .map(|m| format!("{} {:.2}", m.name, m.peak_shortening_ratio))
+            .map(|&(k, m)| {
+                let spec = &eq.model.muscles[eq.muscles[k]].spec;
+                let vmax = spec.max_contraction_velocity * spec.optimal_fiber_length;
+                let between = samples
+                    .windows(2)
+                    .map(|w| -(w[1].fiber_length[k] - w[0].fiber_length[k]) / (w[1].t - w[0].t))
+                    .fold(f64::MIN, f64::max);
+                format!(
+                    "{} {:.2} ({:.2} from row to row)",
+                    m.name,
+                    m.peak_shortening_ratio,
+                    // + 0.0: no "-0.00" for a fibre at rest.
+                    between / vmax + 0.0
+                )
+            })
             .collect();
         warnings.push(format!(
-            "fibres shorten faster than the model's muscles can, in times their maximum contraction velocity: {}; the file's fibre lengths do not fit this model (were they written with another model or muscle_model? give it with --model)",
+            "by the model's force–velocity law, fibres shorten faster than muscles can, in times their maximum contraction velocity: {}; the file's states do not obey this model's fibre dynamics (written with another model or muscle_model? give it with --model; a collocation solution's nodes obey them only between nodes)",
             list.join(", ")
+        ));
+    }
+    let without: Vec<String> = eq
+        .muscles
+        .iter()
+        .zip(&no_velocity)
+        .filter(|(_, (count, _))| *count > 0)
+        .map(|(&mi, (count, first))| {
+            format!(
+                "{} at {count} row{} (the first at t = {} s)",
+                eq.model.muscles[mi].spec.name,
+                if *count == 1 { "" } else { "s" },
+                crate::io::readable(*first)
+            )
+        })
+        .collect();
+    if !without.is_empty() {
+        warnings.push(format!(
+            "no fibre speed balances the tendon force of {}: the force–velocity curve cannot reach that force at the row's activation and fibre length (a collocation solution's nodes, whose force balances midpoint Euler enforces at the interval midpoints only, may hold such states); the peak fibre speeds leave those rows out, the work and forces do not need them",
+            without.join(", ")
         ));
     }
     muscles.sort_by(|a, b| b.net_work_j.total_cmp(&a.net_work_j));

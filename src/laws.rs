@@ -913,6 +913,34 @@ impl ForceLaws<f64> for SettableBalanceLaws {
     }
 }
 
+impl OpenSimLaws {
+    /// Muscle `m`'s rates as its law gives them, possibly non-finite (an
+    /// explicit fibre velocity that does not exist: De Groote's inverted
+    /// force–velocity curve overflows where no fibre speed balances the
+    /// tendon force); [`ForceLaws::muscle`] refuses those.
+    pub fn raw_muscle_rates<S: Scalar>(
+        &self,
+        m: usize,
+        a: S,
+        lm: S,
+        lmt: S,
+        vmt: S,
+        u: S,
+    ) -> MuscleRates<S> {
+        match &self.muscles[m] {
+            MuscleLaw::Thelen(t) => t.rates(a, lm, lmt, u),
+            law => {
+                let info = law.calc(a, lm, lmt, vmt, u);
+                MuscleRates {
+                    tendon_force: info.tendon_force,
+                    fiber_velocity: info.fiber_velocity,
+                    activation_rate: info.activation_rate,
+                }
+            }
+        }
+    }
+}
+
 impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
     fn muscle(
         &self,
@@ -923,18 +951,7 @@ impl<S: Scalar> ForceLaws<S> for OpenSimLaws {
         vmt: S,
         u: S,
     ) -> Result<MuscleRates<S>, String> {
-        let r = match &self.muscles[m] {
-            MuscleLaw::Thelen(t) => t.rates(a, lm, lmt, u),
-            law => {
-                let info = law.calc(a, lm, lmt, vmt, u);
-                MuscleRates {
-                    tendon_force: info.tendon_force,
-                    fiber_velocity: info.fiber_velocity,
-                    activation_rate: info.activation_rate,
-                }
-            }
-        };
-        finite_rates(r, a, lm, lmt)
+        finite_rates(self.raw_muscle_rates(m, a, lm, lmt, vmt, u), a, lm, lmt)
     }
     fn sphere(&self, k: usize, p: [S; 3], v: [S; 3]) -> ([S; 3], [S; 3]) {
         match &self.contact {

@@ -1181,6 +1181,17 @@ fn simulate(
     };
     leap::solve::create_results_dir(&out_dir)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
+    // Until here Ctrl-C quits with nothing written. While the files are
+    // written, one press is absorbed with a word, so that this run's first
+    // files do not stand beside an earlier run's others; a further press
+    // quits.
+    let warned = std::sync::atomic::AtomicBool::new(false);
+    let _ = ctrlc::set_handler(move || {
+        if warned.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+        leap::errln!("leap simulate: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
+    });
     let controls_range = match &exc {
         StudyExcitation::Controls(c) => c.time.first().zip(c.time.last()).map(|(a, b)| (*a, *b)),
         StudyExcitation::BangBang(_) => None,

@@ -1784,9 +1784,9 @@ impl SolveReport {
                 h.shifted, h.qps, h.median, h.max
             ));
         }
-        if self.max_constraint_violation.is_nan()
-            || self.max_constraint_violation > PAPER_CONSTRAINT_TOLERANCE
-        {
+        if self.max_constraint_violation.is_nan() {
+            s.push_str("  warning: the constraints could not be evaluated at the returned iterate (its violation is null in the JSON): its jump height, contact time, lift-off velocity and forces are not to be believed\n");
+        } else if self.max_constraint_violation > PAPER_CONSTRAINT_TOLERANCE {
             s.push_str(&format!(
                 "  warning: the returned iterate violates a constraint by {:.2e}, above the paper's {PAPER_CONSTRAINT_TOLERANCE:e} (the history CSV's `max_violation_constraint` names each iteration's most violated one): its jump height, contact time, lift-off velocity and forces are not to be believed\n",
                 self.max_constraint_violation,
@@ -1868,6 +1868,7 @@ impl SolveReport {
                 let fastest = a
                     .muscles
                     .iter()
+                    .filter(|m| !m.peak_shortening_ratio.is_nan())
                     .max_by(|x, y| x.peak_shortening_ratio.total_cmp(&y.peak_shortening_ratio));
                 let full = a
                     .muscles

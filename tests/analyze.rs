@@ -267,7 +267,7 @@ fn absurd_states_are_warned_of_or_refused_and_one_row_windows_refused() {
     assert_eq!(a.warnings.len(), 1, "{:?}", a.warnings);
     assert!(
         a.warnings[0].starts_with(&format!(
-            "fibres shorten faster than the model's muscles can, in times their maximum contraction velocity: vas_int_r {:.2};",
+            "by the model's force–velocity law, fibres shorten faster than muscles can, in times their maximum contraction velocity: vas_int_r {:.2} (0.00 from row to row);",
             m.peak_shortening_ratio
         )),
         "{:?}",
@@ -295,4 +295,83 @@ fn absurd_states_are_warned_of_or_refused_and_one_row_windows_refused() {
         e,
         "one row between 0.005 s and 0.015 s (t = 0.01 s): a window needs two rows or more to integrate over"
     );
+}
+
+/// A DeGrooteFregly2016Muscle state in which no fibre speed balances the
+/// tendon force (its inverted force–velocity curve overflows), as a
+/// collocation solution's last node can hold: midpoint Euler enforces the
+/// force balance at the interval midpoints only. The state equation
+/// refuses such a row; the analysis reads it, warns of it, and leaves it
+/// out of that muscle's peak fibre speed alone.
+#[test]
+fn a_row_without_a_fibre_velocity_is_warned_of_not_refused() {
+    let mut model = leap::model::Model::from_file("models/jumper.json").unwrap();
+    model.muscle_model = leap::model::MuscleModel::DeGrooteFregly2016Muscle;
+    let eq = StateEquation::new(&model, true, PathSmoothing::Exact).unwrap();
+    let laws = OpenSimLaws::new(&model).unwrap();
+    let ocp = leap::ocp::JumpOcp::new(&model, Default::default()).unwrap();
+    let x0 = ocp.x0().to_vec();
+    let names = eq.state_names();
+    let col = names
+        .iter()
+        .position(|l| l == "/forceset/soleus_r/fiber_length")
+        .unwrap();
+    let spec = &model
+        .muscles
+        .iter()
+        .find(|m| m.spec.name == "soleus_r")
+        .unwrap()
+        .spec;
+    let time = vec![0.0, 0.01, 0.02];
+    let mut rows = vec![x0.clone(); 3];
+    // The fibre just above its shortest (where it stands at its
+    // pennation's right angle; the DeGroote solution's soleus reached
+    // 1.001 times it) stretches the tendon far beyond what it can hold at
+    // the squat's activation.
+    rows[1][col] = 1.02 * spec.optimal_fiber_length * spec.pennation_angle_at_optimal.sin();
+    let mut ws = eq.workspace::<f64>();
+    let mut xdot = vec![0.0; eq.nx()];
+    let u = rows[1][eq.nx() - eq.nm()..].to_vec();
+    let refused = eq
+        .rhs(&laws, &mut ws, &rows[1], &u, &mut xdot)
+        .unwrap_err()
+        .to_string();
+    assert!(refused.contains("soleus_r"), "{refused}");
+    let a = analyze(&eq, &laws, &time, &rows, None).unwrap();
+    assert_eq!(a.warnings.len(), 1, "{:?}", a.warnings);
+    assert!(
+        a.warnings[0].starts_with(
+            "no fibre speed balances the tendon force of soleus_r at 1 row (the first at t = 0.01 s):"
+        ),
+        "{:?}",
+        a.warnings
+    );
+    let sol = a.muscles.iter().find(|m| m.name == "soleus_r").unwrap();
+    // Its peak speed from the squat's rows, where the fibres rest; its
+    // force from all three.
+    assert!(
+        sol.peak_shortening_ratio.abs() < 1e-3,
+        "{}",
+        sol.peak_shortening_ratio
+    );
+    let rest = analyze(&eq, &laws, &time, &vec![x0.clone(); 3], None).unwrap();
+    let sol_rest = rest.muscles.iter().find(|m| m.name == "soleus_r").unwrap();
+    assert!(
+        sol.peak_force_ratio.is_finite() && sol.peak_force_ratio > sol_rest.peak_force_ratio,
+        "{} against {} at rest",
+        sol.peak_force_ratio,
+        sol_rest.peak_force_ratio
+    );
+    // Every other muscle's figures are the resting rows' own.
+    for (m, r) in a.muscles.iter().zip(&rest.muscles) {
+        if m.name != "soleus_r" {
+            assert_eq!(m.name, r.name);
+            assert_eq!(
+                m.peak_shortening_ratio, r.peak_shortening_ratio,
+                "{}",
+                m.name
+            );
+            assert_eq!(m.peak_force_ratio, r.peak_force_ratio, "{}", m.name);
+        }
+    }
 }
