@@ -1413,6 +1413,29 @@ impl Model {
                     ),
                 ));
             }
+            // DeGroote's curves are fixed: Thelen's shape constants would
+            // be read and then have no effect. FmaxTendonStrain and
+            // FmaxMuscleStrain carry over (its tendon_strain_at_one_norm_force
+            // and passive_fiber_strain_at_one_norm_force).
+            if spec.forces.muscle_model == MuscleModel::DeGrooteFregly2016Muscle {
+                for (name, v, default) in [
+                    ("KshapeActive", m.KshapeActive, d_kshape_active()),
+                    ("KshapePassive", m.KshapePassive, d_kshape_passive()),
+                    ("Af", m.Af, d_af()),
+                    ("Flen", m.Flen, d_flen()),
+                ] {
+                    if v != default {
+                        return Err(err(
+                            p(name),
+                            format!(
+                                "{} is Thelen2003Muscle's and has no effect on DeGrooteFregly2016Muscle, whose curves are fixed (FmaxTendonStrain and FmaxMuscleStrain carry over): remove it or give Thelen's default, {}",
+                                crate::io::readable(v),
+                                crate::io::readable(default)
+                            ),
+                        ));
+                    }
+                }
+            }
             // Every parameter but the pennation angle has a range, which
             // refuses what is not finite and positive.
             for (name, v) in m.parameters() {

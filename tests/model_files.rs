@@ -553,6 +553,58 @@ fn a_weld_to_ground_is_refused_naming_the_joint() {
     leap::multibody::Multibody::new(&m, &m.system(false).unwrap());
 }
 
+/// A DeGrooteFregly2016Muscle model that gives Thelen2003Muscle's shape
+/// constants other than their defaults is refused, naming the muscle's
+/// field: the values would be read and have no effect (De Groote's curves
+/// are fixed). With the defaults (as models/jumper.json gives them) or
+/// with Thelen's muscles the same file loads; the tendon and passive
+/// strains carry over and change De Groote's curves.
+#[test]
+fn thelen_shape_constants_are_refused_on_degroote_muscles() {
+    let mut v = jumper_json();
+    v["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    let (k, l) = (muscle_index(&v, "soleus_r"), muscle_index(&v, "soleus_l"));
+    for (field, value) in [
+        ("KshapeActive", 0.6),
+        ("KshapePassive", 5.0),
+        ("Af", 0.25),
+        ("Flen", 1.4),
+    ] {
+        let mut w = v.clone();
+        // Both legs: the symmetric system needs mirror images.
+        w["forces"]["muscles"][k][field] = value.into();
+        w["forces"]["muscles"][l][field] = value.into();
+        let e = refused(&w).to_string();
+        assert!(
+            e.contains(&format!("forces.muscles[{k}].{field}"))
+                && e.contains("has no effect on DeGrooteFregly2016Muscle"),
+            "{e}"
+        );
+        w["forces"]["muscle_model"] = "Thelen2003Muscle".into();
+        Model::from_json_str(&w.to_string(), "m.json").unwrap();
+    }
+    // The strains reach De Groote's tendon and passive curves.
+    let mut w = v.clone();
+    w["forces"]["muscles"][k]["FmaxTendonStrain"] = 0.049.into();
+    w["forces"]["muscles"][l]["FmaxTendonStrain"] = 0.049.into();
+    let m = Model::from_json_str(&w.to_string(), "m.json").unwrap();
+    let base = Model::from_json_str(&v.to_string(), "m.json").unwrap();
+    // The tendon force at 3.3% strain: F0 with the default
+    // FmaxTendonStrain 0.033 (its definition), less with 0.049.
+    let curve = |m: &Model| {
+        let spec = &m
+            .muscles
+            .iter()
+            .find(|x| x.spec.name == "soleus_r")
+            .unwrap()
+            .spec;
+        leap::laws::DeGroote::new(spec).ft(1.033_f64)
+    };
+    assert!((curve(&base) - 1.0).abs() < 1e-12, "{}", curve(&base));
+    assert!(curve(&m) < 0.9, "{}", curve(&m));
+}
+
 /// `leap eval` reports contact forces per sphere name.
 #[test]
 fn contact_spheres_need_distinct_names_and_at_least_one() {
