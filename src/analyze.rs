@@ -155,6 +155,27 @@ pub enum AnalysisError {
     NotFinite(f64, &'static str, String),
 }
 
+/// The contact sphere sunk deepest into the ground at the state in `ws`
+/// (as [`StateEquation::rhs`] left it), if any lies wholly below the
+/// surface (its centre below the ground): its name and depth, the radius
+/// plus the centre's distance below the surface (m).
+fn sunk_sphere(eq: &StateEquation, ws: &crate::ode::StateWorkspace<f64>) -> Option<(String, f64)> {
+    use crate::path::BodyKinematics;
+    let contact = eq.model.contact.as_ref()?;
+    let view = crate::multibody::ModelView {
+        mb: &eq.multibody,
+        ws: &ws.mb,
+        q_of: &eq.system.q_of_model_coordinate,
+    };
+    contact
+        .spheres
+        .iter()
+        .map(|sp| (sp, view.position(sp.body, sp.location)[1]))
+        .filter(|(_, y)| *y < 0.0)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(sp, y)| (sp.name.clone(), sp.radius - y))
+}
+
 /// OpenSim's laws as the analysis reads a row: a muscle whose explicit
 /// fibre velocity does not exist there gets NaN for it, flagged in
 /// `missing` (by model muscle), where [`OpenSimLaws`] refuses the whole row.
@@ -309,6 +330,7 @@ pub fn analyze(
     let mut warnings = Vec::new();
     let mut warned = vec![false; eq.nq()];
     let mut warned_fibre = vec![false; eq.nm()];
+    let mut warned_sunk = false;
     let row_laws = RowLaws {
         laws,
         missing: RefCell::new(vec![false; eq.model.muscles.len()]),
@@ -350,6 +372,16 @@ pub fn analyze(
                     *first = *t;
                 }
                 *count += 1;
+            }
+        }
+        if !warned_sunk {
+            if let Some((name, depth)) = sunk_sphere(eq, &ws) {
+                warned_sunk = true;
+                warnings.push(format!(
+                    "at t = {} s, its first such row: contact sphere '{name}' lies {} m deep in the ground, its centre below the surface (a jump's spheres sink millimetres): the ground force there is not one a foot meets (pelvis_ty in another model's convention?)",
+                    crate::io::readable(*t),
+                    crate::io::readable(depth)
+                ));
             }
         }
         let fy = s.vertical_grf;

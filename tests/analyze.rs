@@ -375,3 +375,54 @@ fn a_row_without_a_fibre_velocity_is_warned_of_not_refused() {
         }
     }
 }
+
+/// States with the body a metre underground (pelvis_ty in another model's
+/// convention) are warned of at their first row, naming the deepest
+/// contact sphere and its depth: 1 m plus what it sinks at the squat. The
+/// analysis had reported thousands of body weights with only the impulse
+/// warning.
+#[test]
+fn a_body_underground_is_warned_of() {
+    let (_, eq, laws, x0) = jumper();
+    let names = eq.state_names();
+    let ty = names
+        .iter()
+        .position(|l| l == "/jointset/ground_pelvis/pelvis_ty/value")
+        .unwrap();
+    let time = vec![0.0, 0.01, 0.02];
+    let mut rows = vec![x0.clone(); 3];
+    rows[1][ty] -= 1.0;
+    rows[2][ty] -= 1.0;
+    let a = analyze(&eq, &laws, &time, &rows, Some((0.0, 0.02))).unwrap();
+    assert_eq!(a.warnings.len(), 1, "{:?}", a.warnings);
+    let w = &a.warnings[0];
+    let prefix = "at t = 0.01 s, its first such row: contact sphere '";
+    assert!(w.starts_with(prefix), "{w}");
+    let (name, rest) = w[prefix.len()..].split_once("' lies ").unwrap();
+    let depth: f64 = rest.split_once(" m deep").unwrap().0.parse().unwrap();
+    // The same sphere's depth at the squat, from the model's geometry.
+    let model = &eq.model;
+    let sp = model
+        .contact
+        .as_ref()
+        .unwrap()
+        .spheres
+        .iter()
+        .find(|s| s.name == name)
+        .unwrap();
+    let mut ws = eq.workspace::<f64>();
+    eq.contact_forces(&laws, &mut ws, &x0).unwrap();
+    let view = leap::multibody::ModelView {
+        mb: &eq.multibody,
+        ws: &ws.mb,
+        q_of: &eq.system.q_of_model_coordinate,
+    };
+    use leap::path::BodyKinematics;
+    let at_squat = sp.radius - view.position(sp.body, sp.location)[1];
+    assert!(
+        (depth - (1.0 + at_squat)).abs() < 1e-9,
+        "{depth} against 1 + {at_squat}"
+    );
+    let fine = analyze(&eq, &laws, &time, &vec![x0.clone(); 3], None).unwrap();
+    assert!(fine.warnings.is_empty(), "{:?}", fine.warnings);
+}
