@@ -438,7 +438,7 @@ fn small_solve_writes_only_into_out_and_files_parse_back() {
     let sol2 = StoTable::read(&out2.join("jump_solution.sto")).unwrap();
     assert_eq!(sol2.time.len(), 7);
 
-    for d in [cwd, out, out2] {
+    for d in [cwd, out, out2, sim_out] {
         let _ = std::fs::remove_dir_all(d);
     }
 }
@@ -1399,7 +1399,8 @@ fn solve_from_excitations(
     name: &str,
     excitation: impl Fn(&str) -> f64,
 ) -> (serde_json::Value, String) {
-    let (_, out, _) = small_solve_in_fresh_dirs(&format!("{name}_src"), &["--max-iterations", "3"]);
+    let (cwd, out, _) =
+        small_solve_in_fresh_dirs(&format!("{name}_src"), &["--max-iterations", "3"]);
     let text = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
     let mut lines: Vec<String> = text.lines().map(String::from).collect();
     let end = lines.iter().position(|l| l == "endheader").unwrap();
@@ -1448,6 +1449,9 @@ fn solve_from_excitations(
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out2.join("jump_summary.json")).unwrap())
             .unwrap();
+    for d in [cwd, out, out2] {
+        let _ = std::fs::remove_dir_all(d);
+    }
     (v, stdout)
 }
 
@@ -1535,7 +1539,7 @@ fn unwritable_result_files_are_refused_before_the_solve() {
 #[cfg(target_os = "linux")]
 #[test]
 fn a_write_failing_part_way_leaves_no_mix_of_two_solves() {
-    let (_, out, _) = small_solve_in_fresh_dirs("partial", &["--max-iterations", "2"]);
+    let (cwd, out, _) = small_solve_in_fresh_dirs("partial", &["--max-iterations", "2"]);
     let before = files_in(&out);
     assert!(
         before.iter().any(|f| f.contains("forward_states")),
@@ -1586,6 +1590,7 @@ fn a_write_failing_part_way_leaves_no_mix_of_two_solves() {
     let now = std::fs::read_to_string(out.join("jump_solution.sto")).unwrap();
     assert_ne!(now, solution);
     let _ = std::fs::remove_dir_all(&out);
+    let _ = std::fs::remove_dir_all(&cwd);
 }
 
 /// Where the system refuses threads (a process limit, `ulimit -u`), the

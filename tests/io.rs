@@ -466,6 +466,7 @@ fn directories_and_devices_are_refused_as_input_files() {
     let t = StoTable::read(&fifo).unwrap();
     writer.join().unwrap();
     assert_eq!((t.labels.len(), t.time.len()), (1, 2));
+    let _ = std::fs::remove_dir_all(fifo.parent().unwrap());
 }
 
 /// An output file is written whole or not at all: a write that fails
