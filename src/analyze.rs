@@ -98,8 +98,10 @@ pub struct JumpAnalysis {
     pub peak_vertical_grf_bw: f64,
     /// By net work, largest first.
     pub muscles: Vec<MuscleWork>,
-    /// Coordinates outside their ranges in the model file (the first row
-    /// of each): states no motion of the model reaches.
+    /// What makes the file's states doubtful, each at its first row:
+    /// coordinates outside their ranges in the model file, fibres outside
+    /// the optimizer's bounds, fibre speeds beyond the model's muscles or
+    /// overflowing, a contact sphere sunk past its centre.
     pub warnings: Vec<String>,
 }
 
@@ -156,34 +158,29 @@ pub enum AnalysisError {
 }
 
 /// The contact sphere sunk deepest into the ground at the state in `ws`
-/// (as [`StateEquation::rhs`] left it), if any lies wholly below the
-/// surface (its centre below the ground): its name and depth, the radius
-/// plus the centre's distance below the surface (m).
+/// (as [`StateEquation::rhs`] left it), if it is sunk beyond its radius
+/// (its centre below the surface): its name and depth (m). Under a jump's
+/// forces the spheres sink millimetres: one of the default model's 32 mm
+/// spheres needs about 1.8 kN, 2.5 body weights on that sphere alone, to
+/// sink to its centre.
 fn sunk_sphere(eq: &StateEquation, ws: &crate::ode::StateWorkspace<f64>) -> Option<(String, f64)> {
-    use crate::path::BodyKinematics;
     let contact = eq.model.contact.as_ref()?;
-    let view = crate::multibody::ModelView {
-        mb: &eq.multibody,
-        ws: &ws.mb,
-        q_of: &eq.system.q_of_model_coordinate,
-    };
-    contact
-        .spheres
-        .iter()
-        .map(|sp| (sp, view.position(sp.body, sp.location)[1]))
-        .filter(|(_, y)| *y < 0.0)
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map(|(sp, y)| (sp.name.clone(), sp.radius - y))
+    let (k, bottom) = crate::ode::lowest_sphere(&eq.multibody, &ws.mb, contact)?;
+    let sp = &contact.spheres[k];
+    (-bottom > sp.radius).then(|| (sp.name.clone(), -bottom))
 }
 
-/// OpenSim's laws as the analysis reads a row: a muscle whose explicit
-/// fibre velocity does not exist there gets NaN for it, flagged in
-/// `missing` (by model muscle), where [`OpenSimLaws`] refuses the whole row.
-/// De Groote's inverted force–velocity curve overflows where no fibre speed
-/// balances the tendon force, as at a collocation solution's nodes, whose
-/// force balances midpoint Euler enforces at the interval midpoints only.
-/// What the analysis integrates (tendon forces, path speeds, ground and
-/// passive forces) needs no fibre velocity.
+/// OpenSim's laws as the analysis reads a row: a DeGrooteFregly2016Muscle
+/// whose explicit fibre velocity overflows there gets NaN for it, flagged
+/// in `missing` (by model muscle), where [`OpenSimLaws`] refuses the whole
+/// row. De Groote's inverted force–velocity curve (a sinh) overflows where
+/// the force balance asks the force–velocity multiplier for more than about
+/// 230, a tendon force far beyond the fibre's activation and length, as at
+/// a collocation solution's nodes, whose force balances midpoint Euler
+/// enforces at the interval midpoints only. What the analysis integrates
+/// (tendon forces, path speeds, ground and passive forces) needs no fibre
+/// velocity. Thelen's non-finite velocities (a fibre whose passive force
+/// overflows) are refused as before.
 struct RowLaws<'a> {
     laws: &'a OpenSimLaws,
     missing: RefCell<Vec<bool>>,
@@ -203,7 +200,11 @@ impl ForceLaws<f64> for RowLaws<'_> {
         if r.fiber_velocity.is_finite() && r.tendon_force.is_finite() {
             return Ok(r);
         }
-        if r.tendon_force.is_finite() {
+        let degroote = matches!(
+            self.laws.muscles.get(m),
+            Some(crate::laws::MuscleLaw::DeGroote(_))
+        );
+        if degroote && r.tendon_force.is_finite() {
             if let Some(flag) = self.missing.borrow_mut().get_mut(m) {
                 *flag = true;
             }
@@ -378,9 +379,9 @@ pub fn analyze(
             if let Some((name, depth)) = sunk_sphere(eq, &ws) {
                 warned_sunk = true;
                 warnings.push(format!(
-                    "at t = {} s, its first such row: contact sphere '{name}' lies {} m deep in the ground, its centre below the surface (a jump's spheres sink millimetres): the ground force there is not one a foot meets (pelvis_ty in another model's convention?)",
+                    "at t = {} s, its first such row: contact sphere '{name}' lies {:.1} mm deep in the ground, its centre below the surface (a jump's spheres sink millimetres): the ground force there is not one a foot meets (pelvis_ty in another model's convention?)",
                     crate::io::readable(*t),
-                    crate::io::readable(depth)
+                    1e3 * depth
                 ));
             }
         }
@@ -496,7 +497,7 @@ pub fn analyze(
         .collect();
     if !without.is_empty() {
         warnings.push(format!(
-            "no fibre speed balances the tendon force of {}: the force–velocity curve cannot reach that force at the row's activation and fibre length (a collocation solution's nodes, whose force balances midpoint Euler enforces at the interval midpoints only, may hold such states); the peak fibre speeds leave those rows out, the work and forces do not need them",
+            "the fibre velocity overflows for {}: De Groote's inverted force–velocity curve overflows where the tendon force lies far beyond what the row's activation and fibre length can hold (a collocation solution's nodes, whose force balances midpoint Euler enforces at the interval midpoints only, may hold such states); the peak fibre speeds leave those rows out, the work and forces do not need them",
             without.join(", ")
         ));
     }

@@ -1428,7 +1428,7 @@ impl Model {
                         return Err(err(
                             p(name),
                             format!(
-                                "{} is Thelen2003Muscle's and has no effect on DeGrooteFregly2016Muscle, whose curves are fixed (FmaxTendonStrain and FmaxMuscleStrain carry over): remove it or give Thelen's default, {}",
+                                "{name} ({}) is a Thelen2003Muscle constant with no effect on DeGrooteFregly2016Muscle, whose curves are fixed (FmaxTendonStrain and FmaxMuscleStrain carry over): remove it or give Thelen's default, {}",
                                 crate::io::readable(v),
                                 crate::io::readable(default)
                             ),

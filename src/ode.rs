@@ -733,11 +733,22 @@ pub fn lowest_sphere_bottom(
     ws: &Workspace<f64>,
     contact: &crate::model::Contact,
 ) -> f64 {
+    lowest_sphere(mb, ws, contact).map_or(f64::INFINITY, |(_, h)| h)
+}
+
+/// The contact sphere whose bottom lies lowest (sunk deepest) at the state
+/// set in `ws`: its index and that height (m; negative: into the ground).
+pub fn lowest_sphere(
+    mb: &Multibody,
+    ws: &Workspace<f64>,
+    contact: &crate::model::Contact,
+) -> Option<(usize, f64)> {
     contact
         .spheres
         .iter()
         .map(|sp| mb.model_point_position(ws, sp.body, sp.location)[1] - sp.radius)
-        .fold(f64::INFINITY, f64::min)
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
 }
 
 /// Every muscle path has a positive finite length at the coordinates'

@@ -578,7 +578,9 @@ fn thelen_shape_constants_are_refused_on_degroote_muscles() {
         let e = refused(&w).to_string();
         assert!(
             e.contains(&format!("forces.muscles[{k}].{field}"))
-                && e.contains("has no effect on DeGrooteFregly2016Muscle"),
+                && e.contains(
+                    "is a Thelen2003Muscle constant with no effect on DeGrooteFregly2016Muscle"
+                ),
             "{e}"
         );
         w["forces"]["muscle_model"] = "Thelen2003Muscle".into();
@@ -586,23 +588,33 @@ fn thelen_shape_constants_are_refused_on_degroote_muscles() {
     }
     // The strains reach De Groote's tendon and passive curves.
     let mut w = v.clone();
-    w["forces"]["muscles"][k]["FmaxTendonStrain"] = 0.049.into();
-    w["forces"]["muscles"][l]["FmaxTendonStrain"] = 0.049.into();
+    for i in [k, l] {
+        w["forces"]["muscles"][i]["FmaxTendonStrain"] = 0.049.into();
+        w["forces"]["muscles"][i]["FmaxMuscleStrain"] = 0.7.into();
+    }
     let m = Model::from_json_str(&w.to_string(), "m.json").unwrap();
     let base = Model::from_json_str(&v.to_string(), "m.json").unwrap();
-    // The tendon force at 3.3% strain: F0 with the default
-    // FmaxTendonStrain 0.033 (its definition), less with 0.049.
-    let curve = |m: &Model| {
+    let soleus = |m: &Model| {
         let spec = &m
             .muscles
             .iter()
             .find(|x| x.spec.name == "soleus_r")
             .unwrap()
             .spec;
-        leap::laws::DeGroote::new(spec).ft(1.033_f64)
+        leap::laws::DeGroote::new(spec)
     };
-    assert!((curve(&base) - 1.0).abs() < 1e-12, "{}", curve(&base));
-    assert!(curve(&m) < 0.9, "{}", curve(&m));
+    // By their definitions: the tendon force at 1 + FmaxTendonStrain and
+    // the passive force at 1 + FmaxMuscleStrain are F0.
+    let (b, c) = (soleus(&base), soleus(&m));
+    for (value, at) in [
+        (b.ft(1.033_f64), "ft(1.033), default"),
+        (c.ft(1.049_f64), "ft(1.049), 0.049"),
+        (b.fpe(1.6_f64), "fpe(1.6), default"),
+        (c.fpe(1.7_f64), "fpe(1.7), 0.7"),
+    ] {
+        assert!((value - 1.0).abs() < 1e-12, "{at}: {value}");
+    }
+    assert!(c.ft(1.033_f64) < 0.9 && c.fpe(1.6_f64) < 0.9);
 }
 
 /// `leap eval` reports contact forces per sphere name.
