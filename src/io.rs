@@ -798,12 +798,13 @@ pub fn write_output_with(
     use std::io::{Error, ErrorKind};
     use std::sync::atomic::{AtomicUsize, Ordering};
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    /// Removes the new file unless the rename took it.
+    /// Removes the new file unless the rename took it, and forgets it.
     struct Pending(Option<PathBuf>);
     impl Drop for Pending {
         fn drop(&mut self) {
             if let Some(p) = self.0.take() {
-                let _ = std::fs::remove_file(p);
+                let _ = std::fs::remove_file(&p);
+                forget_pending(&p);
             }
         }
     }
@@ -844,6 +845,9 @@ pub fn write_output_with(
             Err(e) => return Err(e),
         }
     };
+    if let Ok(mut list) = PENDING_OUTPUTS.lock() {
+        list.push(tmp.clone());
+    }
     let mut pending = Pending(Some(tmp.clone()));
     if let Some(m) = old.filter(|m| m.is_file()) {
         file.set_permissions(m.permissions())?;
@@ -853,7 +857,36 @@ pub fn write_output_with(
     drop(file);
     std::fs::rename(&tmp, path)?;
     pending.0 = None;
+    forget_pending(&tmp);
     Ok(())
+}
+
+/// The new files [`write_output_with`] is writing now, so that a process
+/// that quits part-way (a repeated Ctrl-C, whose `exit` runs no
+/// destructor) can remove them: [`remove_pending_outputs`].
+static PENDING_OUTPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+fn forget_pending(tmp: &Path) {
+    if let Ok(mut list) = PENDING_OUTPUTS.lock() {
+        list.retain(|p| p != tmp);
+    }
+}
+
+/// The new files of the writes under way.
+pub fn pending_outputs() -> Vec<PathBuf> {
+    PENDING_OUTPUTS
+        .lock()
+        .map(|l| l.clone())
+        .unwrap_or_default()
+}
+
+/// Remove the new files of the writes under way (their targets keep their
+/// previous contents): for a process about to quit part-way through
+/// writing its results.
+pub fn remove_pending_outputs() {
+    for p in pending_outputs() {
+        let _ = std::fs::remove_file(p);
+    }
 }
 
 /// [`write_output_with`] of `bytes`.

@@ -1188,6 +1188,7 @@ fn simulate(
     let warned = std::sync::atomic::AtomicBool::new(false);
     let _ = ctrlc::set_handler(move || {
         if warned.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            leap::io::remove_pending_outputs();
             std::process::exit(130);
         }
         leap::errln!("leap simulate: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
@@ -1361,6 +1362,7 @@ fn solve(
                 leap::errln!("leap solve: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
                 return;
             }
+            leap::io::remove_pending_outputs();
             std::process::exit(130);
         }
         if again {

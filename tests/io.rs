@@ -842,3 +842,40 @@ fn moco_parameter_columns_with_nan_after_the_first_row_are_accepted() {
     let t = StoTable::parse(&format!("num_parameters=1\n{first_nan}"), p).unwrap();
     assert!(t.check_finite(p).is_err());
 }
+
+/// A process that quits part-way through writing its results (a repeated
+/// Ctrl-C, whose `exit` runs no destructor) can remove the new files of the
+/// writes under way (`remove_pending_outputs`, which removes what
+/// `pending_outputs` lists): the list holds a write's new file while it is
+/// written, and forgets it when the write ends, whether it failed or not.
+/// (Removing is not tried here: other tests write in parallel.)
+#[test]
+fn pending_output_files_are_listed_while_written() {
+    use std::io::Write;
+    let dir = scratch("pending");
+    let target = dir.join("states.sto");
+    let mine = || -> Vec<std::path::PathBuf> {
+        leap::io::pending_outputs()
+            .into_iter()
+            .filter(|p| p.parent() == Some(dir.as_path()))
+            .collect()
+    };
+    for fail in [true, false] {
+        let r = leap::io::write_output_with(&target, |f| {
+            f.write_all(b"part-way")?;
+            let listed = mine();
+            assert_eq!(listed.len(), 1, "{listed:?}");
+            assert!(listed[0].is_file(), "{listed:?}");
+            assert_ne!(listed[0], target);
+            if fail {
+                Err(std::io::Error::other("quit"))
+            } else {
+                Ok(())
+            }
+        });
+        assert_eq!(r.is_err(), fail);
+        assert!(mine().is_empty(), "{:?}", mine());
+    }
+    assert_eq!(std::fs::read_to_string(&target).unwrap(), "part-way");
+    let _ = std::fs::remove_dir_all(&dir);
+}
