@@ -588,13 +588,18 @@ impl JumpAnalysis {
         let total = self.budget.muscle_work_j;
         for m in &self.muscles {
             s.push_str(&format!(
-                "{:<14} {:>8.0} {:>7.2} {:>10.0} {:>8.2} {:>9.2} {:>10.1} {:>9.1} {:>7.1}\n",
+                "{:<14} {:>8.0} {:>7.2} {:>10.0} {:>8.2} {:>9} {:>10.1} {:>9.1} {:>7.1}\n",
                 m.name,
                 m.max_isometric_force_n,
                 m.peak_activation,
                 100.0 * m.saturated_fraction,
                 m.peak_force_ratio,
-                m.peak_shortening_ratio,
+                // "-": no row had a fibre velocity.
+                if m.peak_shortening_ratio.is_nan() {
+                    "-".to_string()
+                } else {
+                    format!("{:.2}", m.peak_shortening_ratio)
+                },
                 m.positive_work_j,
                 m.net_work_j,
                 if total != 0.0 {
@@ -617,7 +622,7 @@ impl JumpAnalysis {
         } else {
             "work of each muscle; "
         });
-        s.push_str("W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt\n");
+        s.push_str("W+ positive work; a≥0.95 % the share of the window at activation ≥ 0.95; v/vmax the peak fibre shortening speed over v_max·l_opt (-: no row had a fibre velocity)\n");
         s
     }
 }

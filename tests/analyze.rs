@@ -369,6 +369,19 @@ fn a_row_without_a_fibre_velocity_is_warned_of_not_refused() {
         sol.peak_force_ratio,
         sol_rest.peak_force_ratio
     );
+    // With no row's fibre velocity, the peak is NaN (null in JSON, "-" in
+    // the table).
+    let all = vec![rows[1].clone(); 3];
+    let b = analyze(&eq, &laws, &time, &all, None).unwrap();
+    let sol_none = b.muscles.iter().find(|m| m.name == "soleus_r").unwrap();
+    assert!(sol_none.peak_shortening_ratio.is_nan());
+    let line = b
+        .to_text()
+        .lines()
+        .find(|l| l.starts_with("soleus_r "))
+        .unwrap()
+        .to_string();
+    assert_eq!(line.split_whitespace().nth(5), Some("-"), "{line}");
     // Every other muscle's figures are the resting rows' own.
     for (m, r) in a.muscles.iter().zip(&rest.muscles) {
         if m.name != "soleus_r" {
