@@ -22,7 +22,6 @@ use crate::io::StoError;
 use crate::laws::OpenSimLaws;
 use crate::ode::{ForceLaws, MuscleRates, StateEquation};
 use serde::Serialize;
-use std::cell::RefCell;
 use std::path::Path;
 
 /// Activation at or above which a muscle counts as saturated.
@@ -171,9 +170,8 @@ fn sunk_sphere(eq: &StateEquation, ws: &crate::ode::StateWorkspace<f64>) -> Opti
 }
 
 /// OpenSim's laws as the analysis reads a row: a DeGrooteFregly2016Muscle
-/// whose explicit fibre velocity overflows there gets NaN for it, flagged
-/// in `missing` (by model muscle), where [`OpenSimLaws`] refuses the whole
-/// row. De Groote's inverted force–velocity curve (a sinh) overflows where
+/// whose explicit fibre velocity overflows there gets NaN for it, where
+/// [`OpenSimLaws`] refuses the whole row. De Groote's inverted force–velocity curve (a sinh) overflows where
 /// the force balance asks the force–velocity multiplier for more than about
 /// 230, a tendon force far beyond the fibre's activation and length, as at
 /// a collocation solution's nodes, whose force balances midpoint Euler
@@ -181,10 +179,7 @@ fn sunk_sphere(eq: &StateEquation, ws: &crate::ode::StateWorkspace<f64>) -> Opti
 /// (tendon forces, path speeds, ground and passive forces) needs no fibre
 /// velocity. Thelen's non-finite velocities (a fibre whose passive force
 /// overflows) are refused as before.
-struct RowLaws<'a> {
-    laws: &'a OpenSimLaws,
-    missing: RefCell<Vec<bool>>,
-}
+struct RowLaws<'a>(&'a OpenSimLaws);
 
 impl ForceLaws<f64> for RowLaws<'_> {
     fn muscle(
@@ -196,31 +191,24 @@ impl ForceLaws<f64> for RowLaws<'_> {
         vmt: f64,
         u: f64,
     ) -> Result<MuscleRates<f64>, String> {
-        let r = self.laws.raw_muscle_rates(m, a, lm, lmt, vmt, u);
-        if r.fiber_velocity.is_finite() && r.tendon_force.is_finite() {
-            return Ok(r);
-        }
+        let r = self.0.raw_muscle_rates(m, a, lm, lmt, vmt, u);
         let degroote = matches!(
-            self.laws.muscles.get(m),
+            self.0.muscles.get(m),
             Some(crate::laws::MuscleLaw::DeGroote(_))
         );
-        if degroote && r.tendon_force.is_finite() {
-            if let Some(flag) = self.missing.borrow_mut().get_mut(m) {
-                *flag = true;
-            }
+        if degroote && r.tendon_force.is_finite() && !r.fiber_velocity.is_finite() {
             return Ok(MuscleRates {
                 fiber_velocity: f64::NAN,
                 ..r
             });
         }
-        // The refusal, with its message.
-        self.laws.muscle(m, a, lm, lmt, vmt, u)
+        crate::laws::finite_rates(r, a, lm, lmt)
     }
     fn sphere(&self, k: usize, p: [f64; 3], v: [f64; 3]) -> ([f64; 3], [f64; 3]) {
-        self.laws.sphere(k, p, v)
+        self.0.sphere(k, p, v)
     }
     fn ligament(&self, l: usize, q: f64, qd: f64) -> f64 {
-        self.laws.ligament(l, q, qd)
+        self.0.ligament(l, q, qd)
     }
 }
 
@@ -332,12 +320,7 @@ pub fn analyze(
     let mut warned = vec![false; eq.nq()];
     let mut warned_fibre = vec![false; eq.nm()];
     let mut warned_sunk = false;
-    let row_laws = RowLaws {
-        laws,
-        missing: RefCell::new(vec![false; eq.model.muscles.len()]),
-    };
-    // Per carried muscle: the rows without a fibre velocity, and the first.
-    let mut no_velocity: Vec<(usize, f64)> = vec![(0, f64::NAN); nm];
+    let row_laws = RowLaws(laws);
     // A window's ends hold the rows a hair beyond them: report times
     // summed step by step (0.2000000000000001) are the rows meant.
     let slack = |t: f64| 1e-9 * (1.0 + t.abs());
@@ -364,17 +347,7 @@ pub fn analyze(
                 ));
             }
         }
-        row_laws.missing.borrow_mut().fill(false);
         let s = sample(eq, &row_laws, &mut ws, *t, x)?;
-        for (k, &mi) in eq.muscles.iter().enumerate() {
-            if row_laws.missing.borrow()[mi] {
-                let (count, first) = &mut no_velocity[k];
-                if *count == 0 {
-                    *first = *t;
-                }
-                *count += 1;
-            }
-        }
         if !warned_sunk {
             if let Some((name, depth)) = sunk_sphere(eq, &ws) {
                 warned_sunk = true;
@@ -409,6 +382,10 @@ pub fn analyze(
     };
     let duration = last.t - first.t;
     let mut muscles = Vec::with_capacity(nm);
+    // Per carried muscle, the peak row-to-row shortening speed over
+    // v_max · l_opt; the muscles with rows without a fibre velocity.
+    let mut row_to_row = Vec::with_capacity(nm);
+    let mut without = Vec::new();
     let mut muscle_work = 0.0;
     for (k, &mi) in eq.muscles.iter().enumerate() {
         let spec = &eq.model.muscles[mi].spec;
@@ -427,6 +404,26 @@ pub fn analyze(
             .map(|s| -s.fiber_velocity[k])
             .filter(|v| !v.is_nan())
             .fold(f64::NAN, f64::max);
+        // How fast the file's fibre length changes from row to row (a
+        // collocation solution's nodes obey the fibre dynamics only between
+        // them); + 0.0: no "-0.00" for a fibre at rest.
+        let between = samples
+            .windows(2)
+            .map(|w| -(w[1].fiber_length[k] - w[0].fiber_length[k]) / (w[1].t - w[0].t))
+            .fold(f64::MIN, f64::max);
+        row_to_row.push(between / vmax + 0.0);
+        let mut rows_without = samples.iter().filter(|s| s.fiber_velocity[k].is_nan());
+        if let Some(first) = rows_without.next() {
+            without.push(format!(
+                "{} at {} (the first at t = {} s)",
+                spec.name,
+                match rows_without.count() + 1 {
+                    1 => "1 row".to_string(),
+                    n => format!("{n} rows"),
+                },
+                crate::io::readable(first.t)
+            ));
+        }
         muscle_work += net;
         muscles.push(MuscleWork {
             name: spec.name.clone(),
@@ -445,34 +442,23 @@ pub fn analyze(
     }
     // A Hill muscle's fibre cannot shorten much faster than v_max: states
     // whose fibre lengths do are another muscle law's or model's.
-    // Beside each, how fast its fibre length changes from row to row in
-    // the file: a collocation solution's nodes obey the fibre dynamics
-    // only between them.
-    let mut too_fast: Vec<(usize, &MuscleWork)> = muscles
+    // Beside each, how fast its fibre length changes from row to row.
+    let mut too_fast: Vec<(&MuscleWork, f64)> = muscles
         .iter()
-        .enumerate()
-        .filter(|(_, m)| m.peak_shortening_ratio > IMPOSSIBLE_SHORTENING_RATIO)
+        .zip(row_to_row)
+        .filter(|(m, _)| m.peak_shortening_ratio > IMPOSSIBLE_SHORTENING_RATIO)
         .collect();
     too_fast.sort_by(|a, b| {
-        b.1.peak_shortening_ratio
-            .total_cmp(&a.1.peak_shortening_ratio)
+        b.0.peak_shortening_ratio
+            .total_cmp(&a.0.peak_shortening_ratio)
     });
     if !too_fast.is_empty() {
         let list: Vec<String> = too_fast
             .iter()
-            .map(|&(k, m)| {
-                let spec = &eq.model.muscles[eq.muscles[k]].spec;
-                let vmax = spec.max_contraction_velocity * spec.optimal_fiber_length;
-                let between = samples
-                    .windows(2)
-                    .map(|w| -(w[1].fiber_length[k] - w[0].fiber_length[k]) / (w[1].t - w[0].t))
-                    .fold(f64::MIN, f64::max);
+            .map(|(m, between)| {
                 format!(
-                    "{} {:.2} ({:.2} from row to row)",
-                    m.name,
-                    m.peak_shortening_ratio,
-                    // + 0.0: no "-0.00" for a fibre at rest.
-                    between / vmax + 0.0
+                    "{} {:.2} ({between:.2} from row to row)",
+                    m.name, m.peak_shortening_ratio
                 )
             })
             .collect();
@@ -481,20 +467,6 @@ pub fn analyze(
             list.join(", ")
         ));
     }
-    let without: Vec<String> = eq
-        .muscles
-        .iter()
-        .zip(&no_velocity)
-        .filter(|(_, (count, _))| *count > 0)
-        .map(|(&mi, (count, first))| {
-            format!(
-                "{} at {count} row{} (the first at t = {} s)",
-                eq.model.muscles[mi].spec.name,
-                if *count == 1 { "" } else { "s" },
-                crate::io::readable(*first)
-            )
-        })
-        .collect();
     if !without.is_empty() {
         warnings.push(format!(
             "the fibre velocity overflows for {}: De Groote's inverted force–velocity curve overflows where the tendon force lies far beyond what the row's activation and fibre length can hold (a collocation solution's nodes, whose force balances midpoint Euler enforces at the interval midpoints only, may hold such states); the peak fibre speeds leave those rows out, the work and forces do not need them",

@@ -798,13 +798,19 @@ pub fn write_output_with(
     use std::io::{Error, ErrorKind};
     use std::sync::atomic::{AtomicUsize, Ordering};
     static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    /// Removes the new file unless the rename took it, and forgets it.
-    struct Pending(Option<PathBuf>);
+    /// The new file, listed in [`PENDING_OUTPUTS`] while it lives:
+    /// removed unless the rename took it (`renamed`), and unlisted.
+    struct Pending {
+        tmp: PathBuf,
+        renamed: bool,
+    }
     impl Drop for Pending {
         fn drop(&mut self) {
-            if let Some(p) = self.0.take() {
-                let _ = std::fs::remove_file(&p);
-                forget_pending(&p);
+            if !self.renamed {
+                let _ = std::fs::remove_file(&self.tmp);
+            }
+            if let Ok(mut list) = PENDING_OUTPUTS.lock() {
+                list.retain(|p| *p != self.tmp);
             }
         }
     }
@@ -848,7 +854,10 @@ pub fn write_output_with(
     if let Ok(mut list) = PENDING_OUTPUTS.lock() {
         list.push(tmp.clone());
     }
-    let mut pending = Pending(Some(tmp.clone()));
+    let mut pending = Pending {
+        tmp: tmp.clone(),
+        renamed: false,
+    };
     if let Some(m) = old.filter(|m| m.is_file()) {
         file.set_permissions(m.permissions())?;
     }
@@ -856,8 +865,7 @@ pub fn write_output_with(
     file.sync_all()?;
     drop(file);
     std::fs::rename(&tmp, path)?;
-    pending.0 = None;
-    forget_pending(&tmp);
+    pending.renamed = true;
     Ok(())
 }
 
@@ -865,12 +873,6 @@ pub fn write_output_with(
 /// that quits part-way (a repeated Ctrl-C, whose `exit` runs no
 /// destructor) can remove them: [`remove_pending_outputs`].
 static PENDING_OUTPUTS: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
-
-fn forget_pending(tmp: &Path) {
-    if let Ok(mut list) = PENDING_OUTPUTS.lock() {
-        list.retain(|p| p != tmp);
-    }
-}
 
 /// The new files of the writes under way.
 pub fn pending_outputs() -> Vec<PathBuf> {

@@ -813,7 +813,7 @@ impl OpenSimLaws {
 }
 
 /// `r`, or the error that names what turned non-finite.
-fn finite_rates<S: Scalar>(
+pub(crate) fn finite_rates<S: Scalar>(
     r: MuscleRates<S>,
     a: S,
     lm: S,

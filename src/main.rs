@@ -968,6 +968,19 @@ fn at_most(n: usize, limit: usize) -> Result<usize, String> {
     }
 }
 
+/// Ctrl-C while `leap <command>` writes its results: the first press is
+/// absorbed with a word, so that this run's first files do not stand beside
+/// an earlier run's others; a further one removes the file under way and
+/// quits.
+fn ctrl_c_while_writing(command: &str, warned: &std::sync::atomic::AtomicBool) {
+    if !warned.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        leap::errln!("leap {command}: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
+        return;
+    }
+    leap::io::remove_pending_outputs();
+    std::process::exit(130);
+}
+
 #[allow(clippy::too_many_arguments)]
 fn simulate(
     study: Option<PathBuf>,
@@ -1186,13 +1199,7 @@ fn simulate(
     // files do not stand beside an earlier run's others; a further press
     // quits.
     let warned = std::sync::atomic::AtomicBool::new(false);
-    let _ = ctrlc::set_handler(move || {
-        if warned.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            leap::io::remove_pending_outputs();
-            std::process::exit(130);
-        }
-        leap::errln!("leap simulate: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
-    });
+    let _ = ctrlc::set_handler(move || ctrl_c_while_writing("simulate", &warned));
     let controls_range = match &exc {
         StudyExcitation::Controls(c) => c.time.first().zip(c.time.last()).map(|(a, b)| (*a, *b)),
         StudyExcitation::BangBang(_) => None,
@@ -1358,12 +1365,7 @@ fn solve(
     let handler = ctrlc::set_handler(move || {
         let again = flag.swap(true, Ordering::Relaxed);
         if writes.load(Ordering::SeqCst) {
-            if !warned.swap(true, Ordering::Relaxed) {
-                leap::errln!("leap solve: interrupted while writing the results: finishing them (Ctrl-C again to quit at once, leaving them incomplete)");
-                return;
-            }
-            leap::io::remove_pending_outputs();
-            std::process::exit(130);
+            return ctrl_c_while_writing("solve", &warned);
         }
         if again {
             std::process::exit(130);
