@@ -1,0 +1,74 @@
+//! A study solved with SQP settings taken from the environment, for
+//! experiments on the globalisation through `leap solve`'s own path:
+//! `cargo run --release --example study_probe -- STUDY OUT` (no forward
+//! check) with any of LS=merit|filter, VGROWTH=v (max_violation_growth),
+//! TRRATIO=0, SOC=0, RESETS=n (max_filter_resets), MAXIT=n, STALL=n,
+//! HESSIAN=bfgs|exact, QP=clarabel|interior-point, N=mesh intervals,
+//! VERBOSE=1 (the iteration log), VLS=1 (each rejected full step).
+use leap::sqp::{HessianMode, LineSearch, QpSolver};
+use std::str::FromStr;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let [study, out] = args.as_slice() else {
+        return Err("usage: study_probe STUDY OUT".into());
+    };
+    let mut c = leap::study::SolveConfig::load_with_model(Some(std::path::Path::new(study)), None)?;
+    c.output_directory = out.into();
+    c.forward_check = None;
+    let env = |k: &str| std::env::var(k).ok();
+    let s = &mut c.settings;
+    if let Some(v) = env("LS") {
+        s.line_search = match v.as_str() {
+            "merit" => LineSearch::L1Merit,
+            "filter" => LineSearch::Filter,
+            _ => return Err(format!("LS={v}: merit or filter").into()),
+        };
+    }
+    if let Some(v) = env("VGROWTH") {
+        s.max_violation_growth = v.parse()?;
+    }
+    if let Some(v) = env("TRRATIO") {
+        s.trust_region_ratio = v != "0";
+    }
+    if let Some(v) = env("SOC") {
+        s.second_order_correction = v != "0";
+    }
+    if let Some(v) = env("RESETS") {
+        s.max_filter_resets = v.parse()?;
+    }
+    if let Some(v) = env("MAXIT") {
+        s.max_iterations = v.parse()?;
+    }
+    if let Some(v) = env("STALL") {
+        s.stall_iterations = v.parse()?;
+    }
+    if let Some(v) = env("HESSIAN") {
+        s.hessian = HessianMode::from_str(&v)?;
+    }
+    if let Some(v) = env("QP") {
+        s.qp_solver = match v.as_str() {
+            "clarabel" => QpSolver::Clarabel,
+            "interior-point" => QpSolver::InteriorPoint,
+            _ => return Err(format!("QP={v}: clarabel or interior-point").into()),
+        };
+    }
+    if let Some(v) = env("N") {
+        c.transcription.num_mesh_intervals = v.parse()?;
+    }
+    s.verbose = env("VERBOSE").is_some();
+    s.verbose_line_search = env("VLS").is_some();
+    let verbose = s.verbose;
+    let r = leap::solve::run(&c, verbose, &mut |_| {})?;
+    println!(
+        "{} after {} iterations, {:.1} s: J {:.8}, jump {:.4} cm, violation {:.2e}: {}",
+        r.moco_status,
+        r.iterations,
+        r.wall_time_s,
+        r.objective,
+        r.jump_height_m * 100.0,
+        r.max_constraint_violation,
+        r.message
+    );
+    Ok(())
+}
