@@ -2,11 +2,11 @@
 //! `cargo run --release --example kink_probe -- STUDY SOLUTION.sto [H]`
 //! reads a solution of the study's transcription (a `_solution.sto`) and,
 //! for every variable off its bounds, steps H times the variable's bound
-//! range (default 1e-7) each way. It names the constraint entries whose
+//! range (clamped to [1e-3, 1e3]; H default 1e-7) each way. It names the constraint entries whose
 //! forward and backward slopes differ by more than 1% (a constraint that
 //! bends within the step: a kink, or curvature on that scale; ROWS=text
-//! keeps the constraints whose names contain it) and the smooth entries
-//! whose exact Jacobian differs from the central difference.
+//! prints only the constraints whose names contain it) and the smooth
+//! entries whose exact Jacobian differs from the central difference.
 use leap::nlp::Nlp;
 use std::sync::Arc;
 
@@ -17,6 +17,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let c = leap::study::SolveConfig::load_with_model(Some(std::path::Path::new(study)), None)?;
     let hrel: f64 = args.get(2).map(|s| s.parse()).transpose()?.unwrap_or(1e-7);
+    if !(hrel > 0.0 && hrel < 1.0) {
+        return Err(
+            format!("H = {hrel}: a step between 0 and 1 (of each variable's bound range)").into(),
+        );
+    }
     let model = leap::model::Model::from_file(&c.model)?;
     let options = leap::solve::collocation_problem_options(&c.transcription, &c.problem);
     let ocp = Arc::new(leap::ocp::JumpOcp::new(&model, options)?);
@@ -36,7 +41,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         pat.iter().zip(&jv).map(|(&ij, &v)| (ij, v)).collect();
     let mut wrong: Vec<(f64, usize, usize, f64, f64)> = Vec::new();
     for j in 0..n {
-        let h = hrel * (xu[j] - xl[j]).min(1e3).max(1e-3);
+        let h = hrel * (xu[j] - xl[j]).clamp(1e-3, 1e3);
         // A variable on its bound: the other side is outside the problem.
         if x[j] - h <= xl[j] || x[j] + h >= xu[j] {
             continue;

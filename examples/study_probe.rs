@@ -1,9 +1,11 @@
 //! A study solved with SQP settings taken from the environment, for
-//! experiments on the globalisation through `leap solve`'s own path:
+//! experiments on the globalisation (`leap solve`'s run, the settings set
+//! directly, without the checks of its command-line options):
 //! `cargo run --release --example study_probe -- STUDY OUT` (no forward
 //! check) with any of LS=merit|filter, VGROWTH=v (max_violation_growth),
 //! TRRATIO=0, SOC=0, RESETS=n (max_filter_resets), MAXIT=n, STALL=n,
-//! HESSIAN=bfgs|exact, QP=clarabel|interior-point, N=mesh intervals,
+//! HESSIAN=exact|bfgs (no inertia correction), QP=clarabel|interior-point,
+//! N=mesh intervals,
 //! VERBOSE=1 (the iteration log), VLS=1 (each rejected full step).
 use leap::sqp::{HessianMode, LineSearch, QpSolver};
 use std::str::FromStr;
@@ -56,8 +58,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(v) = env("N") {
         c.transcription.num_mesh_intervals = v.parse()?;
     }
-    s.verbose = env("VERBOSE").is_some();
-    s.verbose_line_search = env("VLS").is_some();
+    s.verbose = env("VERBOSE").is_some_and(|v| v != "0");
+    s.verbose_line_search = env("VLS").is_some_and(|v| v != "0");
     let verbose = s.verbose;
     let r = leap::solve::run(&c, verbose, &mut |_| {})?;
     println!(
