@@ -3,7 +3,8 @@
 //! directly, without the checks of its command-line options):
 //! `cargo run --release --example study_probe -- STUDY OUT` (no forward
 //! check) with any of LS=merit|filter, VGROWTH=v (max_violation_growth),
-//! TRRATIO=0, SOC=0, RESETS=n (max_filter_resets), MAXIT=n, STALL=n,
+//! TRRATIO=0, SOC=0, SOCALL=1 (second_order_correction_every_rejected_step),
+//! RESETS=n (max_filter_resets), MAXIT=n, STALL=n,
 //! HESSIAN=exact|bfgs (no inertia correction), QP=clarabel|interior-point,
 //! N=mesh intervals,
 //! VERBOSE=1 (the iteration log), VLS=1 (each rejected full step).
@@ -35,6 +36,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if let Some(v) = env("SOC") {
         s.second_order_correction = v != "0";
+    }
+    if let Some(v) = env("SOCALL") {
+        s.second_order_correction_every_rejected_step = v != "0";
     }
     if let Some(v) = env("RESETS") {
         s.max_filter_resets = v.parse()?;

@@ -7,8 +7,7 @@
 //! function φ(x; ν) = f(x) + ν ‖viol c(x)‖₁ (Nocedal & Wright 2006,
 //! Algorithm 18.3; Han 1977; Powell 1978), by default through IPOPT's
 //! filter ([`LineSearch::Filter`]), with a second-order correction when the
-//! full step is rejected (Maratos effect; with the merit search, when it
-//! also raised the violation).
+//! full step is rejected while the constraints got worse (Maratos effect).
 //!
 //! * Hessian: [`HessianMode::ExactConvexified`] takes each element's exact
 //!   Lagrangian Hessian and replaces its eigenvalues μ by max(μ, δ)
@@ -121,10 +120,10 @@ pub enum LineSearch {
     /// Backtracking with IPOPT's filter (Wächter & Biegler 2006): a trial
     /// point is accepted when it reduces the violation or the objective
     /// enough and no earlier point dominates it; near feasibility an
-    /// Armijo decrease of f alone. A rejected full step gets a
-    /// second-order correction, and the filter is emptied when its entries
-    /// keep refusing steps ([`SqpSettings::max_filter_resets`]). Falls back
-    /// to the merit search when no trial is acceptable and in elastic mode.
+    /// Armijo decrease of f alone. Optionally the filter is emptied when
+    /// its entries keep refusing steps ([`SqpSettings::max_filter_resets`]).
+    /// Falls back to the merit search when no trial is acceptable and in
+    /// elastic mode.
     Filter,
 }
 
@@ -214,10 +213,18 @@ pub struct SqpSettings {
     /// Which solver solves the QPs first ([`QpSolver`]; default clarabel,
     /// see there).
     pub qp_solver: QpSolver,
-    /// Second-order correction of rejected full steps: in the filter line
-    /// search of every one; in the merit search ([`LineSearch::L1Merit`])
-    /// of one that raised the violation, outside elastic mode.
+    /// Second-order correction of a rejected full step that raised the
+    /// violation (outside elastic mode).
     pub second_order_correction: bool,
+    /// In the filter line search, a second-order correction of every
+    /// rejected full step, not only of one that raised the violation
+    /// (IPOPT's trigger; default false). A step the filter's entries refuse
+    /// although it lowered the violation can still carry a curvature
+    /// residual the correction removes: on `models/jump_gait2392.json`
+    /// full steps that halved the violation left 2e-4 on activation defects
+    /// (the switch's tanh at b = 200), their linearisation 1e-11. See
+    /// [`SqpSettings::max_filter_resets`] for what it does with the reset.
+    pub second_order_correction_every_rejected_step: bool,
     /// Print the iteration log to standard error.
     pub verbose: bool,
     /// Directory where a failing QP is written (clarabel JSON).
@@ -249,8 +256,9 @@ pub struct SqpSettings {
     /// multiple of the current one (or of θ_min), besides IPOPT's θ_max
     /// (default 100, measured on the jump with `jump_diag`, VGROWTH).
     pub max_violation_growth: f64,
-    /// A filter reset after IPOPT's heuristic, with its option names and
-    /// defaults (5 and 5; 0 turns it off): when in `filter_reset_trigger`
+    /// A filter reset after IPOPT's heuristic, with its option names
+    /// (IPOPT's defaults are 5 and 5; leap's `max_filter_resets` default is
+    /// 0, off, see below): when in `filter_reset_trigger`
     /// successive filter line searches the last trial rejected was
     /// dominated by a filter entry, the filter is emptied before the next
     /// one, at most `max_filter_resets` times per solve. An entry left by an
@@ -269,7 +277,15 @@ pub struct SqpSettings {
     /// counts by its last trial too (IPOPT leaves the count alone). With
     /// IPOPT's count (and its reset on acceptance, which keeps the new
     /// entry) `jump_gait2392.json` still reached its 3,000-iteration limit
-    /// (2026-12-07, 28.04 cm); with this one it solves in 377 iterations.
+    /// (2026-12-07, 28.04 cm); with this one and
+    /// `second_order_correction_every_rejected_step` it solves in 377
+    /// iterations, with either alone it cycles. Off by default: with both
+    /// on, the reduced jump by Hermite–Simpson (a CI test) reached its
+    /// 1,000-iteration limit instead of solving, and with
+    /// `--hessian exact-inertia-corrected` the default study's 26-interval
+    /// mesh ended "infeasible" (the other shipped studies and the
+    /// Hock–Schittkowski set kept or improved their results; README,
+    /// "Where the SQP struggles").
     pub max_filter_resets: usize,
     /// See [`SqpSettings::max_filter_resets`].
     pub filter_reset_trigger: usize,
@@ -335,6 +351,7 @@ impl Default for SqpSettings {
             qp_warm_start: true,
             qp_solver: QpSolver::Clarabel,
             second_order_correction: true,
+            second_order_correction_every_rejected_step: false,
             verbose: false,
             qp_dump_dir: None,
             qp_dump_every: false,
@@ -343,7 +360,7 @@ impl Default for SqpSettings {
             verbose_line_search: false,
             line_search: LineSearch::Filter,
             max_violation_growth: 100.0,
-            max_filter_resets: 5,
+            max_filter_resets: 0,
             filter_reset_trigger: 5,
             trust_region_ratio: true,
             stall_iterations: 50,
@@ -2256,7 +2273,7 @@ impl<'s> Solver<'s> {
                         let (th, _) = self.pb.violation(&trial_c);
                         let verdict = acceptable_trial(th, f, a, &filter);
                         if a == 1.0 && verdict.is_err() && st.verbose_line_search {
-                            self.log_rejected_step(nlp, &p, &d, f, &trial_c, nu, delta);
+                            self.log_rejected_step(nlp, &p, &d, (f, &trial_c), nu, delta);
                         }
                         if let Err(b) = verdict {
                             by_filter = b;
@@ -2270,18 +2287,10 @@ impl<'s> Solver<'s> {
                             alpha = a;
                             break;
                         }
-                        // A second-order correction of every rejected full
-                        // step, not only of one that raised the violation
-                        // (IPOPT's trigger): a step the filter's entries
-                        // refuse although it lowered the violation can still
-                        // carry the curvature residual the correction
-                        // removes. On `models/jump_gait2392.json` full steps
-                        // that halved the violation left 2e-4 on activation
-                        // defects (the switch's tanh at b = 200), the
-                        // linearisation 1e-11; with this trigger and the
-                        // filter reset that study solves, without either it
-                        // cycles to its iteration limit.
-                        if a == 1.0 && st.second_order_correction {
+                        if a == 1.0
+                            && st.second_order_correction
+                            && (th >= theta0 || st.second_order_correction_every_rejected_step)
+                        {
                             soc_tried = true;
                             let (soc, dq) =
                                 self.second_order_correction(nlp, &p, &d, &trial_c, delta, rho);
@@ -2330,7 +2339,7 @@ impl<'s> Solver<'s> {
                     // (The filter search logged its own full step.)
                     let filter_ran = st.line_search == LineSearch::Filter && !elastic;
                     if alpha == 1.0 && st.verbose_line_search && !filter_ran {
-                        self.log_rejected_step(nlp, &p, &d, f, &trial_c, nu, delta);
+                        self.log_rejected_step(nlp, &p, &d, (f, &trial_c), nu, delta);
                     }
                     // Second-order correction (Nocedal & Wright §18.3)
                     // when the full step made the constraints worse.
@@ -2491,7 +2500,7 @@ impl<'s> Solver<'s> {
     }
 
     /// With `verbose_line_search`: a rejected full step d to a trial
-    /// point (objective `f`, constraints `trial_c`): its objective and
+    /// point (its objective and constraints): its objective and
     /// violation changes, the rows whose violation grew most, and the rows
     /// most violated at the trial beside their linearised values c + J d,
     /// which tell the constraints' curvature from a QP that left them
@@ -2501,8 +2510,7 @@ impl<'s> Solver<'s> {
         nlp: &N,
         p: &Point,
         d: &[f64],
-        f: f64,
-        trial_c: &[f64],
+        (f, trial_c): (f64, &[f64]),
         nu: f64,
         delta: f64,
     ) {
