@@ -217,8 +217,8 @@ pub struct SqpSettings {
     /// violation (outside elastic mode).
     pub second_order_correction: bool,
     /// In the filter line search, a second-order correction of every
-    /// rejected full step, not only of one that raised the violation
-    /// (IPOPT's trigger; default false). A step the filter's entries refuse
+    /// rejected full step, not only of one that raised the violation (the
+    /// default, IPOPT's trigger). A step the filter's entries refuse
     /// although it lowered the violation can still carry a curvature
     /// residual the correction removes: on `models/jump_gait2392.json`
     /// full steps that halved the violation left 2e-4 on activation defects
