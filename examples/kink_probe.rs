@@ -67,37 +67,43 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
-    found.sort_by(|a, b| b.0.total_cmp(&a.0));
-    println!(
-        "{} entries whose one-sided slopes differ by more than 1%",
-        found.len()
-    );
     let rows = std::env::var("ROWS").unwrap_or_default();
-    for f in found
-        .iter()
-        .filter(|f| tr.constraint_name(f.1).contains(&rows))
-        .take(40)
-    {
-        println!(
-            "{:.2e}  {} / {}: forward {:.6e} backward {:.6e}",
-            f.0,
-            tr.constraint_name(f.1),
-            tr.variable_name(f.2),
-            f.3,
-            f.4
-        );
-    }
-    wrong.sort_by(|a, b| b.0.total_cmp(&a.0));
-    println!("{} smooth entries whose Jacobian value differs from the central difference by more than 1e-4", wrong.len());
-    for f in wrong.iter().take(20) {
-        println!(
-            "{:.2e}  {} / {}: analytic {:.6e} central {:.6e}",
-            f.0,
-            tr.constraint_name(f.1),
-            tr.variable_name(f.2),
-            f.3,
-            f.4
-        );
-    }
+    print_largest(
+        &tr,
+        found,
+        "entries whose one-sided slopes differ by more than 1%",
+        ("forward", "backward"),
+        |i| tr.constraint_name(i).contains(&rows),
+        40,
+    );
+    print_largest(
+        &tr,
+        wrong,
+        "smooth entries whose Jacobian value differs from the central difference by more than 1e-4",
+        ("analytic", "central"),
+        |_| true,
+        20,
+    );
     Ok(())
+}
+
+/// The entries (size, row, column, value, value) of `list`, largest first:
+/// their count, then at most `limit` of the rows `keep` keeps.
+fn print_largest(
+    tr: &leap::transcription::Transcription,
+    mut list: Vec<(f64, usize, usize, f64, f64)>,
+    what: &str,
+    (first, second): (&str, &str),
+    keep: impl Fn(usize) -> bool,
+    limit: usize,
+) {
+    list.sort_by(|a, b| b.0.total_cmp(&a.0));
+    println!("{} {what}", list.len());
+    for (size, i, j, a, b) in list.into_iter().filter(|e| keep(e.1)).take(limit) {
+        println!(
+            "{size:.2e}  {} / {}: {first} {a:.6e} {second} {b:.6e}",
+            tr.constraint_name(i),
+            tr.variable_name(j)
+        );
+    }
 }

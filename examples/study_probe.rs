@@ -11,6 +11,24 @@
 use leap::sqp::{HessianMode, LineSearch, QpSolver};
 use std::str::FromStr;
 
+/// The environment variable `key`, if set, parsed into `field`.
+fn parse<T: FromStr>(key: &str, field: &mut T) -> Result<(), String>
+where
+    T::Err: std::fmt::Display,
+{
+    if let Ok(v) = std::env::var(key) {
+        *field = v.parse().map_err(|e| format!("{key}={v}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// The environment variable `key`, if set: on unless "0".
+fn switch(key: &str, field: &mut bool) {
+    if let Ok(v) = std::env::var(key) {
+        *field = v != "0";
+    }
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let [study, out] = args.as_slice() else {
@@ -28,27 +46,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => return Err(format!("LS={v}: merit or filter").into()),
         };
     }
-    if let Some(v) = env("VGROWTH") {
-        s.max_violation_growth = v.parse()?;
-    }
-    if let Some(v) = env("TRRATIO") {
-        s.trust_region_ratio = v != "0";
-    }
-    if let Some(v) = env("SOC") {
-        s.second_order_correction = v != "0";
-    }
-    if let Some(v) = env("SOCALL") {
-        s.second_order_correction_every_rejected_step = v != "0";
-    }
-    if let Some(v) = env("RESETS") {
-        s.max_filter_resets = v.parse()?;
-    }
-    if let Some(v) = env("MAXIT") {
-        s.max_iterations = v.parse()?;
-    }
-    if let Some(v) = env("STALL") {
-        s.stall_iterations = v.parse()?;
-    }
+    parse("VGROWTH", &mut s.max_violation_growth)?;
+    switch("TRRATIO", &mut s.trust_region_ratio);
+    switch("SOC", &mut s.second_order_correction);
+    switch("SOCALL", &mut s.second_order_correction_every_rejected_step);
+    parse("RESETS", &mut s.max_filter_resets)?;
+    parse("MAXIT", &mut s.max_iterations)?;
+    parse("STALL", &mut s.stall_iterations)?;
     if let Some(v) = env("HESSIAN") {
         s.hessian = HessianMode::from_str(&v)?;
     }
@@ -59,11 +63,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             _ => return Err(format!("QP={v}: clarabel or interior-point").into()),
         };
     }
-    if let Some(v) = env("N") {
-        c.transcription.num_mesh_intervals = v.parse()?;
-    }
-    s.verbose = env("VERBOSE").is_some_and(|v| v != "0");
-    s.verbose_line_search = env("VLS").is_some_and(|v| v != "0");
+    parse("N", &mut c.transcription.num_mesh_intervals)?;
+    s.verbose = false;
+    switch("VERBOSE", &mut s.verbose);
+    switch("VLS", &mut s.verbose_line_search);
     let verbose = s.verbose;
     let r = leap::solve::run(&c, verbose, &mut |_| {})?;
     println!(

@@ -40,6 +40,11 @@ fn known_failure(name: &str, mode: HessianMode) -> bool {
 }
 
 fn run_all(mode: HessianMode, qp_solver: QpSolver) {
+    run_all_with(mode, qp_solver, |s| s);
+}
+
+/// [`run_all`] with settings changed by `adjust`.
+fn run_all_with(mode: HessianMode, qp_solver: QpSolver, adjust: fn(SqpSettings) -> SqpSettings) {
     let mut failures = Vec::new();
     let mut iterations = 0;
     let mut fallbacks = 0;
@@ -60,10 +65,10 @@ fn run_all(mode: HessianMode, qp_solver: QpSolver) {
             }
         }
         solved += 1;
-        let st = SqpSettings {
+        let st = adjust(SqpSettings {
             qp_solver,
             ..settings(mode)
-        };
+        });
         let r = solve(&mut AdNlp::new(p), &st);
         iterations += r.iterations;
         // Leap's interior-point solver may hand clarabel only QPs that
@@ -113,6 +118,20 @@ fn hock_schittkowski_exact_hessian() {
 #[test]
 fn hock_schittkowski_partitioned_bfgs() {
     run_all(HessianMode::PartitionedBfgs, QpSolver::InteriorPoint);
+}
+
+/// The filter line search's opt-in filter reset and second-order
+/// correction of every rejected full step (off by default) keep every
+/// problem at its published optimum, in both Hessian modes.
+#[test]
+fn hock_schittkowski_with_filter_resets_and_every_correction() {
+    for mode in [HessianMode::ExactConvexified, HessianMode::PartitionedBfgs] {
+        run_all_with(mode, QpSolver::InteriorPoint, |s| SqpSettings {
+            max_filter_resets: 5,
+            second_order_correction_every_rejected_step: true,
+            ..s
+        });
+    }
 }
 
 /// The same with clarabel alone solving the QPs.

@@ -2518,7 +2518,7 @@ impl<'s> Solver<'s> {
         let (v0, _) = self.pb.violation(&p.c);
         let (v1, _) = self.pb.violation(trial_c);
         crate::errln!("  rejected full step: Δf {:.3e} (gᵀd {:.3e}), ν·Δviol {:.3e} (viol {:.3e} → {:.3e}), |d| {:.3e}, Δ {:.3e}", f - p.f, gd, nu * (v1 - v0), v0, v1, norm_inf(d), delta);
-        let viol = |i: usize, c: f64| (self.pb.cl[i] - c).max(c - self.pb.cu[i]).max(0.0);
+        let viol = |c: &[f64], i: usize| self.pb.row_violation(c, i);
         let mut lin = p.c.clone();
         self.pb.add_jacobian_times(&p.jv, d, 1.0, &mut lin);
         let largest = |key: &dyn Fn(usize) -> f64| {
@@ -2527,17 +2527,17 @@ impl<'s> Solver<'s> {
             rows.truncate(6);
             rows
         };
-        for (dv, i) in largest(&|i| viol(i, trial_c[i]) - viol(i, p.c[i])) {
+        for (dv, i) in largest(&|i| viol(trial_c, i) - viol(&p.c, i)) {
             crate::errln!("    {:.3e} {}", dv, nlp.constraint_name(i));
         }
         let (lin1, _) = self.pb.violation(&lin);
         crate::errln!("    linearised violation {lin1:.3e}; most violated at the trial:");
-        for (v, i) in largest(&|i| viol(i, trial_c[i])) {
+        for (v, i) in largest(&|i| viol(trial_c, i)) {
             crate::errln!(
                 "    {:.3e} (now {:.3e}, linearised {:.3e}) {}",
                 v,
-                viol(i, p.c[i]),
-                viol(i, lin[i]),
+                viol(&p.c, i),
+                viol(&lin, i),
                 nlp.constraint_name(i)
             );
         }
