@@ -6,7 +6,7 @@
 //! TRRATIO=0, SOC=0, SOCALL=1 (second_order_correction_every_rejected_step),
 //! RESETS=n (max_filter_resets), MAXIT=n, STALL=n,
 //! HESSIAN=exact|bfgs (no inertia correction), QP=clarabel|interior-point,
-//! N=mesh intervals,
+//! N=mesh intervals, SCHEME and FIBER (`--scheme`, `--fiber-dynamics`),
 //! VERBOSE=1 (the iteration log), VLS=1 (each rejected full step).
 use leap::sqp::{HessianMode, LineSearch, QpSolver};
 use std::str::FromStr;
@@ -35,6 +35,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         return Err("usage: study_probe STUDY OUT".into());
     };
     let mut c = leap::study::SolveConfig::load_with_model(Some(std::path::Path::new(study)), None)?;
+    c.apply(&leap::study::Overrides {
+        scheme: std::env::var("SCHEME").ok(),
+        fiber_dynamics: std::env::var("FIBER").ok(),
+        ..Default::default()
+    })?;
     c.output_directory = out.into();
     c.forward_check = None;
     let env = |k: &str| std::env::var(k).ok();

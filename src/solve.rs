@@ -510,6 +510,9 @@ pub struct SolveReport {
     /// primal residual stalled (no clarabel certificate asked for; the
     /// elastic QP followed, or a second-order correction was dropped).
     pub qp_stalls_taken_infeasible: usize,
+    /// The filter line search's opt-in heuristics as the study set them
+    /// (its `line_search`) and the filter resets made.
+    pub line_search: LineSearchReport,
     /// The inertia correction's τ over the solve's QPs (None where no QP
     /// needed one, as in every mode but `exact-inertia-corrected`).
     pub hessian_shift: Option<crate::sqp::HessianShiftSummary>,
@@ -532,6 +535,29 @@ pub struct SolveReport {
     /// into them before the solve (a file in degrees read as radians, a
     /// solution of a model with other ranges).
     pub guess_projected_states: Vec<GuessProjection>,
+}
+
+/// The SQP settings of a study's `line_search` ([`crate::study::LineSearchSpec`])
+/// and how many filter resets the solve made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct LineSearchReport {
+    pub max_filter_resets: usize,
+    pub filter_reset_trigger: usize,
+    pub second_order_correction_every_rejected_step: bool,
+    pub filter_resets: usize,
+}
+
+impl LineSearchReport {
+    /// The settings of `s`, with the resets a solve made.
+    pub fn new(s: &crate::sqp::SqpSettings, filter_resets: usize) -> Self {
+        LineSearchReport {
+            max_filter_resets: s.max_filter_resets,
+            filter_reset_trigger: s.filter_reset_trigger,
+            second_order_correction_every_rejected_step: s
+                .second_order_correction_every_rejected_step,
+            filter_resets,
+        }
+    }
 }
 
 /// IPOPT's return status for an SQP status (what Moco writes as `status`).
@@ -719,6 +745,7 @@ pub fn run(
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
+    report.line_search = LineSearchReport::new(&config.settings, report.line_search.filter_resets);
 
     // Outputs.
     let mesh = tr.unpack(&result.x);
@@ -859,6 +886,7 @@ fn run_shooting(
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
+    report.line_search = LineSearchReport::new(&config.settings, report.line_search.filter_resets);
     report.ignored_study_settings = config.ignored.clone();
     let o = sh.options();
     report.shooting = Some(ShootingSummary {
@@ -1289,6 +1317,10 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
         qp_fallback_seconds: r.qp_fallback_seconds,
         qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
+        line_search: LineSearchReport {
+            filter_resets: r.filter_resets,
+            ..Default::default()
+        },
         hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
         ignored_study_settings: Vec::new(),
@@ -1776,6 +1808,16 @@ impl SolveReport {
             s.push_str(&format!(
                 "  {} plain QPs taken as infeasible where the interior-point solver stalled (the SQP went on with the elastic QP, or without a second-order correction)\n",
                 self.qp_stalls_taken_infeasible
+            ));
+        }
+        let ls = &self.line_search;
+        if ls.max_filter_resets > 0 || ls.second_order_correction_every_rejected_step {
+            s.push_str(&format!(
+                "  line search: {} of at most {} filter resets (trigger {}), second-order correction of every rejected full step {}\n",
+                ls.filter_resets,
+                ls.max_filter_resets,
+                ls.filter_reset_trigger,
+                if ls.second_order_correction_every_rejected_step { "on" } else { "off" }
             ));
         }
         if let Some(h) = &self.hessian_shift {

@@ -152,6 +152,10 @@ pub struct SolveStudy {
     pub integrate_guess: Option<bool>,
     #[serde(default)]
     pub tolerances: TolerancesSpec,
+    /// The filter line search's opt-in heuristics (IPOPT's names), for a
+    /// study that needs them.
+    #[serde(default)]
+    pub line_search: LineSearchSpec,
     /// "exact" (exact element Hessians with negative eigenvalues clipped,
     /// default), "exact-block-diagonal" (the same, block-diagonal over the
     /// transcription's blocks) or "bfgs" (partitioned damped BFGS).
@@ -357,6 +361,30 @@ pub struct TolerancesSpec {
     /// off, −1 keeps the default 50.
     #[serde(default)]
     pub stall_iterations: Option<i64>,
+}
+
+/// Heuristics of the SQP's filter line search that leap leaves off by
+/// default and a study may turn on ([`SqpSettings::max_filter_resets`],
+/// [`SqpSettings::second_order_correction_every_rejected_step`]): together
+/// they solve `models/jump_gait2392.json`, whose 28 intervals cycle without
+/// them, but the reduced Hermite–Simpson jump stopped at its iteration limit
+/// with them (README, "Where the SQP struggles").
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct LineSearchSpec {
+    /// Filter resets allowed per solve (IPOPT's `max_filter_resets`;
+    /// default 0, none; −1 the default).
+    #[serde(default)]
+    pub max_filter_resets: Option<i64>,
+    /// Successive line searches whose last rejected trial a filter entry
+    /// dominated before a reset (IPOPT's `filter_reset_trigger`; default 5,
+    /// at least 1; −1 the default).
+    #[serde(default)]
+    pub filter_reset_trigger: Option<i64>,
+    /// A second-order correction for every rejected full step, not only for
+    /// one that raised the violation (default false).
+    #[serde(default)]
+    pub second_order_correction_every_rejected_step: Option<bool>,
 }
 
 /// The forward check: the optimal excitations integrated from the squat
@@ -772,6 +800,24 @@ impl SolveStudy {
             {
                 settings.stall_iterations = v;
             }
+        }
+        let ls = &self.line_search;
+        if let Some(v) = ls.max_filter_resets {
+            if let Some(v) = check_count(v, 0, ", 0 allows none")
+                .map_err(|r| err("line_search.max_filter_resets", r))?
+            {
+                settings.max_filter_resets = v;
+            }
+        }
+        if let Some(v) = ls.filter_reset_trigger {
+            if let Some(v) =
+                check_count(v, 1, "").map_err(|r| err("line_search.filter_reset_trigger", r))?
+            {
+                settings.filter_reset_trigger = v;
+            }
+        }
+        if let Some(v) = ls.second_order_correction_every_rejected_step {
+            settings.second_order_correction_every_rejected_step = v;
         }
         if method == Method::Shooting {
             settings.hessian = HessianMode::PartitionedBfgs;
@@ -1677,6 +1723,55 @@ mod tests {
             let c = SolveStudy::from_json_str(&json, "s").unwrap();
             assert_eq!(c.resolve(None).unwrap().settings.stall_iterations, want);
         }
+    }
+
+    #[test]
+    fn line_search_heuristics_are_read_and_checked() {
+        let d = SqpSettings::default();
+        let c = SolveStudy::from_json_str(
+            r#"{"line_search": {"max_filter_resets": 5, "filter_reset_trigger": 3,
+                "second_order_correction_every_rejected_step": true}}"#,
+            "s",
+        )
+        .unwrap()
+        .resolve(None)
+        .unwrap();
+        assert_eq!(c.settings.max_filter_resets, 5);
+        assert_eq!(c.settings.filter_reset_trigger, 3);
+        assert!(c.settings.second_order_correction_every_rejected_step);
+        let c = SolveStudy::from_json_str(
+            r#"{"line_search": {"max_filter_resets": -1, "filter_reset_trigger": -1}}"#,
+            "s",
+        )
+        .unwrap()
+        .resolve(None)
+        .unwrap();
+        assert_eq!(c.settings.max_filter_resets, d.max_filter_resets);
+        assert_eq!(c.settings.filter_reset_trigger, d.filter_reset_trigger);
+        assert_eq!(
+            c.settings.second_order_correction_every_rejected_step,
+            d.second_order_correction_every_rejected_step
+        );
+        for (json, field, bad) in [
+            (
+                r#"{"line_search": {"max_filter_resets": -3}}"#,
+                "line_search.max_filter_resets",
+                "-3",
+            ),
+            (
+                r#"{"line_search": {"filter_reset_trigger": 0}}"#,
+                "line_search.filter_reset_trigger",
+                "0",
+            ),
+        ] {
+            let (f, r) = field_error(json);
+            assert_eq!(f, field);
+            assert!(r.contains(bad), "{r}");
+        }
+        let e = SolveStudy::from_json_str(r#"{"line_search": {"max_filter_reset": 5}}"#, "s")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("max_filter_reset"), "{e}");
     }
 
     #[test]

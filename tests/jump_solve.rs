@@ -219,20 +219,26 @@ fn full_jump_by_hermite_simpson_is_solved_and_agrees() {
     ));
 }
 
-/// The shipped studies on the other models that solve as the default study
+/// The shipped studies on the other models solve as the default study
 /// does: status solved, violation at most 1e-3, forward check within 1 cm.
-/// (`jump_gait2392.json`, 28 intervals, cycles to its iteration limit
-/// unless the SQP's `max_filter_resets` and
-/// `second_order_correction_every_rejected_step` are on; README, "Where the
-/// SQP struggles".)
+/// `jump_gait2392.json` (28 intervals) turns on the filter reset and the
+/// second-order correction of every rejected full step (its
+/// `line_search`), without which it cycles to its iteration limit (README,
+/// "Where the SQP struggles"); the filter is reset at least once.
 #[test]
-#[ignore = "two full solves, about 4 minutes on 2 cores; scripts/full_solve.sh"]
+#[ignore = "three full solves, about 5 minutes on 2 cores; scripts/full_solve.sh"]
 fn shipped_studies_on_other_models_are_solved_and_agree() {
     for (study, tag) in [
         ("models/jump_explicit.json", "full_explicit"),
         ("models/jump_jmp_strength.json", "full_jmp_strength"),
+        ("models/jump_gait2392.json", "full_gait2392"),
     ] {
-        assert_solved_and_forward_checked(&solve(study, tag));
+        let r = solve(study, tag);
+        assert_solved_and_forward_checked(&r);
+        if tag == "full_gait2392" {
+            assert!(r.line_search.second_order_correction_every_rejected_step);
+            assert!(r.line_search.filter_resets >= 1, "{:?}", r.line_search);
+        }
     }
 }
 

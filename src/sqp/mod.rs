@@ -522,6 +522,8 @@ pub struct SqpResult {
     /// its primal residual stalled (the SQP went on with the elastic QP,
     /// or dropped that second-order correction).
     pub qp_stalls_taken_infeasible: usize,
+    /// Filter resets made ([`SqpSettings::max_filter_resets`]).
+    pub filter_resets: usize,
     pub hessian: HessianMode,
     pub time: TimeSplit,
     pub history: Vec<IterationRecord>,
@@ -1211,6 +1213,7 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         qp_fallbacks_infeasible: 0,
         qp_fallback_seconds: 0.0,
         qp_stalls_taken_infeasible: 0,
+        filter_resets: 0,
         hessian,
         time: TimeSplit::default(),
         history: Vec::new(),
@@ -2253,6 +2256,7 @@ impl<'s> Solver<'s> {
                 {
                     filter.clear();
                     filter_resets += 1;
+                    result.filter_resets = filter_resets;
                     filter_rejections = 0;
                     if st.verbose_line_search {
                         crate::errln!(
