@@ -285,7 +285,9 @@ pub struct SqpSettings {
     /// `--hessian exact-inertia-corrected` the default study's 26-interval
     /// mesh ended "infeasible" (the other shipped studies and the
     /// Hock–Schittkowski set kept or improved their results; README,
-    /// "Where the SQP struggles").
+    /// "Where the SQP struggles"). A study turns both on with its
+    /// `line_search` ([`crate::study::LineSearchSpec`]), as
+    /// `models/jump_gait2392.json` does.
     pub max_filter_resets: usize,
     /// See [`SqpSettings::max_filter_resets`].
     pub filter_reset_trigger: usize,
