@@ -1405,3 +1405,12 @@ mod tests {
         );
     }
 }
+
+/// Whether `a` and `b` are the same existing file (after symbolic links
+/// and relative paths are resolved).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}

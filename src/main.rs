@@ -1098,6 +1098,34 @@ fn simulate(
     files.push(format!("{SIMULATE_FILE_PREFIX}_summary.json"));
     leap::solve::check_result_files(&out_dir, &files)
         .map_err(|e| anyhow::anyhow!("{}: {e}", out_dir.display()))?;
+    // An input among the result files would be overwritten by them.
+    let inputs = [
+        (
+            "the controls file (controls, --controls)",
+            controls_path.as_ref(),
+        ),
+        ("the model (model, --model)", Some(&model_path)),
+        ("the study file", study.as_ref()),
+    ];
+    for (what, input) in inputs {
+        let Some(input) = input else { continue };
+        if let Some(r) = files
+            .iter()
+            .map(|f| out_dir.join(f))
+            .find(|r| leap::io::same_file(input, r))
+        {
+            anyhow::bail!(
+                "{}: {what} is one of this run's result files ({}), which the run would overwrite; copy it elsewhere or give the run another results directory (out, --out)",
+                input.display(),
+                r.display()
+            );
+        }
+    }
+    if controls_path.is_some() && st.bang_bang.is_some() {
+        leap::errln!(
+            "note: {origin}: bang_bang is not used: the excitations come from the controls file (--controls)"
+        );
+    }
     let m = leap::model::Model::from_file(&model_path)?;
     let (laws, eq) = leap::ode::StateEquation::opensim(&m, true)?;
     let pose = m.squat_pose()?;

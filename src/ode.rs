@@ -924,12 +924,28 @@ fn check_contact_mirror(
         let candidates: Vec<usize> = (0..contact.spheres.len())
             .filter(|&j| side[contact.spheres[j].body] == other)
             .collect();
-        // (Fails on NaN too.)
-        if candidates
-            .iter()
-            .any(|&j| distance(j) <= TOL && contact.spheres[j].radius == a.radius)
-        {
+        // One to one: as many spheres of this radius at this x and y on
+        // each leg (a foot's two spheres that differ only in z are not
+        // both mirrored by one of the other's). (Fails on NaN too.)
+        let coincide = |j: usize| distance(j) <= TOL && contact.spheres[j].radius == a.radius;
+        let here = (0..contact.spheres.len())
+            .filter(|&j| side[contact.spheres[j].body] == side[a.body] && coincide(j))
+            .count();
+        let there = candidates.iter().filter(|&&j| coincide(j)).count();
+        if there == here {
             continue;
+        }
+        if there > 0 {
+            let leg = |s: Side| if s == Side::Left { "left" } else { "right" };
+            return Err(OdeError::Symmetry(format!(
+                "{}: forces.contact.spheres[{i}]: sphere '{}' of the {} leg (on '{}', radius {} m) has {here} sphere(s) of its radius at its x and y on its leg and {there} on the {} leg: the symmetric system moves both legs as one, so each foot needs the other's spheres one to one, of the same radius at the same x and y (z negated); give both feet the same spheres, or use the full system (`leap eval --full`, `leap squat --full`, `leap analyze --full`)",
+                model.file.display(),
+                a.name,
+                leg(side[a.body]),
+                model.bodies[a.body].name,
+                a.radius,
+                leg(other),
+            )));
         }
         let nearest = candidates
             .iter()

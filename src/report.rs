@@ -693,13 +693,9 @@ pub fn check_output(output: &Path, trajectory: &Path, refs: &[PathBuf]) -> Resul
         file: output.into(),
         reason,
     };
-    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
-    };
     if let Some(input) = std::iter::once(trajectory)
         .chain(refs.iter().map(PathBuf::as_path))
-        .find(|p| same(output, p))
+        .find(|p| crate::io::same_file(output, p))
     {
         return Err(refuse(format!(
             "--output is the input file {}: the report would overwrite it; name another file",

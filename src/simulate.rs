@@ -692,6 +692,12 @@ pub const MAX_REPORTED_ROWS: f64 = 1e5;
 pub const MAX_T_MAX: f64 = 10.0;
 /// The finest relative accuracy of the third-order RungeKutta3.
 pub const MIN_ACCURACY_RK3: f64 = 1e-10;
+/// The finest relative accuracy of CPodes on the jumper: the bang-bang
+/// jump integrates at 1e-5 to 1e-7 (1,408 to 2,884 steps), and from 1e-8 to
+/// 1e-12 CPodes' error test fails repeatedly near t = 0.35 s, its step
+/// down to 2e-9 s (`leap simulate --integrator CPodes --accuracy A`,
+/// 2026-12-07).
+pub const MIN_ACCURACY_CPODES: f64 = 1e-7;
 /// The coarsest relative accuracy: at 1e-1 the bang-bang jump came out at
 /// 16.1 cm against 23.5 cm at 1e-2 to 1e-4 (an earlier model's; today's
 /// jumps 25.7 cm at 1e-2 to 1e-4).
@@ -746,6 +752,16 @@ pub fn check_integrator_accuracy(
     {
         return Err(format!(
             "RungeKutta3 needs at least {MIN_ACCURACY_RK3:e}, got {}: a third-order method, at 1e-12 it needs more than {MAX_INTEGRATOR_STEPS} steps to lift-off (at 1e-10 about 68,000 to the apex)",
+            crate::io::readable(accuracy)
+        ));
+    } else if accuracy < MIN_ACCURACY_CPODES
+        && matches!(
+            integrator,
+            IntegratorChoice::Simbody(crate::simbody::SimbodyIntegrator::CPodes)
+        )
+    {
+        return Err(format!(
+            "CPodes needs at least {MIN_ACCURACY_CPODES:e} on this jumper, got {}: from 1e-8 on its error test fails repeatedly near t = 0.35 s (the bang-bang jump, its step down to 2e-9 s); RungeKuttaMerson (OpenSim's default) takes accuracies to {MIN_ACCURACY:e}",
             crate::io::readable(accuracy)
         ));
     } else if !(MIN_ACCURACY..=MAX_ACCURACY).contains(&accuracy) {

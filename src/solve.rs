@@ -599,6 +599,44 @@ pub fn collocation_problem_options(
     }
 }
 
+/// Refuse a run that would overwrite or remove one of its own inputs (the
+/// guess, the model or the study file) among its result files: the
+/// solution of a previous run given as the guess in the same results
+/// directory, or its forward check's controls, which a run without the
+/// check removes as stale.
+fn check_inputs_are_not_results(config: &SolveConfig) -> Result<(), SolveError> {
+    let guess = match &config.guess {
+        crate::study::GuessChoice::File(f) => Some(("the guess (guess, --guess)", f)),
+        _ => None,
+    };
+    let inputs = guess
+        .into_iter()
+        .chain(std::iter::once((
+            "the model (model, --model)",
+            &config.model,
+        )))
+        .chain(config.study_file.iter().map(|f| ("the study file", f)));
+    for (what, input) in inputs {
+        if let Some(r) = result_files(&config.name)
+            .iter()
+            .map(|f| config.output_directory.join(f))
+            .find(|r| crate::io::same_file(input, r))
+        {
+            return Err(SolveError::Io {
+                file: input.clone(),
+                error: std::io::Error::new(
+                    std::io::ErrorKind::AlreadyExists,
+                    format!(
+                        "{what} is one of this run's result files ({}), which the run would overwrite or remove; copy it elsewhere, or give the run another results directory (output_directory, --out) or name",
+                        r.display()
+                    ),
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Run a study: build the problem, solve it, write the outputs, check the
 /// solution forward. `verbose` prints the SQP's iteration log to standard
 /// error; `progress` receives one line per stage.
@@ -614,6 +652,7 @@ pub fn run(
         file: dir.clone(),
         error: std::io::Error::new(e.kind(), format!("output_directory (--out): {e}")),
     })?;
+    check_inputs_are_not_results(config)?;
     if let Some(q) = config
         .settings
         .qp_dump_dir

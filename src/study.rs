@@ -816,6 +816,12 @@ impl SolveStudy {
                 settings.filter_reset_trigger = v;
             }
         }
+        if ls.filter_reset_trigger.is_some_and(|v| v != -1) && settings.max_filter_resets == 0 {
+            return Err(err(
+                "line_search.filter_reset_trigger",
+                "has no effect while max_filter_resets is 0 (the default): allow resets with line_search.max_filter_resets".into(),
+            ));
+        }
         if let Some(v) = ls.second_order_correction_every_rejected_step {
             settings.second_order_correction_every_rejected_step = v;
         }
@@ -1759,9 +1765,14 @@ mod tests {
                 "-3",
             ),
             (
-                r#"{"line_search": {"filter_reset_trigger": 0}}"#,
+                r#"{"line_search": {"max_filter_resets": 1, "filter_reset_trigger": 0}}"#,
                 "line_search.filter_reset_trigger",
                 "0",
+            ),
+            (
+                r#"{"line_search": {"filter_reset_trigger": 3}}"#,
+                "line_search.filter_reset_trigger",
+                "max_filter_resets is 0",
             ),
         ] {
             let (f, r) = field_error(json);

@@ -3,6 +3,7 @@
 
 use crate::common::refused;
 use assert_cmd::Command;
+use leap::study::SIMULATE_FILE_PREFIX;
 
 fn leap() -> Command {
     Command::cargo_bin("leap").unwrap()
@@ -247,6 +248,10 @@ fn accuracies_that_would_abort_or_hang_are_refused() {
         ),
         (vec!["--accuracy", "1e-300"], "accuracy: "),
         (
+            vec!["--integrator", "CPodes", "--accuracy", "1e-8"],
+            "CPodes needs at least 1e-7",
+        ),
+        (
             vec!["--integrator", "ExplicitEuler", "--accuracy", "1e-12"],
             "fixed step",
         ),
@@ -261,11 +266,37 @@ fn accuracies_that_would_abort_or_hang_are_refused() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
         assert!(err.contains(want), "{args:?}: {err}");
-        if !args.contains(&"ExplicitEuler") && !args.contains(&"RungeKutta3") {
+        let own_floor = args.contains(&"1e-8") || args.contains(&"1e-11");
+        if !args.contains(&"ExplicitEuler") && !own_floor {
             assert!(err.contains("[1e-12, 1e-2]"), "{args:?}: {err}");
         }
         assert!(!err.contains("Assertion"), "{args:?}: {err}");
     }
+    std::fs::remove_dir_all(&out).ok();
+}
+
+/// A controls file among the run's own result files would be overwritten
+/// by them: refused, and kept.
+#[test]
+fn controls_among_the_runs_result_files_are_refused_and_kept() {
+    let out = tmp("controls-are-result");
+    let controls = out.join(format!("{SIMULATE_FILE_PREFIX}_controls.sto"));
+    std::fs::copy("tests/data/controls/jumper_missing_soleus.sto", &controls).unwrap();
+    let before = std::fs::read(&controls).unwrap();
+    let o = leap()
+        .args(["simulate", "--controls"])
+        .arg(&controls)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("the controls file (controls, --controls) is one of this run's result files"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&controls).unwrap(), before);
     std::fs::remove_dir_all(&out).ok();
 }
 

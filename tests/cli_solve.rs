@@ -535,6 +535,42 @@ fn a_guess_without_state_columns_is_refused_naming_file_and_column() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A guess among the run's own result files (a forward check's controls,
+/// which a run without the check removes as stale; a solution, which the
+/// run overwrites) is refused before anything is written, and kept.
+#[test]
+fn a_guess_among_the_runs_result_files_is_refused_and_kept() {
+    let out = fresh_dir("guess_is_result");
+    for (file, extra) in [
+        (
+            "jump_forward_controls.sto",
+            vec!["--integrate-guess", "--no-forward-check"],
+        ),
+        ("jump_solution.sto", vec![]),
+    ] {
+        let guess = out.join(file);
+        std::fs::copy("tests/data/controls/jumper_missing_soleus.sto", &guess).unwrap();
+        let before = std::fs::read(&guess).unwrap();
+        let mut args = vec![
+            "solve",
+            "--max-iterations",
+            "1",
+            "--guess",
+            guess.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        args.extend(["--out", out.to_str().unwrap()]);
+        let err = refused(&args);
+        assert!(
+            err.contains(guess.to_str().unwrap())
+                && err.contains("the guess (guess, --guess) is one of this run's result files"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&guess).unwrap(), before, "{file}");
+    }
+    let _ = std::fs::remove_dir_all(&out);
+}
+
 #[test]
 fn example_study_parses() {
     let s = leap::study::SolveStudy::from_file(Path::new("models/jump_collocation.json")).unwrap();

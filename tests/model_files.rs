@@ -690,6 +690,25 @@ fn the_symmetric_system_needs_mirrored_contact_spheres() {
             );
         }
     }
+    // A left sphere removed whose partner's twin on the same foot differs
+    // only in z (heel_med_r and heel_lat_r share x and y): one to one, the
+    // right foot's two have one partner.
+    let mut w = v.clone();
+    w["forces"]["contact"]["spheres"] = serde_json::json!(spheres
+        .iter()
+        .filter(|s| s["name"] != "heel_med_l")
+        .collect::<Vec<_>>());
+    let at = |name: &str| {
+        let s = spheres.iter().find(|s| s["name"] == name).unwrap();
+        (s["location"][0].as_f64(), s["location"][1].as_f64())
+    };
+    assert_eq!(at("heel_med_r"), at("heel_lat_r"), "the jumper's heels");
+    let e = build(&w, true).unwrap_err();
+    assert!(
+        e.contains("has 2 sphere(s) of its radius at its x and y on its leg and 1 on the left leg"),
+        "{e}"
+    );
+    build(&w, false).unwrap();
     // Moved along z: it still mirrors.
     let mut w = v.clone();
     let z = w["forces"]["contact"]["spheres"][i]["location"][2]
