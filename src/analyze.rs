@@ -154,7 +154,14 @@ pub enum AnalysisError {
     /// ([`crate::eval::outside_range_hint`]).
     #[error("row at t = {t} s: its states give a non-finite {what}{why}", t = crate::io::readable(*.0), what = .1, why = if .2.is_empty() { ": a state of that row lies far outside what the model can do" } else { .2.as_str() })]
     NotFinite(f64, &'static str, String),
+    /// A row whose centre of mass lies or moves beyond
+    /// [`MAX_COM_MAGNITUDE`] (a height of 1e300 m is finite, and no jump).
+    #[error("row at t = {t} s: its states put the {what} at {v}, beyond ±{MAX_COM_MAGNITUDE} (m, m/s): no movement of the model{why}", t = crate::io::readable(*.0), what = .1, v = crate::io::readable(*.2), why = if .3.is_empty() { "" } else { .3.as_str() })]
+    FarOutside(f64, &'static str, f64, String),
 }
+
+/// The largest centre-of-mass height (m) or speed (m/s) a row may give.
+pub const MAX_COM_MAGNITUDE: f64 = 1e3;
 
 /// The contact sphere sunk deepest into the ground at the state in `ws`
 /// (as [`StateEquation::rhs`] left it), if it is sunk beyond its radius
@@ -274,6 +281,23 @@ fn sample(
             return Err(AnalysisError::NotFinite(
                 t,
                 what,
+                crate::eval::outside_range_hint(
+                    eq,
+                    x,
+                    "a file in degrees without `inDegrees=yes` in its header?",
+                ),
+            ));
+        }
+    }
+    for (value, what) in [
+        (com[1], "centre-of-mass height"),
+        (vcom[1], "centre-of-mass velocity"),
+    ] {
+        if value.abs() > MAX_COM_MAGNITUDE {
+            return Err(AnalysisError::FarOutside(
+                t,
+                what,
+                value,
                 crate::eval::outside_range_hint(
                     eq,
                     x,

@@ -281,6 +281,14 @@ impl StoTable {
             }
         }
         if !found_end {
+            // A leap model or study (JSON) is the other file a user has at
+            // hand.
+            if text.trim_start().starts_with('{') {
+                return Err(perr(
+                    1,
+                    "a JSON file (a leap model or study?), not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')".into(),
+                ));
+            }
             return Err(perr(text_lines(text).count(), "no 'endheader' line".into()));
         }
         table.in_degrees(path)?;

@@ -644,7 +644,16 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
             let (what, at) = text.split_at(text.rfind(" at line ").unwrap_or(text.len()));
             format!("{what}, under two of its names; give it once{at}")
         } else {
-            inner.to_string()
+            // serde names the Rust type a section deserializes into
+            // ("expected struct MeshSpec"), which the user never wrote.
+            let text = inner.to_string();
+            match text.split_once("expected struct ") {
+                Some((before, after)) => {
+                    let rest = after.split_once(' ').map_or("", |(_, r)| r);
+                    format!("{before}expected a JSON object {rest}")
+                }
+                None => text,
+            }
         };
         JsonError {
             path: if whole { "(document)".into() } else { path },

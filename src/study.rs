@@ -537,11 +537,73 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize>(
     text: &str,
     origin: &str,
 ) -> Result<T, StudyError> {
-    parse_json_object(text).map_err(|e| StudyError::Field {
-        origin: origin.into(),
-        field: e.path,
-        reason: e.reason,
+    parse_json_object(text).map_err(|e| {
+        // The kind of file this study is: a hint where the file is another.
+        let own = if std::any::type_name::<T>().ends_with("SimulateStudy") {
+            "simulate"
+        } else {
+            "solve"
+        };
+        let reason = match file_kind(text) {
+            Some((kind, hint)) if kind != own && e.reason.starts_with("unknown field") => {
+                format!("{}; {hint}", e.reason)
+            }
+            _ => e.reason,
+        };
+        StudyError::Field {
+            origin: origin.into(),
+            field: e.path,
+            reason,
+        }
     })
+}
+
+/// What kind of leap file the JSON object `text` looks like, by its
+/// top-level keys, when a study refused one of them: a model, a `leap
+/// solve` study or a `leap simulate` study (None for neither), with a
+/// hint for the user.
+fn file_kind(text: &str) -> Option<(&'static str, &'static str)> {
+    let v: serde_json::Value = serde_json::from_str(text).ok()?;
+    let has = |keys: &[&str]| keys.iter().filter(|k| v.get(**k).is_some()).count();
+    let model = has(&[
+        "bodies",
+        "joints",
+        "coordinates",
+        "forces",
+        "credits",
+        "gravity",
+    ]);
+    let solve = has(&[
+        "mesh",
+        "tolerances",
+        "line_search",
+        "method",
+        "guess",
+        "hessian",
+        "shooting",
+        "problem",
+        "forward_check",
+        "qp_solver",
+        "description",
+    ]);
+    let simulate = has(&[
+        "t_max",
+        "bang_bang",
+        "controls",
+        "integrator",
+        "accuracy",
+        "report_interval",
+        "out",
+    ]);
+    if model >= 2 && model > solve.max(simulate) {
+        Some(("model", "this looks like a model file (it has bodies, joints, forces), not a study: name it as a study's model or with --model"))
+    } else if solve > simulate && solve >= 2 {
+        Some(("solve", "this looks like a `leap solve` study file (mesh, tolerances, guess, ...): give it to `leap solve`"))
+    } else if simulate > solve && simulate >= 2 {
+        Some(("simulate", "this looks like a `leap simulate` study file (t_max, integrator, bang_bang, ...): give it to `leap simulate --study`"))
+    } else {
+        None
+    }
 }
 
 impl SolveStudy {
@@ -1783,6 +1845,39 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("max_filter_reset"), "{e}");
+    }
+
+    #[test]
+    fn a_model_or_simulate_study_given_as_a_solve_study_is_named() {
+        let model = std::fs::read_to_string("models/jumper.json").unwrap();
+        let e = SolveStudy::from_json_str(&model, "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("this looks like a model file"), "{e}");
+        let sim =
+            r#"{"t_max": 1.0, "integrator": "RungeKuttaMerson", "bang_bang": {"on_time": 0.0}}"#;
+        let e = SolveStudy::from_json_str(sim, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`leap simulate` study file"), "{e}");
+        // A section given as null is a JSON object missing, not a Rust type.
+        let e = SolveStudy::from_json_str(r#"{"mesh": null}"#, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("mesh: invalid type: null, expected a JSON object at line"),
+            "{e}"
+        );
+        // A solve study's own misspelt field gets no such hint.
+        let e = SolveStudy::from_json_str(r#"{"mesh": {}, "tolerance": {}}"#, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("tolerance") && !e.contains("looks like"), "{e}");
+        let solve = std::fs::read_to_string("models/jump_collocation.json").unwrap();
+        let e = crate::simulate::SimulateStudy::from_json_str(&solve, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`leap solve` study file"), "{e}");
     }
 
     #[test]

@@ -210,6 +210,14 @@ fn broken_states_files_name_file_column_and_row_once() {
     std::fs::write(&p, "states\ntime\tx\n").unwrap();
     let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
     assert_eq!(e, format!("{}: line 2: no 'endheader' line", p.display()));
+    // A leap model (JSON) given as a table is named as such.
+    let e = leap::analyze::read_states(&eq, std::path::Path::new("models/jumper.json"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("models/jumper.json: line 1: a JSON file (a leap model or study?)"),
+        "{e}"
+    );
     // A good file in radians: the file's values as they are.
     let p = dir.join("good.sto");
     good.write_sto(&p).unwrap();
@@ -281,6 +289,18 @@ fn absurd_states_are_warned_of_or_refused_and_one_row_windows_refused() {
     assert_eq!(
         e,
         "row at t = 0.01 s: its states give a non-finite kinetic plus potential energy: a state of that row lies far outside what the model can do"
+    );
+    // Finite, but no jump: the pelvis a million kilometres up.
+    let mut high = vec![x0.clone(); 3];
+    high[1][col("/jointset/ground_pelvis/pelvis_ty/value")] = 1e9;
+    let e = analyze(&eq, &laws, &time, &high, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with("row at t = 0.01 s: its states put the centre-of-mass height at ")
+            && e.contains("beyond ±1000 (m, m/s)")
+            && e.contains("pelvis_ty"),
+        "{e}"
     );
     let e = analyze(
         &eq,
