@@ -176,6 +176,19 @@ fn sunk_sphere(eq: &StateEquation, ws: &crate::ode::StateWorkspace<f64>) -> Opti
     (-bottom > sp.radius).then(|| (sp.name.clone(), -bottom))
 }
 
+/// The warning for a state whose deepest contact sphere is sunk past its
+/// centre ([`sunk_sphere`]), if one is.
+pub(crate) fn sunk_sphere_warning(
+    eq: &StateEquation,
+    ws: &crate::ode::StateWorkspace<f64>,
+) -> Option<String> {
+    let (name, depth) = sunk_sphere(eq, ws)?;
+    Some(format!(
+        "contact sphere '{name}' lies {:.1} mm deep in the ground, its centre below the surface (a jump's spheres sink millimetres): the ground force there is not one a foot meets (pelvis_ty in another model's convention?)",
+        1e3 * depth
+    ))
+}
+
 /// OpenSim's laws as the analysis reads a row: a DeGrooteFregly2016Muscle
 /// whose explicit fibre velocity overflows there gets NaN for it, where
 /// [`OpenSimLaws`] refuses the whole row. De Groote's inverted force–velocity curve (a sinh) overflows where
@@ -373,12 +386,11 @@ pub fn analyze(
         }
         let s = sample(eq, &row_laws, &mut ws, *t, x)?;
         if !warned_sunk {
-            if let Some((name, depth)) = sunk_sphere(eq, &ws) {
+            if let Some(w) = sunk_sphere_warning(eq, &ws) {
                 warned_sunk = true;
                 warnings.push(format!(
-                    "at t = {} s, its first such row: contact sphere '{name}' lies {:.1} mm deep in the ground, its centre below the surface (a jump's spheres sink millimetres): the ground force there is not one a foot meets (pelvis_ty in another model's convention?)",
+                    "at t = {} s, its first such row: {w}",
                     crate::io::readable(*t),
-                    1e3 * depth
                 ));
             }
         }

@@ -530,6 +530,7 @@ pub fn evaluate(
             .into_iter()
             .map(|(_, w)| w),
     );
+    warnings.extend(crate::analyze::sunk_sphere_warning(eq, &ws));
     let contact_forces = match &model.contact {
         Some(c) => c
             .spheres

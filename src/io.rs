@@ -916,6 +916,12 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// finite by [`StoTable::finite_columns`], which takes the states out
 /// (after the check of a missing column, which is the more telling).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
+    read_states_in(eq, path).map(|(t, _)| t)
+}
+
+/// [`read_states`], and whether the file's header said `inDegrees=yes`
+/// (the table's says no once its angles are converted).
+pub fn read_states_in(eq: &StateEquation, path: &Path) -> Result<(StoTable, bool), StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
     let columns = eq.model_state_columns();
@@ -948,7 +954,7 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(l))),
     )?;
     to_radians(&mut t, &angular, degrees);
-    Ok(t)
+    Ok((t, degrees))
 }
 
 /// The value and speed columns of the rotational coordinates of `eq`'s

@@ -368,6 +368,24 @@ fn eval_warns_of_coordinates_outside_their_range_and_clamped_fibres() {
         err.contains(fibre) && err.contains("outside.json: evaluation 0"),
         "{err}"
     );
+    // The feet half a metre into the ground (pelvis_ty lowered): meganewtons
+    // of contact force, warned of with the deepest sphere.
+    let mut s = squat.clone();
+    let ty = "/jointset/ground_pelvis/pelvis_ty/value";
+    s["state"][ty] = (s["state"][ty].as_f64().unwrap() - 0.5).into();
+    let (err, v) = eval("sunk", &s);
+    let w: Vec<&str> = v["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|w| w.as_str())
+        .collect();
+    assert!(
+        w.iter()
+            .any(|w| w.contains("mm deep in the ground, its centre below the surface")),
+        "{w:?}"
+    );
+    assert!(err.contains("mm deep in the ground"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

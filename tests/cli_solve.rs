@@ -571,6 +571,64 @@ fn a_guess_among_the_runs_result_files_is_refused_and_kept() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
+/// A solution in radians whose header says `inDegrees=yes` (its angles
+/// would be divided by 57) is refused as a guess, naming the header; the
+/// same file in degrees with that header is read.
+#[test]
+fn a_radians_guess_headed_in_degrees_is_refused() {
+    let dir = fresh_dir("radians_headed_degrees");
+    solve_json(
+        &args(&["--num-mesh-intervals", "4", "--max-iterations", "1"]),
+        &dir.join("first"),
+    );
+    let mut t = leap::io::StoTable::read(&dir.join("first/jump_solution.sto")).unwrap();
+    t.metadata.insert("inDegrees".into(), "yes".into());
+    let wrong = dir.join("wrong.sto");
+    t.write_sto(&wrong).unwrap();
+    let err = refused(&[
+        "solve",
+        "--num-mesh-intervals",
+        "4",
+        "--max-iterations",
+        "1",
+        "--guess",
+        wrong.to_str().unwrap(),
+        "--out",
+        dir.join("second").to_str().unwrap(),
+    ]);
+    assert!(
+        err.contains(wrong.to_str().unwrap())
+            && err.contains("inDegrees: the header says yes, but the first row's angles are the squat's only if read in radians"),
+        "{err}"
+    );
+    // In degrees, as the header says: a guess like any other.
+    let m =
+        leap::model::Model::from_file(concat!(env!("CARGO_MANIFEST_DIR"), "/models/jumper.json"))
+            .unwrap();
+    let (_, eq) = leap::ode::StateEquation::opensim(&m, false).unwrap();
+    let angular = leap::io::angular_columns(&eq);
+    for (k, label) in t.labels.iter().enumerate() {
+        if angular.contains(label) {
+            t.rows.iter_mut().for_each(|r| r[k] = r[k].to_degrees());
+        }
+    }
+    let right = dir.join("right.sto");
+    t.write_sto(&right).unwrap();
+    let v = solve_json(
+        &[
+            "--num-mesh-intervals".as_ref(),
+            "4".as_ref(),
+            "--max-iterations".as_ref(),
+            "1".as_ref(),
+            "--guess".as_ref(),
+            right.as_os_str(),
+        ],
+        &dir.join("third"),
+    );
+    assert_eq!(v["guess_projected_states"], serde_json::json!([]), "{v}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn example_study_parses() {
     let s = leap::study::SolveStudy::from_file(Path::new("models/jump_collocation.json")).unwrap();
