@@ -154,13 +154,14 @@ pub enum AnalysisError {
     /// ([`crate::eval::outside_range_hint`]).
     #[error("row at t = {t} s: its states give a non-finite {what}{why}", t = crate::io::readable(*.0), what = .1, why = if .2.is_empty() { ": a state of that row lies far outside what the model can do" } else { .2.as_str() })]
     NotFinite(f64, &'static str, String),
-    /// A row whose centre of mass lies or moves beyond
+    /// A row whose centre of mass lies or moves vertically beyond
     /// [`MAX_COM_MAGNITUDE`] (a height of 1e300 m is finite, and no jump).
     #[error("row at t = {t} s: its states put the {what} at {v}, beyond ±{MAX_COM_MAGNITUDE} (m, m/s): no movement of the model{why}", t = crate::io::readable(*.0), what = .1, v = crate::io::readable(*.2), why = if .3.is_empty() { "" } else { .3.as_str() })]
     FarOutside(f64, &'static str, f64, String),
 }
 
-/// The largest centre-of-mass height (m) or speed (m/s) a row may give.
+/// The largest centre-of-mass height (m) or vertical speed (m/s) a row
+/// may give.
 pub const MAX_COM_MAGNITUDE: f64 = 1e3;
 
 /// The contact sphere sunk deepest into the ground at the state in `ws`
@@ -304,7 +305,7 @@ fn sample(
     }
     for (value, what) in [
         (com[1], "centre-of-mass height"),
-        (vcom[1], "centre-of-mass velocity"),
+        (vcom[1], "centre-of-mass vertical velocity"),
     ] {
         if value.abs() > MAX_COM_MAGNITUDE {
             return Err(AnalysisError::FarOutside(

@@ -283,7 +283,11 @@ impl StoTable {
         if !found_end {
             // A leap model or study (JSON) is the other file a user has at
             // hand.
-            if text.trim_start().starts_with('{') {
+            if text
+                .trim_start_matches('\u{feff}')
+                .trim_start()
+                .starts_with('{')
+            {
                 return Err(perr(
                     1,
                     "a JSON file (a leap model or study?), not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')".into(),
@@ -1311,6 +1315,37 @@ impl Controls {
     }
 }
 
+/// Whether `a` and `b` are the same existing file (after symbolic links
+/// and relative paths are resolved).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// The first of a run's `inputs` (what it is, its path) that is one of the
+/// result files `files` the run writes into `dir`, with that result's path:
+/// the run would overwrite or remove it. A result file that is a symbolic
+/// link is replaced, not written through ([`write_output_with`]), so the
+/// results are compared by their own paths, the inputs by what they are.
+pub fn input_among_results<'a>(
+    inputs: impl IntoIterator<Item = (&'a str, &'a Path)>,
+    dir: &Path,
+    files: &[String],
+) -> Option<(&'a str, &'a Path, PathBuf)> {
+    // No directory yet: no result file to lose.
+    let dir = dir.canonicalize().ok()?;
+    inputs.into_iter().find_map(|(what, input)| {
+        let real = input.canonicalize().ok()?;
+        files
+            .iter()
+            .map(|f| dir.join(f))
+            .find(|r| *r == real)
+            .map(|r| (what, input, r))
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1417,14 +1452,5 @@ mod tests {
                     .chars()
                     .count()
         );
-    }
-}
-
-/// Whether `a` and `b` are the same existing file (after symbolic links
-/// and relative paths are resolved).
-pub fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
     }
 }

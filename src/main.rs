@@ -1102,24 +1102,18 @@ fn simulate(
     let inputs = [
         (
             "the controls file (controls, --controls)",
-            controls_path.as_ref(),
+            controls_path.as_deref(),
         ),
-        ("the model (model, --model)", Some(&model_path)),
-        ("the study file", study.as_ref()),
+        ("the model (model, --model)", Some(model_path.as_path())),
+        ("the study file", study.as_deref()),
     ];
-    for (what, input) in inputs {
-        let Some(input) = input else { continue };
-        if let Some(r) = files
-            .iter()
-            .map(|f| out_dir.join(f))
-            .find(|r| leap::io::same_file(input, r))
-        {
-            anyhow::bail!(
-                "{}: {what} is one of this run's result files ({}), which the run would overwrite; copy it elsewhere or give the run another results directory (out, --out)",
-                input.display(),
-                r.display()
-            );
-        }
+    let inputs = inputs.into_iter().filter_map(|(w, p)| p.map(|p| (w, p)));
+    if let Some((what, input, r)) = leap::io::input_among_results(inputs, &out_dir, &files) {
+        anyhow::bail!(
+            "{}: {what} is one of this run's result files ({}), which the run would overwrite; copy it elsewhere or give the run another results directory (out, --out)",
+            input.display(),
+            r.display()
+        );
     }
     if controls_path.is_some() && st.bang_bang.is_some() {
         leap::errln!(

@@ -646,13 +646,17 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
         } else {
             // serde names the Rust type a section deserializes into
             // ("expected struct MeshSpec"), which the user never wrote.
+            // Only where a value of another type stands for a section
+            // ("invalid type: null, expected struct MeshSpec at line 1").
             let text = inner.to_string();
             match text.split_once("expected struct ") {
-                Some((before, after)) => {
-                    let rest = after.split_once(' ').map_or("", |(_, r)| r);
-                    format!("{before}expected a JSON object {rest}")
+                Some((before, after)) if text.starts_with("invalid type") => {
+                    match after.split_once(' ') {
+                        Some((_, rest)) => format!("{before}expected a JSON object {rest}"),
+                        None => format!("{before}expected a JSON object"),
+                    }
                 }
-                None => text,
+                _ => text,
             }
         };
         JsonError {

@@ -857,8 +857,9 @@ fn check_mirror(
 /// toes below the talus) needs a sphere of the right leg of the same radius
 /// at the same place in the plane (x and y in the ground frame; the legs'
 /// frames then coincide in the plane), and every sphere of the right leg
-/// one of the left. z does not act in the plane and is not compared; a
-/// sphere on a midline body (the pelvis) needs no partner.
+/// one of the left, one to one (each leg as many spheres of a radius at a
+/// place). z does not act in the plane and is not compared; a sphere on a
+/// midline body (the pelvis) needs no partner.
 fn check_contact_mirror(
     model: &Model,
     system: &SystemSpec,
@@ -932,7 +933,7 @@ fn check_contact_mirror(
             .filter(|&j| side[contact.spheres[j].body] == side[a.body] && coincide(j))
             .count();
         let there = candidates.iter().filter(|&&j| coincide(j)).count();
-        if there == here {
+        if here > 0 && there == here {
             continue;
         }
         if there > 0 {

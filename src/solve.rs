@@ -606,35 +606,32 @@ pub fn collocation_problem_options(
 /// check removes as stale.
 fn check_inputs_are_not_results(config: &SolveConfig) -> Result<(), SolveError> {
     let guess = match &config.guess {
-        crate::study::GuessChoice::File(f) => Some(("the guess (guess, --guess)", f)),
+        crate::study::GuessChoice::File(f) => Some(("the guess (guess, --guess)", f.as_path())),
         _ => None,
     };
     let inputs = guess
         .into_iter()
-        .chain(std::iter::once((
-            "the model (model, --model)",
-            &config.model,
-        )))
-        .chain(config.study_file.iter().map(|f| ("the study file", f)));
-    for (what, input) in inputs {
-        if let Some(r) = result_files(&config.name)
-            .iter()
-            .map(|f| config.output_directory.join(f))
-            .find(|r| crate::io::same_file(input, r))
-        {
-            return Err(SolveError::Io {
-                file: input.clone(),
-                error: std::io::Error::new(
-                    std::io::ErrorKind::AlreadyExists,
-                    format!(
-                        "{what} is one of this run's result files ({}), which the run would overwrite or remove; copy it elsewhere, or give the run another results directory (output_directory, --out) or name",
-                        r.display()
-                    ),
+        .chain([("the model (model, --model)", config.model.as_path())])
+        .chain(
+            config
+                .study_file
+                .iter()
+                .map(|f| ("the study file", f.as_path())),
+        );
+    let files = result_files(&config.name);
+    match crate::io::input_among_results(inputs, &config.output_directory, &files) {
+        Some((what, input, r)) => Err(SolveError::Io {
+            file: input.into(),
+            error: std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                format!(
+                    "{what} is one of this run's result files ({}), which the run would overwrite or remove; copy it elsewhere, or give the run another results directory (output_directory, --out) or name",
+                    r.display()
                 ),
-            });
-        }
+            ),
+        }),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 /// Run a study: build the problem, solve it, write the outputs, check the

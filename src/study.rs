@@ -522,7 +522,7 @@ pub struct Overrides {
 
 /// Read a study file of any kind (`leap solve`'s, `leap simulate`'s): one
 /// JSON object, its errors naming the file and the field's JSON path.
-pub fn read_study<T: serde::de::DeserializeOwned + Serialize>(
+pub fn read_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
     path: &Path,
 ) -> Result<T, StudyError> {
     let text = crate::io::read_input_text(path).map_err(|error| StudyError::Io {
@@ -533,19 +533,14 @@ pub fn read_study<T: serde::de::DeserializeOwned + Serialize>(
 }
 
 /// Parse study JSON (one object); `origin` names it in errors.
-pub fn parse_study<T: serde::de::DeserializeOwned + Serialize>(
+pub fn parse_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
     text: &str,
     origin: &str,
 ) -> Result<T, StudyError> {
     parse_json_object(text).map_err(|e| {
-        // The kind of file this study is: a hint where the file is another.
-        let own = if std::any::type_name::<T>().ends_with("SimulateStudy") {
-            "simulate"
-        } else {
-            "solve"
-        };
+        // A hint where the file is of another kind.
         let reason = match file_kind(text) {
-            Some((kind, hint)) if kind != own && e.reason.starts_with("unknown field") => {
+            Some((kind, hint)) if kind != T::KIND && e.reason.starts_with("unknown field") => {
                 format!("{}; {hint}", e.reason)
             }
             _ => e.reason,
@@ -556,6 +551,16 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize>(
             reason,
         }
     })
+}
+
+/// The kind of a study file ("solve", "simulate"), for [`parse_study`]'s
+/// hint where a file of another kind is given.
+pub trait StudyKind {
+    const KIND: &'static str;
+}
+
+impl StudyKind for SolveStudy {
+    const KIND: &'static str = "solve";
 }
 
 /// What kind of leap file the JSON object `text` looks like, by its
@@ -881,7 +886,7 @@ impl SolveStudy {
         if ls.filter_reset_trigger.is_some_and(|v| v != -1) && settings.max_filter_resets == 0 {
             return Err(err(
                 "line_search.filter_reset_trigger",
-                "has no effect while max_filter_resets is 0 (the default): allow resets with line_search.max_filter_resets".into(),
+                "has no effect while max_filter_resets is 0 (the default): allow resets with line_search.max_filter_resets, or remove filter_reset_trigger".into(),
             ));
         }
         if let Some(v) = ls.second_order_correction_every_rejected_step {
@@ -1829,7 +1834,7 @@ mod tests {
             (
                 r#"{"line_search": {"max_filter_resets": 1, "filter_reset_trigger": 0}}"#,
                 "line_search.filter_reset_trigger",
-                "0",
+                "must be ≥ 1 (or -1 for the default), got 0",
             ),
             (
                 r#"{"line_search": {"filter_reset_trigger": 3}}"#,
@@ -1844,7 +1849,10 @@ mod tests {
         let e = SolveStudy::from_json_str(r#"{"line_search": {"max_filter_reset": 5}}"#, "s")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("max_filter_reset"), "{e}");
+        assert!(
+            e.starts_with("s: line_search.max_filter_reset: unknown field `max_filter_reset`"),
+            "{e}"
+        );
     }
 
     #[test]

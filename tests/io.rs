@@ -445,7 +445,7 @@ fn directories_and_devices_are_refused_as_input_files() {
         .unwrap_err()
         .to_string();
     assert!(dir.contains("models") && dir.contains("directory"), "{dir}");
-    let study = leap::study::read_study::<serde_json::Value>(Path::new("tests"))
+    let study = leap::study::read_study::<leap::study::SolveStudy>(Path::new("tests"))
         .unwrap_err()
         .to_string();
     assert!(study.contains("directory"), "{study}");
