@@ -226,7 +226,7 @@ fn full_jump_by_hermite_simpson_is_solved_and_agrees() {
 /// `line_search`), without which it cycles to its iteration limit (README,
 /// "Where the SQP struggles"); the filter is reset at least once.
 #[test]
-#[ignore = "three full solves, about 5 minutes on 2 cores; scripts/full_solve.sh"]
+#[ignore = "three full solves, about 3 minutes on 2 cores; scripts/full_solve.sh"]
 fn shipped_studies_on_other_models_are_solved_and_agree() {
     for (study, tag) in [
         ("models/jump_explicit.json", "full_explicit"),
