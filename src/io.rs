@@ -1325,24 +1325,29 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 }
 
 /// The first of a run's `inputs` (what it is, its path) that is one of the
-/// result files `files` the run writes into `dir`, with that result's path:
-/// the run would overwrite or remove it. A result file that is a symbolic
-/// link is replaced, not written through ([`write_output_with`]), so the
-/// results are compared by their own paths, the inputs by what they are.
+/// result files `files` the run writes into `dir`, with the reason to
+/// refuse it (the run would overwrite or remove it; `instead` says what the
+/// user may do). A result file that is a symbolic link is replaced, not
+/// written through ([`write_output_with`]), so the results are compared by
+/// their own paths, the inputs by what they are.
 pub fn input_among_results<'a>(
     inputs: impl IntoIterator<Item = (&'a str, &'a Path)>,
     dir: &Path,
     files: &[String],
-) -> Option<(&'a str, &'a Path, PathBuf)> {
+    instead: &str,
+) -> Option<(&'a Path, String)> {
     // No directory yet: no result file to lose.
     let dir = dir.canonicalize().ok()?;
     inputs.into_iter().find_map(|(what, input)| {
         let real = input.canonicalize().ok()?;
-        files
-            .iter()
-            .map(|f| dir.join(f))
-            .find(|r| *r == real)
-            .map(|r| (what, input, r))
+        let r = files.iter().map(|f| dir.join(f)).find(|r| *r == real)?;
+        Some((
+            input,
+            format!(
+                "{what} is one of this run's result files ({}), which the run would overwrite or remove; copy it elsewhere, or give the run {instead}",
+                r.display()
+            ),
+        ))
     })
 }
 

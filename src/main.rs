@@ -1108,12 +1108,10 @@ fn simulate(
         ("the study file", study.as_deref()),
     ];
     let inputs = inputs.into_iter().filter_map(|(w, p)| p.map(|p| (w, p)));
-    if let Some((what, input, r)) = leap::io::input_among_results(inputs, &out_dir, &files) {
-        anyhow::bail!(
-            "{}: {what} is one of this run's result files ({}), which the run would overwrite; copy it elsewhere or give the run another results directory (out, --out)",
-            input.display(),
-            r.display()
-        );
+    let instead = "another results directory (out, --out)";
+    if let Some((input, reason)) = leap::io::input_among_results(inputs, &out_dir, &files, instead)
+    {
+        anyhow::bail!("{}: {reason}", input.display());
     }
     if controls_path.is_some() && st.bang_bang.is_some() {
         leap::errln!(

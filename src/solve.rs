@@ -619,16 +619,11 @@ fn check_inputs_are_not_results(config: &SolveConfig) -> Result<(), SolveError> 
                 .map(|f| ("the study file", f.as_path())),
         );
     let files = result_files(&config.name);
-    match crate::io::input_among_results(inputs, &config.output_directory, &files) {
-        Some((what, input, r)) => Err(SolveError::Io {
+    let instead = "another results directory (output_directory, --out) or name";
+    match crate::io::input_among_results(inputs, &config.output_directory, &files, instead) {
+        Some((input, reason)) => Err(SolveError::Io {
             file: input.into(),
-            error: std::io::Error::new(
-                std::io::ErrorKind::AlreadyExists,
-                format!(
-                    "{what} is one of this run's result files ({}), which the run would overwrite or remove; copy it elsewhere, or give the run another results directory (output_directory, --out) or name",
-                    r.display()
-                ),
-            ),
+            error: std::io::Error::new(std::io::ErrorKind::AlreadyExists, reason),
         }),
         None => Ok(()),
     }
@@ -781,7 +776,7 @@ pub fn run(
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
-    report.line_search = LineSearchReport::new(&config.settings, report.line_search.filter_resets);
+    report.line_search = LineSearchReport::new(&config.settings, result.filter_resets);
 
     // Outputs.
     let mesh = tr.unpack(&result.x);
@@ -922,7 +917,7 @@ fn run_shooting(
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
-    report.line_search = LineSearchReport::new(&config.settings, report.line_search.filter_resets);
+    report.line_search = LineSearchReport::new(&config.settings, result.filter_resets);
     report.ignored_study_settings = config.ignored.clone();
     let o = sh.options();
     report.shooting = Some(ShootingSummary {
@@ -1353,10 +1348,8 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         qp_fallbacks_infeasible: r.qp_fallbacks_infeasible,
         qp_fallback_seconds: r.qp_fallback_seconds,
         qp_stalls_taken_infeasible: r.qp_stalls_taken_infeasible,
-        line_search: LineSearchReport {
-            filter_resets: r.filter_resets,
-            ..Default::default()
-        },
+        // Set by the run, which has the settings.
+        line_search: LineSearchReport::default(),
         hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
         ignored_study_settings: Vec::new(),
@@ -1516,12 +1509,15 @@ fn check_degrees_header(tr: &Transcription, t: &StoTable) -> Result<(), String> 
     let eq = &tr.ocp.eq;
     let x0 = tr.ocp.x0();
     let angular = crate::io::angular_columns(eq);
+    let Some(row) = t.rows.first() else {
+        return Ok(());
+    };
     let (mut as_degrees, mut as_radians) = (0.0f64, 0.0f64);
     for (label, i) in eq.model_state_columns() {
         if !(label.ends_with("/value") && angular.contains(&label)) {
             continue;
         }
-        if let (Some(k), Some(row)) = (t.labels.iter().position(|l| *l == label), t.rows.first()) {
+        if let Some(k) = t.labels.iter().position(|l| *l == label) {
             as_degrees = as_degrees.max((row[k] - x0[i]).abs());
             as_radians = as_radians.max((row[k].to_degrees() - x0[i]).abs());
         }
