@@ -134,7 +134,7 @@ pub struct OcpOptions {
     /// check used the blended switch too; at b = 50 (the default until
     /// 2026-12-06) the gap is 0.34 cm. On the full jump the forward check's
     /// gap is 0.37–0.51 cm at b = 50 and 0.08–0.24 cm at b = 200 on 24–30
-    /// mesh intervals (README, "Mesh error and open-loop sensitivity").
+    /// mesh intervals (docs/model-strength.md, "Mesh error and open-loop sensitivity").
     pub activation_smoothing: Option<f64>,
     /// Thelen's fibre clamp spread over a band (see
     /// [`crate::laws::FiberClampSmoothing`]) from the fibre-length lower

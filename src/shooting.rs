@@ -1229,7 +1229,7 @@ fn run_tasks<S, T: Send>(
 /// differences, Shanno–Phua's steps stayed near 1e-3 (the actual reduction twice the predicted) and
 /// the paper's rule stopped the solve at 25.6 cm after 45 iterations;
 /// Oren–Luenberger's steps were 0.05–0.1 and passed that point by
-/// iteration 9 (README, "Direct shooting").
+/// iteration 9 (docs/shooting.md).
 pub fn sqp_settings(base: &crate::sqp::SqpSettings) -> crate::sqp::SqpSettings {
     crate::sqp::SqpSettings {
         hessian: crate::sqp::HessianMode::PartitionedBfgs,

@@ -208,7 +208,7 @@ pub struct SqpSettings {
     /// multipliers (slacks from the new bounds), and from its cold start
     /// again where that does not solve; not with the inertia correction.
     /// Default on: the default jump took 25% fewer interior-point
-    /// iterations on its consecutive QPs (see README, "Speed").
+    /// iterations on its consecutive QPs (docs/implicit-fibre-dynamics.md, "Speed").
     pub qp_warm_start: bool,
     /// Which solver solves the QPs first ([`QpSolver`]; default clarabel,
     /// see there).
@@ -284,10 +284,10 @@ pub struct SqpSettings {
     /// 1,000-iteration limit instead of solving, and with
     /// `--hessian exact-inertia-corrected` the default study's 26-interval
     /// mesh ended "infeasible" (the other shipped studies and the
-    /// Hock–Schittkowski set kept or improved their results; README,
-    /// "Where the SQP struggles"). A study turns both on with its
-    /// `line_search` ([`crate::study::LineSearchSpec`]), as
-    /// `models/jump_gait2392.json` does.
+    /// Hock–Schittkowski set kept or improved their results; docs/sqp.md).
+    /// A study turns both on with its `line_search`
+    /// ([`crate::study::LineSearchSpec`]), as `models/jump_gait2392.json`
+    /// does.
     pub max_filter_resets: usize,
     /// See [`SqpSettings::max_filter_resets`].
     pub filter_reset_trigger: usize,
