@@ -250,7 +250,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         err(
             format!("line {}, column {}", e.line(), e.column()),
             if ext("json") {
-                e.to_string()
+                crate::model::json_error_text(text, &e)
             } else if ext("sto") || ext("mot") {
                 format!("{e} (read as JSON: a storage file is not an input of `leap eval`, which takes one state as JSON or rows as CSV; `leap analyze` reads a states .sto)")
             } else {

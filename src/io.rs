@@ -771,6 +771,19 @@ fn not_readable_kind(kind: &std::fs::FileType) -> Option<&'static str> {
     None
 }
 
+/// Why a path written in a study file cannot name a file, if it cannot: a
+/// control character (a NUL, a newline, as a JSON `\u0000` or `\n` writes
+/// them), which no file name of ours holds and which a message would print
+/// raw. The path is quoted with the character escaped.
+pub fn path_text_problem(path: &str) -> Option<String> {
+    let (k, c) = path.chars().enumerate().find(|(_, c)| c.is_control())?;
+    Some(format!(
+        "holds a control character ({}) at character {}: {path:?}",
+        c.escape_unicode(),
+        k + 1
+    ))
+}
+
 /// Why `path` names no input file leap could read, checked before the
 /// file is (a study's model and guess): it is missing, a directory, or a
 /// device or socket. `None` when it is a file or a pipe.

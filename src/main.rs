@@ -620,7 +620,15 @@ fn run(cli: Cli) -> Result<ExitCode> {
         } => {
             let model = model.path();
             let (laws, eq) = opensim_system(&model, full)?;
-            let inputs = leap::eval::read_inputs(&eq, &input).map_err(|e| full_hint(e, full))?;
+            let inputs = leap::eval::read_inputs(&eq, &input).map_err(|e| {
+                // A symmetric system's input (`leap squat`'s) given with
+                // --full misses the left leg's names.
+                if full && e.reason.starts_with("missing '") {
+                    anyhow::anyhow!("{e}; with --full an input holds both legs' states and excitations (`leap squat --full` prints one)")
+                } else {
+                    full_hint(e, full)
+                }
+            })?;
             let mut reports = Vec::with_capacity(inputs.len());
             for (k, (x, u)) in inputs.iter().enumerate() {
                 let r = leap::eval::evaluate(&eq, &laws, x, u)

@@ -610,7 +610,7 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
             // Say what the document is when it is JSON, else where it is not.
             let reason = match serde_json::from_str::<serde_json::Value>(text) {
                 Ok(v) => format!("expected a JSON object, got {}", json_kind(&v)),
-                Err(e) => format!("expected a JSON object: {e}"),
+                Err(e) => format!("expected a JSON object: {}", json_error_text(text, &e)),
             };
             return Err(document(reason));
         }
@@ -648,15 +648,19 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
             // ("expected struct MeshSpec"), which the user never wrote.
             // Only where a value of another type stands for a section
             // ("invalid type: null, expected struct MeshSpec at line 1").
-            let text = inner.to_string();
-            match text.split_once("expected struct ") {
-                Some((before, after)) if text.starts_with("invalid type") => {
-                    match after.split_once(' ') {
-                        Some((_, rest)) => format!("{before}expected a JSON object {rest}"),
-                        None => format!("{before}expected a JSON object"),
+            let text = json_error_text(text, &inner);
+            if let Some(reason) = whole_number_reason(&text) {
+                reason
+            } else {
+                match text.split_once("expected struct ") {
+                    Some((before, after)) if text.starts_with("invalid type") => {
+                        match after.split_once(' ') {
+                            Some((_, rest)) => format!("{before}expected a JSON object {rest}"),
+                            None => format!("{before}expected a JSON object"),
+                        }
                     }
+                    _ => text,
                 }
-                _ => text,
             }
         };
         JsonError {
@@ -923,6 +927,69 @@ fn array_for_object(
     }
 }
 
+/// serde_json's error `e` in reading `text`, with a word where the text at
+/// the error is a NaN or an infinity, which JSON does not have (Python's
+/// `json.dump` writes them).
+pub fn json_error_text(text: &str, e: &serde_json::Error) -> String {
+    if e.is_syntax() && non_finite_literal_at(text, e.line(), e.column()) {
+        format!("{e}: JSON has no NaN or Infinity; write a finite number")
+    } else {
+        e.to_string()
+    }
+}
+
+/// Whether a `NaN`, `Infinity` or `inf` literal (any case and sign) starts
+/// at or next to `line`, `column` (1-based, as serde_json counts) of `text`.
+fn non_finite_literal_at(text: &str, line: usize, column: usize) -> bool {
+    let Some(l) = text.lines().nth(line.saturating_sub(1)) else {
+        return false;
+    };
+    let at = column.saturating_sub(1);
+    (at.saturating_sub(2)..=at + 1).any(|k| {
+        l.get(k..).is_some_and(|rest| {
+            let rest = rest.trim_start_matches(['-', '+']).to_ascii_lowercase();
+            rest.starts_with("nan") || rest.starts_with("inf")
+        })
+    })
+}
+
+/// serde's word for a number where a field takes a whole number ("invalid
+/// type: floating point `2.5`, expected i64"; "invalid value: integer
+/// `18446744073709551615`, expected i64"), which names a Rust type the user
+/// never wrote, in the user's words; None for any other reason.
+fn whole_number_reason(reason: &str) -> Option<String> {
+    let (whole, rest) = if let Some(r) = reason.strip_prefix("invalid type: floating point `") {
+        (false, r)
+    } else if let Some(r) = reason.strip_prefix("invalid value: integer `") {
+        (true, r)
+    } else {
+        return None;
+    };
+    let (value, rest) = rest.split_once("`, expected ")?;
+    let (ty, at) = rest.split_at(rest.find(' ').unwrap_or(rest.len()));
+    let (min, max): (i128, i128) = match ty {
+        "i8" => (i8::MIN.into(), i8::MAX.into()),
+        "i16" => (i16::MIN.into(), i16::MAX.into()),
+        "i32" => (i32::MIN.into(), i32::MAX.into()),
+        "i64" | "isize" => (i64::MIN.into(), i64::MAX.into()),
+        "u8" => (0, u8::MAX.into()),
+        "u16" => (0, u16::MAX.into()),
+        "u32" => (0, u32::MAX.into()),
+        "u64" | "usize" => (0, u64::MAX.into()),
+        _ => return None,
+    };
+    // A whole integer out of range, or a float beyond the range (1e20).
+    let v = value.parse::<f64>().unwrap_or(f64::NAN);
+    let beyond = if v < min as f64 {
+        ", too small"
+    } else if whole || v > max as f64 {
+        ", too large"
+    } else {
+        ""
+    };
+    Some(format!("expected a whole number, got {value}{beyond}{at}"))
+}
+
 fn json_kind(v: &serde_json::Value) -> &'static str {
     match v {
         serde_json::Value::Null => "null",
@@ -1033,10 +1100,21 @@ impl Model {
     /// Parse and validate JSON text; `file` names it in errors.
     pub fn from_json_str(text: &str, file: impl AsRef<Path>) -> Result<Self, ModelError> {
         let file = file.as_ref().to_path_buf();
-        let spec: ModelFile = parse_json_object(text).map_err(|e| ModelError::Parse {
-            file: file.clone(),
-            reason: unknown_field_of_type(text, &e.path, &e.reason).unwrap_or(e.reason),
-            path: e.path,
+        let spec: ModelFile = parse_json_object(text).map_err(|e| {
+            let mut reason = unknown_field_of_type(text, &e.path, &e.reason).unwrap_or(e.reason);
+            // A study given as the model: say so at its first unknown field.
+            if reason.starts_with("unknown field") {
+                if let Some((kind, hint)) = crate::study::file_kind(text) {
+                    if kind != "model" {
+                        reason = format!("{reason}; {hint}, not as a model");
+                    }
+                }
+            }
+            ModelError::Parse {
+                file: file.clone(),
+                reason,
+                path: e.path,
+            }
         })?;
         Self::from_spec(spec, file)
     }

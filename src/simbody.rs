@@ -190,7 +190,7 @@ impl SimbodyIntegrator {
 /// message is kept, since Simbody's integrators swallow exceptions.
 pub struct ForceCallback {
     f: Box<ForceFn>,
-    last_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    last_error: std::sync::Arc<std::sync::Mutex<Option<(f64, String)>>>,
     calls: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
@@ -228,7 +228,7 @@ impl ForceCallback {
         };
         if let Err(e) = &r {
             if let Ok(mut g) = self.last_error.lock() {
-                *g = Some(format!("t = {t}: {e}"));
+                *g = Some((t, e.clone()));
             }
         }
         r
@@ -304,7 +304,7 @@ pub struct SimbodyModel {
     points_buf: Vec<f64>,
     forces_buf: Vec<f64>,
     nz: usize,
-    last_error: std::sync::Arc<std::sync::Mutex<Option<String>>>,
+    last_error: std::sync::Arc<std::sync::Mutex<Option<(f64, String)>>>,
     callback_calls: std::sync::Arc<std::sync::atomic::AtomicU64>,
 }
 
@@ -459,8 +459,9 @@ impl SimbodyModel {
             .map_err(|e| self.with_callback_error(e))
     }
 
-    /// The last error the Rust force element reported, if any (taken).
-    pub fn take_force_error(&self) -> Option<String> {
+    /// The last error the Rust force element reported, if any (taken): the
+    /// time and the reason.
+    pub fn take_force_error(&self) -> Option<(f64, String)> {
         self.last_error.lock().ok().and_then(|mut g| g.take())
     }
 
@@ -472,7 +473,16 @@ impl SimbodyModel {
 
     fn with_callback_error(&self, e: cxx::Exception) -> SimbodyError {
         match self.take_force_error() {
-            Some(rust) => SimbodyError::Simbody(format!("{} (force element: {rust})", e.what())),
+            // Simbody's text only wraps the force element's reason ("SimTK
+            // Exception thrown at AbstractIntegratorRep.cpp:428: Integrator
+            // step failed at time … apparently because: <reason>"): say it once.
+            Some((t, rust)) if e.what().contains(rust.as_str()) => {
+                SimbodyError::Simbody(format!("the force element failed at t = {t} s: {rust}"))
+            }
+            Some((t, rust)) => SimbodyError::Simbody(format!(
+                "{} (force element, at t = {t} s: {rust})",
+                e.what()
+            )),
             None => e.into(),
         }
     }

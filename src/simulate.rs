@@ -757,7 +757,7 @@ pub fn check_integrator_accuracy(
         IntegratorChoice::Simbody(S::CPodes) => Some((
             "CPodes",
             MIN_ACCURACY_CPODES,
-            format!("on this jumper from 1e-8 on its error test fails repeatedly near t = 0.35 s (the bang-bang jump, its step down to 2e-9 s); RungeKuttaMerson (OpenSim's default) takes accuracies to {MIN_ACCURACY:e}"),
+            format!("on leap's jumper (models/jumper.json) its error test fails repeatedly from 1e-8 on, near t = 0.35 s of the bang-bang jump with steps down to 2e-9 s; RungeKuttaMerson (OpenSim's default) takes accuracies to {MIN_ACCURACY:e}"),
         )),
         _ => None,
     };
@@ -932,6 +932,9 @@ impl SimulateStudy {
         ] {
             if path.as_deref().is_some_and(|p| p.trim().is_empty()) {
                 return Err(err(field, format!("empty: name {what}")));
+            }
+            if let Some(why) = path.as_deref().and_then(crate::io::path_text_problem) {
+                return Err(err(field, why));
             }
         }
         if !(self.t_max.is_finite() && self.t_max > 0.0 && self.t_max <= MAX_T_MAX) {

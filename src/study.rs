@@ -43,7 +43,7 @@ pub const JUMP_EIGENVALUE_FLOOR: f64 = 1e-4;
 /// that stiff composition, and 1e-4 of it lifted every weak direction so
 /// far that the full jump crept (26.7 cm after 3,000 iterations); at 1e-6
 /// it solved in 580 iterations (32.3 cm), at 1e-7 in 525 (34.1 cm), at 1e-2
-/// it stalled in elastic mode (README, "Hermite–Simpson").
+/// it stalled in elastic mode (docs/implicit-fibre-dynamics.md, "Speed").
 pub const HERMITE_SIMPSON_EIGENVALUE_FLOOR: f64 = 1e-7;
 
 /// The eigenvalue floor a scheme gets unless the study names one.
@@ -368,7 +368,7 @@ pub struct TolerancesSpec {
 /// [`SqpSettings::second_order_correction_every_rejected_step`]): together
 /// they solve `models/jump_gait2392.json`, whose 28 intervals cycle without
 /// them, but the reduced Hermite–Simpson jump stopped at its iteration limit
-/// with them (README, "Where the SQP struggles").
+/// with them (docs/sqp.md).
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct LineSearchSpec {
@@ -567,7 +567,7 @@ impl StudyKind for SolveStudy {
 /// top-level keys, when a study refused one of them: a model, a `leap
 /// solve` study or a `leap simulate` study (None for neither), with a
 /// hint for the user.
-fn file_kind(text: &str) -> Option<(&'static str, &'static str)> {
+pub(crate) fn file_kind(text: &str) -> Option<(&'static str, &'static str)> {
     let v: serde_json::Value = serde_json::from_str(text).ok()?;
     let has = |keys: &[&str]| keys.iter().filter(|k| v.get(**k).is_some()).count();
     let model = has(&[
@@ -651,6 +651,15 @@ impl SolveStudy {
             .map(Path::to_path_buf)
             .unwrap_or_default();
         let rel = |s: &str| base.join(s);
+        for (field, path) in [
+            ("model", &self.model),
+            ("guess", &self.guess),
+            ("output_directory", &self.output_directory),
+        ] {
+            if let Some(why) = path.as_deref().and_then(crate::io::path_text_problem) {
+                return Err(err(field, why));
+            }
+        }
 
         let name = self.name.clone().unwrap_or_else(|| "jump".into());
         check_name(&name).map_err(|r| err("name", r))?;
@@ -1335,7 +1344,7 @@ pub fn parse_fiber_dynamics(s: &str) -> Result<FiberDynamics, String> {
 /// the paper's explicit ones, and on the default study every mesh of 24-30
 /// intervals solved (112-829 iterations) where the explicit rows solved two
 /// of four (810 and 954 iterations; `leap bench solve --num-mesh-intervals
-/// 24,26,28,30`, README).
+/// 24,26,28,30`, docs/implicit-fibre-dynamics.md).
 pub fn default_fiber_dynamics(scheme: Scheme) -> FiberDynamics {
     if scheme == Scheme::MidpointEuler {
         FiberDynamics::Implicit
@@ -1886,6 +1895,83 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("`leap solve` study file"), "{e}");
+        // And a study given as the model.
+        let e = crate::model::Model::from_json_str(&solve, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("`leap solve` study file") && e.contains("not as a model"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn whole_numbers_non_finite_literals_and_control_characters_are_named() {
+        for (json, field, want) in [
+            (
+                r#"{"tolerances": {"max_iterations": 2.5}}"#,
+                "tolerances.max_iterations",
+                "expected a whole number, got 2.5 at line",
+            ),
+            (
+                r#"{"tolerances": {"max_iterations": 100000000000000000000}}"#,
+                "tolerances.max_iterations",
+                "expected a whole number, got 1e+20, too large at line",
+            ),
+            (
+                r#"{"tolerances": {"max_iterations": -1e20}}"#,
+                "tolerances.max_iterations",
+                "expected a whole number, got -1e+20, too small at line",
+            ),
+            (
+                r#"{"tolerances": {"max_iterations": 18446744073709551615}}"#,
+                "tolerances.max_iterations",
+                "expected a whole number, got 18446744073709551615, too large",
+            ),
+            (
+                r#"{"mesh": {"num_mesh_intervals": 28.0}}"#,
+                "mesh.num_mesh_intervals",
+                "expected a whole number, got 28",
+            ),
+            (
+                r#"{"tolerances": {"optim_convergence_tolerance": NaN}}"#,
+                "tolerances.optim_convergence_tolerance",
+                "JSON has no NaN or Infinity",
+            ),
+            (
+                r#"{"tolerances": {"optim_convergence_tolerance": -Infinity}}"#,
+                "tolerances.optim_convergence_tolerance",
+                "JSON has no NaN or Infinity",
+            ),
+            (
+                r#"{"output_directory": "out\u0000x"}"#,
+                "output_directory",
+                r#"holds a control character (\u{0}) at character 4: "out\0x""#,
+            ),
+            (
+                r#"{"model": "m\n.json"}"#,
+                "model",
+                r#"holds a control character (\u{a}) at character 2"#,
+            ),
+        ] {
+            let (f, r) = field_error(json);
+            assert_eq!(f, field, "{json}");
+            assert!(r.contains(want), "{json}: {r}");
+            assert!(!r.contains("i64") && !r.contains('\0'), "{json}: {r}");
+        }
+        // A `leap simulate` study's paths too.
+        let e = crate::simulate::SimulateStudy::from_json_str(r#"{"out": "o\u0000x"}"#, "s.json")
+            .unwrap()
+            .check("s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with(r#"s.json: out: holds a control character (\u{0}) at character 2"#),
+            "{e}"
+        );
+        // Other reasons pass unchanged: a string for a count.
+        let (_, r) = field_error(r#"{"tolerances": {"max_iterations": "10"}}"#);
+        assert!(r.starts_with("invalid type: string \"10\""), "{r}");
     }
 
     #[test]

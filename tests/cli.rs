@@ -309,6 +309,32 @@ fn eval_refuses_inputs_outside_their_physical_range() {
         err.contains("twice.json: excitation: key '/forceset/add_long_r' given twice"),
         "{err}"
     );
+    // A NaN, as Python's json.dump writes it, is named: JSON has none.
+    let nan = text.replacen(
+        "\"/forceset/add_long_r\":",
+        "\"/forceset/add_long_r\":NaN,\"x\":",
+        1,
+    );
+    assert_ne!(nan, text);
+    let file = dir.join("nan.json");
+    std::fs::write(&file, nan).unwrap();
+    let err = eval_refused(&file, "a NaN literal");
+    assert!(
+        err.contains("nan.json: line 1") && err.contains("JSON has no NaN or Infinity"),
+        "{err}"
+    );
+    // The symmetric system's input given with --full lacks the left leg.
+    let err = refused(
+        Command::cargo_bin("leap")
+            .unwrap()
+            .args(["eval", "--full", "--input"])
+            .arg(dir.join("ok.json")),
+        "a symmetric input with --full",
+    );
+    assert!(
+        err.contains("ok.json: state: missing '") && err.contains("`leap squat --full` prints one"),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -1013,3 +1013,33 @@ fn states_in_degrees_without_the_header_key_are_refused_naming_the_cause() {
     }
     std::fs::remove_dir_all(&out).ok();
 }
+
+/// A muscle law that fails inside Simbody's step (a DeGroote muscle whose
+/// inverted force–velocity curve overflows at the minimum activation;
+/// README, "The model") is reported once, with its time and reason, not
+/// inside SimTK's exception text.
+#[test]
+fn a_force_element_failure_in_a_step_is_said_once() {
+    let dir = tmp("degroote-step");
+    let mut model: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    model["forces"]["muscle_model"] = "DeGrooteFregly2016Muscle".into();
+    let file = dir.join("degroote.json");
+    std::fs::write(&file, model.to_string()).unwrap();
+    let o = leap()
+        .args(["simulate", "--t-max", "0.01", "--model"])
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("integration stopped: Simbody: the force element failed at t = ")
+            && err.matches("non-finite fibre velocity").count() == 1
+            && !err.contains("SimTK Exception"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
