@@ -223,7 +223,8 @@ fn full_jump_by_hermite_simpson_is_solved_and_agrees() {
 /// does: status solved, violation at most 1e-3, forward check within 1 cm.
 /// `jump_gait2392.json` (28 intervals) turns on the filter reset and the
 /// second-order correction of every rejected full step (its
-/// `line_search`), without which it cycles to its iteration limit (docs/sqp.md); the filter is reset at least once.
+/// `line_search`), without which it cycles to its iteration limit
+/// (docs/sqp.md); the filter is reset at least once.
 #[test]
 #[ignore = "three full solves, about 3 minutes on 2 cores; scripts/full_solve.sh"]
 fn shipped_studies_on_other_models_are_solved_and_agree() {
