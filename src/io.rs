@@ -241,6 +241,14 @@ impl StoTable {
         if text.trim().is_empty() {
             return Err(perr(1, "the file is empty".into()));
         }
+        // An OpenSim model or setup file is the other file an OpenSim user
+        // has at hand (its lines hold '=' and would read as header keys).
+        if text.trim_start().starts_with('<') {
+            return Err(perr(
+                1,
+                "an XML file (an OpenSim .osim model or setup file?), not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')".into(),
+            ));
+        }
         let mut table = StoTable::default();
         let mut lines = text_lines(text).enumerate();
         let mut found_end = false;
@@ -322,12 +330,15 @@ impl StoTable {
             labels_raw.split_whitespace().map(str::to_string).collect()
         };
         if labels.first().map(String::as_str) != Some("time") {
+            let first = labels.first().cloned().unwrap_or_default();
+            let commas = if first.starts_with("time,") {
+                " (columns separated by commas: a storage table's are separated by tabs, as OpenSim writes them)"
+            } else {
+                ""
+            };
             return Err(perr(
                 label_line,
-                format!(
-                    "the first column must be 'time', got '{}'",
-                    labels.first().cloned().unwrap_or_default()
-                ),
+                format!("the first column must be 'time', got '{first}'{commas}"),
             ));
         }
         if let Some(k) = labels.iter().position(String::is_empty) {
@@ -778,8 +789,8 @@ fn not_readable_kind(kind: &std::fs::FileType) -> Option<&'static str> {
 pub fn path_text_problem(path: &str) -> Option<String> {
     let (k, c) = path.chars().enumerate().find(|(_, c)| c.is_control())?;
     Some(format!(
-        "holds a control character ({}) at character {}: {path:?}",
-        c.escape_unicode(),
+        "holds the control character U+{:04X} at character {} of {path:?}; remove it",
+        c as u32,
         k + 1
     ))
 }
@@ -931,14 +942,10 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// where the symmetric system carries it by its right partner's, equal to
 /// that one ([`StoTable::check_copied_columns`]). The values are checked
 /// finite by [`StoTable::finite_columns`], which takes the states out
-/// (after the check of a missing column, which is the more telling).
+/// (after the check of a missing column, which is the more telling). A
+/// file headed `inDegrees=yes` whose angles look like radians is refused
+/// ([`check_angles_look_like_degrees`]).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
-    read_states_in(eq, path).map(|(t, _)| t)
-}
-
-/// [`read_states`], and whether the file's header said `inDegrees=yes`
-/// (the table's says no once its angles are converted).
-pub fn read_states_in(eq: &StateEquation, path: &Path) -> Result<(StoTable, bool), StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
     let columns = eq.model_state_columns();
@@ -961,6 +968,9 @@ pub fn read_states_in(eq: &StateEquation, path: &Path) -> Result<(StoTable, bool
             }
         }
     }
+    if degrees {
+        check_angles_look_like_degrees(&t, path, &angular)?;
+    }
     // The left leg's columns against their right partners', before the
     // conversion, to name the file's values.
     let names = eq.state_names();
@@ -971,7 +981,44 @@ pub fn read_states_in(eq: &StateEquation, path: &Path) -> Result<(StoTable, bool
             .map(|(l, i)| (l.as_str(), names[*i].as_str(), in_degrees(l))),
     )?;
     to_radians(&mut t, &angular, degrees);
-    Ok((t, degrees))
+    Ok(t)
+}
+
+/// A states file headed `inDegrees=yes` whose joint angles all lie within
+/// ±π, one of them beyond 0.2: read in degrees, a movement of less than
+/// 3.2° at every joint, no squat or jump (the squat's knee is bent some
+/// 80°); read in radians, one. A file in radians with a wrong header, whose
+/// angles would be divided by 57 (`leap analyze` had printed a jump of
+/// −21.7 cm and 1,097 BW from one).
+fn check_angles_look_like_degrees(
+    t: &StoTable,
+    path: &Path,
+    angular: &std::collections::HashSet<String>,
+) -> Result<(), StoError> {
+    let mut largest: Option<(f64, &str)> = None;
+    for (k, label) in t.labels.iter().enumerate() {
+        if !(label.ends_with("/value") && angular.contains(label)) {
+            continue;
+        }
+        for row in &t.rows {
+            let v = row[k].abs();
+            if largest.is_none_or(|(m, _)| v > m) {
+                largest = Some((v, label));
+            }
+        }
+    }
+    match largest {
+        Some((m, label)) if m > 0.2 && m <= std::f64::consts::PI => Err(StoError::Header {
+            file: path.into(),
+            key: "inDegrees".into(),
+            reason: format!(
+                "the header says yes, but every joint angle lies within ±π (the largest, {} in '{label}', is {:.1}° read as radians): in degrees no joint would move more than 3.2° from zero, while the squat alone bends the knee about 80°. A file in radians? Write inDegrees=no",
+                readable(m),
+                m.to_degrees()
+            ),
+        }),
+        _ => Ok(()),
+    }
 }
 
 /// The value and speed columns of the rotational coordinates of `eq`'s

@@ -622,8 +622,12 @@ fn run(cli: Cli) -> Result<ExitCode> {
             let (laws, eq) = opensim_system(&model, full)?;
             let inputs = leap::eval::read_inputs(&eq, &input).map_err(|e| {
                 // A symmetric system's input (`leap squat`'s) given with
-                // --full misses the left leg's names.
-                if full && e.reason.starts_with("missing '") {
+                // --full misses the left leg's names (by name, as CSV
+                // columns) or values (as arrays).
+                let short = e.reason.starts_with("missing '")
+                    || e.reason.starts_with("missing column '")
+                    || e.reason.contains(" values, expected ");
+                if full && short {
                     anyhow::anyhow!("{e}; with --full an input holds both legs' states and excitations (`leap squat --full` prints one)")
                 } else {
                     full_hint(e, full)
@@ -1026,6 +1030,12 @@ fn simulate(
         // An empty name is refused as such by the study's check.
         if name.as_deref().is_some_and(|n| n.trim().is_empty()) {
             return Ok(Some(p));
+        }
+        if let (Some(s), Some(why)) = (
+            &study,
+            name.as_deref().and_then(leap::io::path_text_problem),
+        ) {
+            anyhow::bail!("{}: {field}: {why}", s.display());
         }
         if let (Some(s), Some(why)) = (&study, leap::io::input_file_problem(&p)) {
             anyhow::bail!("{}: {field}: {what} '{}' {why}", s.display(), p.display());

@@ -648,18 +648,18 @@ pub fn parse_json_object<T: serde::de::DeserializeOwned + Serialize>(
             // ("expected struct MeshSpec"), which the user never wrote.
             // Only where a value of another type stands for a section
             // ("invalid type: null, expected struct MeshSpec at line 1").
-            let text = json_error_text(text, &inner);
-            if let Some(reason) = whole_number_reason(&text) {
+            let msg = json_error_text(text, &inner);
+            if let Some(reason) = whole_number_reason(&msg) {
                 reason
             } else {
-                match text.split_once("expected struct ") {
-                    Some((before, after)) if text.starts_with("invalid type") => {
+                match msg.split_once("expected struct ") {
+                    Some((before, after)) if msg.starts_with("invalid type") => {
                         match after.split_once(' ') {
                             Some((_, rest)) => format!("{before}expected a JSON object {rest}"),
                             None => format!("{before}expected a JSON object"),
                         }
                     }
-                    _ => text,
+                    _ => msg,
                 }
             }
         };
@@ -938,17 +938,30 @@ pub fn json_error_text(text: &str, e: &serde_json::Error) -> String {
     }
 }
 
-/// Whether a `NaN`, `Infinity` or `inf` literal (any case and sign) starts
-/// at or next to `line`, `column` (1-based, as serde_json counts) of `text`.
+/// Whether a `NaN`, `Infinity` or `inf` literal (any case, with or without
+/// a sign), a whole word, starts at `line`, `column` (1-based, as
+/// serde_json counts bytes) of `text`, or one byte before (where
+/// serde_json points past a sign).
 fn non_finite_literal_at(text: &str, line: usize, column: usize) -> bool {
     let Some(l) = text.lines().nth(line.saturating_sub(1)) else {
         return false;
     };
+    let b = l.as_bytes();
+    let word = |c: u8| c.is_ascii_alphanumeric() || c == b'_' || c == b'"' || c == b'.';
     let at = column.saturating_sub(1);
-    (at.saturating_sub(2)..=at + 1).any(|k| {
-        l.get(k..).is_some_and(|rest| {
-            let rest = rest.trim_start_matches(['-', '+']).to_ascii_lowercase();
-            rest.starts_with("nan") || rest.starts_with("inf")
+    (at.saturating_sub(1)..=at).any(|k| {
+        if k > 0 && b.get(k - 1).is_some_and(|&c| word(c)) {
+            return false;
+        }
+        let mut start = k;
+        if matches!(b.get(start), Some(b'-' | b'+')) {
+            start += 1;
+        }
+        ["infinity", "nan", "inf"].iter().any(|w| {
+            let end = start + w.len();
+            b.get(start..end)
+                .is_some_and(|t| t.eq_ignore_ascii_case(w.as_bytes()))
+                && !b.get(end).is_some_and(|&c| word(c))
         })
     })
 }
@@ -958,7 +971,7 @@ fn non_finite_literal_at(text: &str, line: usize, column: usize) -> bool {
 /// `18446744073709551615`, expected i64"), which names a Rust type the user
 /// never wrote, in the user's words; None for any other reason.
 fn whole_number_reason(reason: &str) -> Option<String> {
-    let (whole, rest) = if let Some(r) = reason.strip_prefix("invalid type: floating point `") {
+    let (integer, rest) = if let Some(r) = reason.strip_prefix("invalid type: floating point `") {
         (false, r)
     } else if let Some(r) = reason.strip_prefix("invalid value: integer `") {
         (true, r)
@@ -978,16 +991,32 @@ fn whole_number_reason(reason: &str) -> Option<String> {
         "u64" | "usize" => (0, u64::MAX.into()),
         _ => return None,
     };
-    // A whole integer out of range, or a float beyond the range (1e20).
-    let v = value.parse::<f64>().unwrap_or(f64::NAN);
-    let beyond = if v < min as f64 {
-        ", too small"
-    } else if whole || v > max as f64 {
-        ", too large"
+    let expected = if min == 0 {
+        "a whole number ≥ 0"
     } else {
-        ""
+        "a whole number"
     };
-    Some(format!("expected a whole number, got {value}{beyond}{at}"))
+    // The value as a whole number (a float's saturates), and whether it
+    // has a fraction.
+    let (whole, fraction) = if integer {
+        (value.parse::<i128>().ok()?, false)
+    } else {
+        let v = value.parse::<f64>().ok()?;
+        (v as i128, v.fract() != 0.0)
+    };
+    let why = if whole > max {
+        ", too large"
+    } else if whole < min && min < 0 {
+        ", too small"
+    } else if whole < min || fraction {
+        ""
+    } else {
+        // 28.0 or 1e3 for 28 or 1000.
+        return Some(format!(
+            "expected {expected} written without a decimal point or exponent ({whole}), got {value}{at}"
+        ));
+    };
+    Some(format!("expected {expected}, got {value}{why}{at}"))
 }
 
 fn json_kind(v: &serde_json::Value) -> &'static str {
@@ -1101,15 +1130,9 @@ impl Model {
     pub fn from_json_str(text: &str, file: impl AsRef<Path>) -> Result<Self, ModelError> {
         let file = file.as_ref().to_path_buf();
         let spec: ModelFile = parse_json_object(text).map_err(|e| {
-            let mut reason = unknown_field_of_type(text, &e.path, &e.reason).unwrap_or(e.reason);
+            let reason = unknown_field_of_type(text, &e.path, &e.reason).unwrap_or(e.reason);
             // A study given as the model: say so at its first unknown field.
-            if reason.starts_with("unknown field") {
-                if let Some((kind, hint)) = crate::study::file_kind(text) {
-                    if kind != "model" {
-                        reason = format!("{reason}; {hint}, not as a model");
-                    }
-                }
-            }
+            let reason = crate::study::with_kind_hint(text, "model", reason);
             ModelError::Parse {
                 file: file.clone(),
                 reason,

@@ -453,6 +453,7 @@ impl SimbodyModel {
     /// The auxiliary states' derivatives at the current state.
     pub fn zdot(&mut self, zdot: &mut [f64]) -> Result<(), SimbodyError> {
         self.check("zdot", zdot.len(), self.nz)?;
+        self.take_force_error();
         self.sys
             .pin_mut()
             .calc_zdot(zdot)
@@ -476,11 +477,14 @@ impl SimbodyModel {
             // Simbody's text only wraps the force element's reason ("SimTK
             // Exception thrown at AbstractIntegratorRep.cpp:428: Integrator
             // step failed at time … apparently because: <reason>"): say it once.
-            Some((t, rust)) if e.what().contains(rust.as_str()) => {
-                SimbodyError::Simbody(format!("the force element failed at t = {t} s: {rust}"))
-            }
+            Some((t, rust)) if e.what().contains(rust.as_str()) => SimbodyError::Simbody(format!(
+                "the muscle, contact and ligament forces (leap's force element) failed at t = {t:.6} s: {rust}"
+            )),
+            // Simbody's own reason (a step that collapsed after the force
+            // element's failures, a step cap), and the last such failure in
+            // this call.
             Some((t, rust)) => SimbodyError::Simbody(format!(
-                "{} (force element, at t = {t} s: {rust})",
+                "{} (the last failure of the muscle, contact and ligament forces in this call, at t = {t:.6} s: {rust})",
                 e.what()
             )),
             None => e.into(),
@@ -587,6 +591,7 @@ impl SimbodyModel {
     pub fn accelerations(&mut self, qdd: &mut [f64]) -> Result<(), SimbodyError> {
         self.check("qdd", qdd.len(), self.n)?;
         let n = self.n;
+        self.take_force_error();
         if let Err(e) = self.sys.pin_mut().calc_udot(&mut self.tmp[..n]) {
             return Err(self.with_callback_error(e));
         }
@@ -702,6 +707,7 @@ impl SimbodyModel {
     /// Advance the persistent integration to `t`; the model's state is then
     /// the integrator's. Counters are cumulative since the start.
     pub fn integration_step_to(&mut self, t: f64) -> Result<IntegratorStats, SimbodyError> {
+        self.take_force_error();
         match self.sys.pin_mut().integration_step_to(t) {
             Ok(s) => Ok(s),
             Err(e) => Err(self.with_callback_error(e)),

@@ -1462,12 +1462,12 @@ fn guess_from_file_with(
 ) -> Result<FileGuess, SolveError> {
     // Without states, the file's state columns are not read; they are
     // checked only to be finite (`Controls::from_table`).
-    let (t, in_degrees) = if with_states {
-        crate::io::read_states_in(&tr.ocp.eq, path)?
+    let t = if with_states {
+        crate::io::read_states(&tr.ocp.eq, path)?
     } else {
         let t = StoTable::read(path)?;
         t.check_time(path, 2)?;
-        (t, false)
+        t
     };
     let bad = |reason: String| SolveError::Guess {
         file: path.into(),
@@ -1475,9 +1475,6 @@ fn guess_from_file_with(
     };
     let tf = guess_final_time(path, &t.time, tr.ocp.options.final_time_bounds)?;
     let eq = &tr.ocp.eq;
-    if in_degrees {
-        check_degrees_header(tr, &t).map_err(bad)?;
-    }
     let missing = "missing (a guess needs every state and control column; with integrate_guess (--integrate-guess) the control columns alone)";
     let states = if with_states {
         t.finite_columns(path, &eq.state_names(), missing)?
@@ -1499,37 +1496,6 @@ fn guess_from_file_with(
         unread: unread_guess_columns(&eq.model, &t),
         projected,
     })
-}
-
-/// A guess whose header says `inDegrees=yes` (its angles converted to
-/// radians in `t`) but whose first row is the squat only read in radians:
-/// a file in radians with a wrong header, whose angles would have been
-/// divided by 57 (a solve from such a guess ended at a violation of 3.8e4).
-fn check_degrees_header(tr: &Transcription, t: &StoTable) -> Result<(), String> {
-    let eq = &tr.ocp.eq;
-    let x0 = tr.ocp.x0();
-    let angular = crate::io::angular_columns(eq);
-    let Some(row) = t.rows.first() else {
-        return Ok(());
-    };
-    let (mut as_degrees, mut as_radians) = (0.0f64, 0.0f64);
-    for (label, i) in eq.model_state_columns() {
-        if !(label.ends_with("/value") && angular.contains(&label)) {
-            continue;
-        }
-        if let Some(k) = t.labels.iter().position(|l| *l == label) {
-            as_degrees = as_degrees.max((row[k] - x0[i]).abs());
-            as_radians = as_radians.max((row[k].to_degrees() - x0[i]).abs());
-        }
-    }
-    if as_radians <= 1e-3 && as_degrees > 0.1 {
-        return Err(format!(
-            "inDegrees: the header says yes, but the first row's angles are the squat's only if read in radians (within {} rad; as degrees {} rad away): a file in radians whose header says inDegrees=yes? Write inDegrees=no",
-            crate::io::readable(as_radians),
-            crate::io::readable(as_degrees)
-        ));
-    }
-    Ok(())
 }
 
 /// A guess file's t_f, its last time: the file must start at 0 (the

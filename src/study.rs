@@ -538,13 +538,7 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
     origin: &str,
 ) -> Result<T, StudyError> {
     parse_json_object(text).map_err(|e| {
-        // A hint where the file is of another kind.
-        let reason = match file_kind(text) {
-            Some((kind, hint)) if kind != T::KIND && e.reason.starts_with("unknown field") => {
-                format!("{}; {hint}", e.reason)
-            }
-            _ => e.reason,
-        };
+        let reason = with_kind_hint(text, T::KIND, e.reason);
         StudyError::Field {
             origin: origin.into(),
             field: e.path,
@@ -563,11 +557,28 @@ impl StudyKind for SolveStudy {
     const KIND: &'static str = "solve";
 }
 
+/// `reason`, the refusal of `text` read as a file of kind `expected`
+/// ("model", "solve", "simulate"), with a hint where it is an unknown field
+/// and the file looks like one of another kind.
+pub(crate) fn with_kind_hint(text: &str, expected: &str, reason: String) -> String {
+    match file_kind(text) {
+        Some((kind, hint)) if kind != expected && reason.starts_with("unknown field") => {
+            let given_as = if expected == "model" {
+                ", not as a model (--model, or a study's \"model\")"
+            } else {
+                ""
+            };
+            format!("{reason}; {hint}{given_as}")
+        }
+        _ => reason,
+    }
+}
+
 /// What kind of leap file the JSON object `text` looks like, by its
 /// top-level keys, when a study refused one of them: a model, a `leap
 /// solve` study or a `leap simulate` study (None for neither), with a
 /// hint for the user.
-pub(crate) fn file_kind(text: &str) -> Option<(&'static str, &'static str)> {
+fn file_kind(text: &str) -> Option<(&'static str, &'static str)> {
     let v: serde_json::Value = serde_json::from_str(text).ok()?;
     let has = |keys: &[&str]| keys.iter().filter(|k| v.get(**k).is_some()).count();
     let model = has(&[
@@ -1926,17 +1937,22 @@ mod tests {
             (
                 r#"{"tolerances": {"max_iterations": 18446744073709551615}}"#,
                 "tolerances.max_iterations",
-                "expected a whole number, got 18446744073709551615, too large",
+                "expected a whole number, got 18446744073709551615, too large at line",
             ),
             (
                 r#"{"mesh": {"num_mesh_intervals": 28.0}}"#,
                 "mesh.num_mesh_intervals",
-                "expected a whole number, got 28",
+                "expected a whole number written without a decimal point or exponent (28), got 28.0 at line",
             ),
             (
                 r#"{"tolerances": {"optim_convergence_tolerance": NaN}}"#,
                 "tolerances.optim_convergence_tolerance",
                 "JSON has no NaN or Infinity",
+            ),
+            (
+                r#"{"tolerances": {"max_iterations": 9223372036854775808.0}}"#,
+                "tolerances.max_iterations",
+                "expected a whole number, got 9.223372036854776e+18, too large at line",
             ),
             (
                 r#"{"tolerances": {"optim_convergence_tolerance": -Infinity}}"#,
@@ -1946,12 +1962,12 @@ mod tests {
             (
                 r#"{"output_directory": "out\u0000x"}"#,
                 "output_directory",
-                r#"holds a control character (\u{0}) at character 4: "out\0x""#,
+                r#"holds the control character U+0000 at character 4 of "out\0x"; remove it"#,
             ),
             (
                 r#"{"model": "m\n.json"}"#,
                 "model",
-                r#"holds a control character (\u{a}) at character 2"#,
+                r#"holds the control character U+000A at character 2 of "m\n.json""#,
             ),
         ] {
             let (f, r) = field_error(json);
@@ -1966,9 +1982,18 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(
-            e.starts_with(r#"s.json: out: holds a control character (\u{0}) at character 2"#),
+            e.starts_with(r#"s.json: out: holds the control character U+0000 at character 2"#),
             "{e}"
         );
+        // No such word where the text only starts like one: a missing
+        // comma before a key "info", an unquoted file name.
+        for json in [
+            r#"{"tolerances": {"max_iterations": 10 "info": 1}}"#,
+            r#"{"guess": infile.sto}"#,
+        ] {
+            let (_, r) = field_error(json);
+            assert!(!r.contains("NaN"), "{json}: {r}");
+        }
         // Other reasons pass unchanged: a string for a count.
         let (_, r) = field_error(r#"{"tolerances": {"max_iterations": "10"}}"#);
         assert!(r.starts_with("invalid type: string \"10\""), "{r}");

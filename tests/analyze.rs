@@ -218,6 +218,23 @@ fn broken_states_files_name_file_column_and_row_once() {
         e.starts_with("models/jumper.json: line 1: a JSON file (a leap model or study?)"),
         "{e}"
     );
+    // So is an OpenSim model (XML), and a table separated by commas.
+    let e = leap::analyze::read_states(&eq, std::path::Path::new("models/jumper.osim"))
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.starts_with(
+            "models/jumper.osim: line 1: an XML file (an OpenSim .osim model or setup file?)"
+        ),
+        "{e}"
+    );
+    let p = dir.join("commas.sto");
+    std::fs::write(&p, "states\nendheader\ntime,x\n0,1\n").unwrap();
+    let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+    assert!(
+        e.ends_with("got 'time,x' (columns separated by commas: a storage table's are separated by tabs, as OpenSim writes them)"),
+        "{e}"
+    );
     // A good file in radians: the file's values as they are.
     let p = dir.join("good.sto");
     good.write_sto(&p).unwrap();
@@ -225,6 +242,39 @@ fn broken_states_files_name_file_column_and_row_once() {
     let raw = leap::io::StoTable::read(&p).unwrap();
     assert_eq!(time, good.time);
     assert_eq!(xs, raw.rows);
+    // The same file headed inDegrees=yes: its angles, the squat's in
+    // radians, would be divided by 57; refused, naming the header.
+    let mut wrong = good.clone();
+    wrong.metadata.insert("inDegrees".into(), "yes".into());
+    let p = dir.join("wrong.sto");
+    wrong.write_sto(&p).unwrap();
+    let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+    assert!(
+        e.starts_with(&format!(
+            "{}: header 'inDegrees': the header says yes, but every joint angle lies within ±π",
+            p.display()
+        )) && e.ends_with("Write inDegrees=no"),
+        "{e}"
+    );
+    // Its angles and angular speeds in degrees, as the header says: read
+    // back in radians.
+    let angular = leap::io::angular_columns(&eq);
+    let mut degrees = wrong.clone();
+    for (k, label) in degrees.labels.clone().iter().enumerate() {
+        if angular.contains(label) {
+            for row in &mut degrees.rows {
+                row[k] = row[k].to_degrees();
+            }
+        }
+    }
+    let p = dir.join("degrees.sto");
+    degrees.write_sto(&p).unwrap();
+    let (_, xs) = leap::analyze::read_states(&eq, &p).unwrap();
+    for (row, want) in xs.iter().zip(&good.rows) {
+        for (a, b) in row.iter().zip(want) {
+            assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} against {b}");
+        }
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

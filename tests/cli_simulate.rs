@@ -181,6 +181,20 @@ fn bad_simulate_input_gets_clear_errors() {
         !o.status.success() && err.contains("study.json") && err.contains("acuracy"),
         "{err}"
     );
+    // A path holding a control character, escaped in the message.
+    for field in ["model", "controls", "out"] {
+        std::fs::write(&study, format!(r#"{{"{field}": "m\n.json"}}"#)).unwrap();
+        let err = refused(
+            leap().args(["simulate", "--study"]).arg(&study),
+            "a control character",
+        );
+        assert!(
+            err.contains(&format!(
+                r#"study.json: {field}: holds the control character U+000A at character 2 of "m\n.json"; remove it"#
+            )) && !err.contains("m\n"),
+            "{err}"
+        );
+    }
     std::fs::remove_dir_all(&out).ok();
 }
 
@@ -1036,7 +1050,7 @@ fn a_force_element_failure_in_a_step_is_said_once() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert!(
-        err.contains("integration stopped: Simbody: the force element failed at t = ")
+        err.contains("integration stopped: Simbody: the muscle, contact and ligament forces (leap's force element) failed at t = 0.000")
             && err.matches("non-finite fibre velocity").count() == 1
             && !err.contains("SimTK Exception"),
         "{err}"

@@ -598,7 +598,9 @@ fn a_radians_guess_headed_in_degrees_is_refused() {
     ]);
     assert!(
         err.contains(wrong.to_str().unwrap())
-            && err.contains("inDegrees: the header says yes, but the first row's angles are the squat's only if read in radians"),
+            && err.contains(
+                "header 'inDegrees': the header says yes, but every joint angle lies within ±π"
+            ),
         "{err}"
     );
     // In degrees, as the header says: a guess like any other.

@@ -243,7 +243,9 @@ fn every_mutated_field_is_refused_by_name_or_evaluates_finitely() {
                         // A value of the wrong type is named exactly, also
                         // inside joints and path points (tagged objects,
                         // where serde's own enums lose the path).
-                        if e.contains("invalid type") && f != m.place.trim_start_matches('.') {
+                        let type_error =
+                            e.contains("invalid type") || e.contains("expected a whole number");
+                        if type_error && f != m.place.trim_start_matches('.') {
                             failures.push(format!(
                                 "{} {}: type error named at {f}: {e}",
                                 m.place, m.what
