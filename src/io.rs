@@ -968,9 +968,7 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
-    if degrees {
-        check_angles_look_like_degrees(&t, path, &angular)?;
-    }
+    check_angle_units(&t, path, &angular, degrees)?;
     // The left leg's columns against their right partners', before the
     // conversion, to name the file's values.
     let names = eq.state_names();
@@ -984,37 +982,52 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
     Ok(t)
 }
 
-/// A states file headed `inDegrees=yes` whose joint angles all lie within
-/// ±π, one of them beyond 0.2: read in degrees, a movement of less than
-/// 3.2° at every joint, no squat or jump (the squat's knee is bent some
-/// 80°); read in radians, one. A file in radians with a wrong header, whose
-/// angles would be divided by 57 (`leap analyze` had printed a jump of
-/// −21.7 cm and 1,097 BW from one).
-fn check_angles_look_like_degrees(
+/// The joint angles of a states file against its header's unit (`degrees`:
+/// `inDegrees=yes`). Refused:
+/// - headed in degrees, every angle within ±π, one of them beyond 0.2:
+///   read in degrees, a movement of less than 3.2° at every joint, no squat
+///   or jump (the squat's knee is bent some 80°); read in radians, one. A
+///   file in radians with a wrong header, whose angles would be divided by
+///   57 (`leap analyze` had printed a jump of −21.7 cm and 1,097 BW from
+///   one);
+/// - headed in radians (or not headed), an angle beyond ±2π, a whole turn,
+///   which no joint of a jumper makes: a file in degrees (a guess from one
+///   had ended in a numerical error after its projection into the bounds).
+fn check_angle_units(
     t: &StoTable,
     path: &Path,
     angular: &std::collections::HashSet<String>,
+    degrees: bool,
 ) -> Result<(), StoError> {
-    let mut largest: Option<(f64, &str)> = None;
+    // The angle farthest from zero: (its size, its value, its column).
+    let mut largest: Option<(f64, f64, &str)> = None;
     for (k, label) in t.labels.iter().enumerate() {
         if !(label.ends_with("/value") && angular.contains(label)) {
             continue;
         }
         for row in &t.rows {
-            let v = row[k].abs();
-            if largest.is_none_or(|(m, _)| v > m) {
-                largest = Some((v, label));
+            if largest.is_none_or(|(m, _, _)| row[k].abs() > m) {
+                largest = Some((row[k].abs(), row[k], label));
             }
         }
     }
+    use std::f64::consts::PI;
     match largest {
-        Some((m, label)) if m > 0.2 && m <= std::f64::consts::PI => Err(StoError::Header {
+        Some((m, v, label)) if !degrees && m > 2.0 * PI => Err(StoError::Header {
+            file: path.into(),
+            key: "inDegrees".into(),
+            reason: format!(
+                "the header says no (or has no inDegrees, which means radians), but '{label}' reaches {} rad, beyond a whole turn (±2π): a file in degrees? Write inDegrees=yes",
+                readable(v)
+            ),
+        }),
+        Some((m, v, label)) if degrees && m > 0.2 && m <= PI => Err(StoError::Header {
             file: path.into(),
             key: "inDegrees".into(),
             reason: format!(
                 "the header says yes, but every joint angle lies within ±π (the largest, {} in '{label}', is {:.1}° read as radians): in degrees no joint would move more than 3.2° from zero, while the squat alone bends the knee about 80°. A file in radians? Write inDegrees=no",
-                readable(m),
-                m.to_degrees()
+                readable(v),
+                v.to_degrees()
             ),
         }),
         _ => Ok(()),
@@ -1228,6 +1241,32 @@ pub fn unread_excitation_columns(t: &StoTable, muscles: &[&str]) -> Vec<String> 
         .collect()
 }
 
+/// For a missing excitation column: the file's columns that look like
+/// excitations of no muscle among `muscles` or their left partners (a
+/// misspelt one), as "; columns naming no muscle: 'a', 'b'".
+fn unread_columns_note(t: &StoTable, muscles: &[&str]) -> String {
+    let left: Vec<String> = muscles
+        .iter()
+        .filter_map(|m| m.strip_suffix("_r").map(|stem| format!("{stem}_l")))
+        .collect();
+    let all: Vec<&str> = muscles
+        .iter()
+        .copied()
+        .chain(left.iter().map(String::as_str))
+        .collect();
+    let unread = unread_excitation_columns(t, &all);
+    if unread.is_empty() {
+        return String::new();
+    }
+    let shown: Vec<String> = unread.iter().take(5).map(|l| format!("'{l}'")).collect();
+    let more = if unread.len() > 5 {
+        format!(" and {} more", unread.len() - 5)
+    } else {
+        String::new()
+    };
+    format!("; columns naming no muscle: {}{more}", shown.join(", "))
+}
+
 /// Excitations over time read from a controls file, one column per muscle,
 /// linearly interpolated (held constant outside the time range).
 #[derive(Debug, Clone)]
@@ -1265,7 +1304,13 @@ impl Controls {
                 .ok_or_else(|| StoError::Column {
                     file: path.into(),
                     column: format!("/forceset/{m}"),
-                    reason: format!("missing: no excitation column for muscle '{m}'"),
+                    reason: format!(
+                        "missing: no excitation column for muscle '{m}' (read as '{}', '{}' or '{}'){}",
+                        names[0],
+                        names[1],
+                        names[2],
+                        unread_columns_note(t, muscles)
+                    ),
                 })?;
             // Two spellings of one muscle's column: one would be lost.
             let given: Vec<&String> = names.iter().filter(|n| t.labels.contains(n)).collect();
@@ -1414,6 +1459,30 @@ pub fn input_among_results<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A muscle's column misspelt: the missing muscle's error names the
+    /// labels read and the file's column that names no muscle (not the left
+    /// leg's columns, which are read as copies).
+    #[test]
+    fn a_missing_excitation_names_the_misspelt_column() {
+        let t = StoTable {
+            labels: vec![
+                "/forceset/solues_r".into(),
+                "/forceset/vasti_r".into(),
+                "/forceset/vasti_l".into(),
+            ],
+            time: vec![0.0],
+            rows: vec![vec![0.5, 0.5, 0.5]],
+            ..Default::default()
+        };
+        let e = Controls::from_table(&t, Path::new("c.sto"), &["vasti_r", "soleus_r"])
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "c.sto: column '/forceset/soleus_r': missing: no excitation column for muscle 'soleus_r' (read as '/forceset/soleus_r', 'soleus_r' or 'soleus_r.excitation'); columns naming no muscle: '/forceset/solues_r'"
+        );
+    }
 
     /// A Moco solution's multipliers, slacks and parameters carry no `/`
     /// but are no excitations: only a misspelt control is reported. A

@@ -275,6 +275,25 @@ fn broken_states_files_name_file_column_and_row_once() {
             assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} against {b}");
         }
     }
+    // And headed in radians: the squat's knee at some −80 "rad", beyond a
+    // whole turn.
+    for header in [Some("no"), None] {
+        let mut wrong = degrees.clone();
+        match header {
+            Some(h) => wrong.metadata.insert("inDegrees".into(), h.into()),
+            None => wrong.metadata.remove("inDegrees"),
+        };
+        let p = dir.join("degrees_headed_radians.sto");
+        wrong.write_sto(&p).unwrap();
+        let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+        assert!(
+            e.starts_with(&format!(
+                "{}: header 'inDegrees': the header says no (or has no inDegrees, which means radians), but '",
+                p.display()
+            )) && e.ends_with("beyond a whole turn (±2π): a file in degrees? Write inDegrees=yes"),
+            "{header:?}: {e}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 

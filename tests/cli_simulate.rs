@@ -937,8 +937,8 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
 }
 
 /// A states file in degrees without `inDegrees=yes` (a slip when writing
-/// one by hand) gives non-finite forces: the refusal names the coordinates
-/// outside their ranges and the likely cause, where it had named no
+/// one by hand), which gave non-finite forces: the refusal names the
+/// header, the farthest angle and the likely cause, where it had named no
 /// column.
 #[test]
 fn states_in_degrees_without_the_header_key_are_refused_naming_the_cause() {
@@ -963,9 +963,9 @@ fn states_in_degrees_without_the_header_key_are_refused_naming_the_cause() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "{err}");
     assert!(
-        err.contains("knee_angle_r")
-            && err.contains("outside its range")
-            && err.contains("inDegrees=yes"),
+        err.contains("header 'inDegrees'")
+            && err.contains("'/jointset/knee_r/knee_angle_r/value' reaches -79.9")
+            && err.contains("a file in degrees? Write inDegrees=yes"),
         "{err}"
     );
     // The same file with the key read in radians: analysed.
