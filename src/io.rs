@@ -13,7 +13,7 @@
 
 use crate::model::Mobilizer;
 use crate::ode::StateEquation;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -944,7 +944,7 @@ pub fn write_output(path: &Path, bytes: impl AsRef<[u8]>) -> std::io::Result<()>
 /// finite by [`StoTable::finite_columns`], which takes the states out
 /// (after the check of a missing column, which is the more telling). A
 /// file headed `inDegrees=yes` whose angles look like radians is refused
-/// ([`check_angles_look_like_degrees`]).
+/// ([`check_angle_units`]).
 pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError> {
     let mut t = StoTable::read(path)?;
     t.check_time(path, 2)?;
@@ -968,7 +968,17 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
-    check_angle_units(&t, path, &angular, degrees)?;
+    // Each angle column's coordinate range in the model.
+    let nq = eq.nq();
+    let ranges: HashMap<&str, [f64; 2]> = columns
+        .iter()
+        .filter(|(l, _)| l.ends_with("/value") && angular.contains(l))
+        .map(|(l, i)| {
+            let c = eq.system.coordinates[i % nq];
+            (l.as_str(), eq.model.coordinates[c].range)
+        })
+        .collect();
+    check_angle_units(&t, path, &ranges, degrees)?;
     // The left leg's columns against their right partners', before the
     // conversion, to name the file's values.
     let names = eq.state_names();
@@ -985,47 +995,63 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
 /// The joint angles of a states file against its header's unit (`degrees`:
 /// `inDegrees=yes`). Refused:
 /// - headed in degrees, every angle within ±π, one of them beyond 0.2:
-///   read in degrees, a movement of less than 3.2° at every joint, no squat
+///   read in degrees, a movement of less than 3.14° at every joint, no squat
 ///   or jump (the squat's knee is bent some 80°); read in radians, one. A
 ///   file in radians with a wrong header, whose angles would be divided by
 ///   57 (`leap analyze` had printed a jump of −21.7 cm and 1,097 BW from
 ///   one);
 /// - headed in radians (or not headed), an angle beyond ±2π, a whole turn,
-///   which no joint of a jumper makes: a file in degrees (a guess from one
-///   had ended in a numerical error after its projection into the bounds).
+///   and outside its coordinate's range (`ranges`, by column): a file in
+///   degrees (a guess from one had ended in a numerical error after its
+///   projection into the bounds).
 fn check_angle_units(
     t: &StoTable,
     path: &Path,
-    angular: &std::collections::HashSet<String>,
+    ranges: &HashMap<&str, [f64; 2]>,
     degrees: bool,
 ) -> Result<(), StoError> {
-    // The angle farthest from zero: (its size, its value, its column).
+    use std::f64::consts::PI;
+    // The angle farthest from zero: (its size, its value, its column); and
+    // the farthest beyond a whole turn and its range.
     let mut largest: Option<(f64, f64, &str)> = None;
+    let mut turned: Option<(f64, &str)> = None;
     for (k, label) in t.labels.iter().enumerate() {
-        if !(label.ends_with("/value") && angular.contains(label)) {
+        let Some(&[lo, hi]) = ranges.get(label.as_str()) else {
             continue;
-        }
+        };
         for row in &t.rows {
-            if largest.is_none_or(|(m, _, _)| row[k].abs() > m) {
-                largest = Some((row[k].abs(), row[k], label));
+            let v = row[k];
+            // A value that is not finite is refused later, by its column.
+            if !v.is_finite() {
+                continue;
+            }
+            if largest.is_none_or(|(m, _, _)| v.abs() > m) {
+                largest = Some((v.abs(), v, label));
+            }
+            if v.abs() > 2.0 * PI
+                && !(lo..=hi).contains(&v)
+                && turned.is_none_or(|(w, _)| v.abs() > w.abs())
+            {
+                turned = Some((v, label));
             }
         }
     }
-    use std::f64::consts::PI;
-    match largest {
-        Some((m, v, label)) if !degrees && m > 2.0 * PI => Err(StoError::Header {
+    if let (false, Some((v, label))) = (degrees, turned) {
+        return Err(StoError::Header {
             file: path.into(),
             key: "inDegrees".into(),
             reason: format!(
-                "the header says no (or has no inDegrees, which means radians), but '{label}' reaches {} rad, beyond a whole turn (±2π): a file in degrees? Write inDegrees=yes",
+                "the header says no (or has no inDegrees, which means radians), but '{label}' reaches {} rad, beyond a whole turn (±2π) and its range: a file in degrees? Write inDegrees=yes",
                 readable(v)
             ),
-        }),
+        });
+    }
+    match largest {
         Some((m, v, label)) if degrees && m > 0.2 && m <= PI => Err(StoError::Header {
             file: path.into(),
             key: "inDegrees".into(),
             reason: format!(
-                "the header says yes, but every joint angle lies within ±π (the largest, {} in '{label}', is {:.1}° read as radians): in degrees no joint would move more than 3.2° from zero, while the squat alone bends the knee about 80°. A file in radians? Write inDegrees=no",
+                "the header says yes, but every joint angle lies within ±π (the largest, {} in '{label}', is {:.1}° read as radians): in degrees no joint would move more than 3.14° from zero, where a jumper's squat bends the knee about 80°. A file in radians? Write inDegrees=no",
                 readable(v),
                 v.to_degrees()
             ),

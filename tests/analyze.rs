@@ -147,6 +147,11 @@ fn broken_states_files_name_file_column_and_row_once() {
     nan.rows[1][k] = f64::NAN;
     let mut inf = good.clone();
     inf.time[2] = f64::INFINITY;
+    // An infinite angle is refused by its column, not taken for degrees.
+    let knee = "/jointset/knee_r/knee_angle_r/value";
+    let kk = good.labels.iter().position(|l| l == knee).unwrap();
+    let mut inf_angle = good.clone();
+    inf_angle.rows[1][kk] = f64::INFINITY;
     let mut back = good.clone();
     back.time[2] = 0.005;
     let mut one = good.clone();
@@ -173,6 +178,11 @@ fn broken_states_files_name_file_column_and_row_once() {
     for (name, table, want) in [
         ("nan", nan, format!("column '{ty}': row 2 (t = 0.01): NaN is not a finite number")),
         ("inf", inf, "column 'time': row 3: inf is not finite".into()),
+        (
+            "inf_angle",
+            inf_angle,
+            format!("column '{knee}': row 2 (t = 0.01): inf is not a finite number"),
+        ),
         (
             "back",
             back,
@@ -290,7 +300,7 @@ fn broken_states_files_name_file_column_and_row_once() {
             e.starts_with(&format!(
                 "{}: header 'inDegrees': the header says no (or has no inDegrees, which means radians), but '",
                 p.display()
-            )) && e.ends_with("beyond a whole turn (±2π): a file in degrees? Write inDegrees=yes"),
+            )) && e.ends_with("beyond a whole turn (±2π) and its range: a file in degrees? Write inDegrees=yes"),
             "{header:?}: {e}"
         );
     }
