@@ -241,12 +241,18 @@ impl StoTable {
         if text.trim().is_empty() {
             return Err(perr(1, "the file is empty".into()));
         }
-        // An OpenSim model or setup file is the other file an OpenSim user
-        // has at hand (its lines hold '=' and would read as header keys).
-        if text.trim_start().starts_with('<') {
+        // The other files a user has at hand: an OpenSim model or setup
+        // file (XML, whose lines hold '=' and would read as header keys),
+        // a leap model or study (JSON).
+        let other = match text.trim_start().chars().next() {
+            Some('<') => Some("an XML file (an OpenSim .osim model or setup file?)"),
+            Some('{') => Some("a JSON file (a leap model or study?)"),
+            _ => None,
+        };
+        if let Some(what) = other {
             return Err(perr(
                 1,
-                "an XML file (an OpenSim .osim model or setup file?), not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')".into(),
+                format!("{what}, not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')"),
             ));
         }
         let mut table = StoTable::default();
@@ -289,18 +295,6 @@ impl StoTable {
             }
         }
         if !found_end {
-            // A leap model or study (JSON) is the other file a user has at
-            // hand.
-            if text
-                .trim_start_matches('\u{feff}')
-                .trim_start()
-                .starts_with('{')
-            {
-                return Err(perr(
-                    1,
-                    "a JSON file (a leap model or study?), not an OpenSim storage table (.sto or .mot, with a header ending in 'endheader')".into(),
-                ));
-            }
             return Err(perr(text_lines(text).count(), "no 'endheader' line".into()));
         }
         table.in_degrees(path)?;

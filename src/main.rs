@@ -1031,15 +1031,13 @@ fn simulate(
         let Some(p) = name.as_deref().map(rel) else {
             return Ok(None);
         };
-        // An empty name is refused as such by the study's check.
-        if name.as_deref().is_some_and(|n| n.trim().is_empty()) {
+        // An empty name, or one holding a control character, is refused as
+        // such by the study's check (before anything is read).
+        if name
+            .as_deref()
+            .is_some_and(|n| n.trim().is_empty() || leap::io::path_text_problem(n).is_some())
+        {
             return Ok(Some(p));
-        }
-        if let (Some(s), Some(why)) = (
-            &study,
-            name.as_deref().and_then(leap::io::path_text_problem),
-        ) {
-            anyhow::bail!("{}: {field}: {why}", s.display());
         }
         if let (Some(s), Some(why)) = (&study, leap::io::input_file_problem(&p)) {
             anyhow::bail!("{}: {field}: {what} '{}' {why}", s.display(), p.display());
