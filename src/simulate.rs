@@ -885,6 +885,12 @@ fn default_off() -> f64 {
 
 impl crate::study::StudyKind for SimulateStudy {
     const KIND: &'static str = "simulate";
+    fn fields() -> serde_json::Value {
+        serde_json::from_str::<SimulateStudy>(r#"{"bang_bang": {}}"#)
+            .ok()
+            .and_then(|s| serde_json::to_value(s).ok())
+            .unwrap_or_default()
+    }
 }
 
 impl SimulateStudy {

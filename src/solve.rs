@@ -692,6 +692,9 @@ pub fn run(
         fiber_dynamics_name(config.transcription.fiber_dynamics),
         backend_name(config.transcription.backend)
     ));
+    for line in &config.switched {
+        progress(line);
+    }
     let mut tr = Transcription::new(ocp.clone(), config.transcription)?;
     let mut mesh_integration = None;
     let mut unread_guess = Vec::new();
@@ -726,6 +729,9 @@ pub fn run(
                 p.display()
             ));
             let FileGuess { mut v, unread, .. } = guess_from_file_with(&tr, p, false)?;
+            for w in guess_warnings(&p.display().to_string(), &unread, &[]) {
+                progress(&w);
+            }
             unread_guess = unread;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 SolveError::Guess {
@@ -743,6 +749,9 @@ pub fn run(
                 unread,
                 projected,
             } = guess_from_file_with(&tr, p, true)?;
+            for w in guess_warnings(&p.display().to_string(), &unread, &projected) {
+                progress(&w);
+            }
             unread_guess = unread;
             guess_projected = projected;
             (v, p.display().to_string(), None)
@@ -875,6 +884,9 @@ fn run_shooting(
                 p.display()
             ));
             let (v, unread) = shooting_guess_from_file(&sh, p)?;
+            for w in guess_warnings(&p.display().to_string(), &unread, &[]) {
+                progress(&w);
+            }
             unread_guess = unread;
             (v, p.display().to_string(), None)
         }
@@ -1524,6 +1536,24 @@ fn guess_final_time(path: &Path, time: &[f64], bounds: [f64; 2]) -> Result<f64, 
     Ok(tf)
 }
 
+/// The warnings on a guess file: its columns read by nothing, its states
+/// projected into their bounds. Said as soon as the guess is read (in the
+/// progress lines, before the SQP) and again in the summary.
+fn guess_warnings(guess: &str, unread: &[String], projected: &[GuessProjection]) -> Vec<String> {
+    let mut w = Vec::new();
+    if !unread.is_empty() {
+        w.push(format!(
+            "warning: {guess}: {} column(s) name no muscle of the model and are not read: {}",
+            unread.len(),
+            unread.join(", ")
+        ));
+    }
+    for p in projected {
+        w.push(format!("warning: {guess}: {p}; projected into the bounds"));
+    }
+    w
+}
+
 /// The columns of a guess file that look like excitations but name no
 /// muscle of the model (either leg): a misspelt muscle, read by nothing.
 fn unread_guess_columns(model: &Model, t: &StoTable) -> Vec<String> {
@@ -2005,19 +2035,12 @@ impl SolveReport {
                 100.0 * g
             ));
         }
-        if !self.unread_guess_columns.is_empty() {
-            s.push_str(&format!(
-                "  warning: {}: {} column(s) name no muscle of the model and are not read: {}\n",
-                self.guess,
-                self.unread_guess_columns.len(),
-                self.unread_guess_columns.join(", ")
-            ));
-        }
-        for p in &self.guess_projected_states {
-            s.push_str(&format!(
-                "  warning: {}: {p}; projected into the bounds\n",
-                self.guess
-            ));
+        for w in guess_warnings(
+            &self.guess,
+            &self.unread_guess_columns,
+            &self.guess_projected_states,
+        ) {
+            s.push_str(&format!("  {w}\n"));
         }
         if !self.removed_stale_files.is_empty() {
             s.push_str(&format!(

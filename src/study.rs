@@ -489,6 +489,10 @@ pub struct SolveConfig {
     /// collocation study solved with `--method shooting`); `leap solve`
     /// lists them.
     pub ignored: Vec<String>,
+    /// Study settings that a command-line option changed with it (the
+    /// study's implicit fibre rows under `--scheme trapezoidal`), in words;
+    /// `leap solve` says them.
+    pub switched: Vec<String>,
     /// The collocation-only settings the study names (fields), for
     /// `ignored` when `--method shooting` overrides it.
     collocation_named: Vec<&'static str>,
@@ -539,6 +543,10 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
 ) -> Result<T, StudyError> {
     parse_json_object(text).map_err(|e| {
         let reason = with_kind_hint(text, T::KIND, e.reason);
+        let reason = match misplaced_field_hint(&T::fields(), &e.path, &reason) {
+            Some(hint) => format!("{reason}; {hint}"),
+            None => reason,
+        };
         StudyError::Field {
             origin: origin.into(),
             field: e.path,
@@ -551,10 +559,58 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
 /// hint where a file of another kind is given.
 pub trait StudyKind {
     const KIND: &'static str;
+    /// Every field the study reads, as a JSON object of its nesting (the
+    /// values do not matter), for [`misplaced_field_hint`].
+    fn fields() -> serde_json::Value;
 }
 
 impl StudyKind for SolveStudy {
     const KIND: &'static str = "solve";
+    fn fields() -> serde_json::Value {
+        serde_json::to_value(SolveStudy::default()).unwrap_or_default()
+    }
+}
+
+/// Where an unknown field at `path` (dotted, ending in the field) belongs
+/// instead, when the study reads a field of that name elsewhere in
+/// `fields` ([`StudyKind::fields`]): a top-level `num_mesh_intervals` is
+/// read under `mesh`, a `guess` under `mesh` at the top level.
+pub(crate) fn misplaced_field_hint(
+    fields: &serde_json::Value,
+    path: &str,
+    reason: &str,
+) -> Option<String> {
+    let key = reason.strip_prefix("unknown field `")?.split('`').next()?;
+    fn find(v: &serde_json::Value, key: &str, at: &str, out: &mut Vec<String>) {
+        if let Some(map) = v.as_object() {
+            for (k, child) in map {
+                let here = if at.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{at}.{k}")
+                };
+                if k == key {
+                    out.push(here.clone());
+                }
+                find(child, key, &here, out);
+            }
+        }
+    }
+    let mut found = Vec::new();
+    find(fields, key, "", &mut found);
+    found.retain(|f| f != path);
+    let place = |f: &String| match f.rsplit_once('.') {
+        Some((parent, _)) => format!("under \"{parent}\" ({f})"),
+        None => "at the top level of the study".to_string(),
+    };
+    match found.as_slice() {
+        [] => None,
+        [one] => Some(format!("`{key}` belongs {}", place(one))),
+        many => Some(format!(
+            "`{key}` belongs {}",
+            many.iter().map(place).collect::<Vec<_>>().join(" or ")
+        )),
+    }
 }
 
 /// `reason`, the refusal of `text` read as a file of kind `expected`
@@ -1006,6 +1062,7 @@ impl SolveStudy {
             eigenvalue_floor_given: self.hessian_eigenvalue_floor.is_some(),
             hessian_given: self.hessian.is_some(),
             ignored: Vec::new(),
+            switched: Vec::new(),
             collocation_named,
             writing: None,
         })
@@ -1108,6 +1165,15 @@ impl SolveConfig {
             // Implicit rows exist at midpoints only: another scheme on the
             // command line brings the explicit rows with it.
             if self.transcription.scheme != Scheme::MidpointEuler {
+                let named = self.collocation_named.contains(&"mesh.fiber_dynamics");
+                if named
+                    && o.fiber_dynamics.is_none()
+                    && self.transcription.fiber_dynamics == FiberDynamics::Implicit
+                {
+                    self.switched.push(format!(
+                        "the study's mesh.fiber_dynamics \"implicit\" becomes \"explicit\" with --scheme {s} (implicit fibre rows exist with midpoint-euler only; --fiber-dynamics explicit says so)"
+                    ));
+                }
                 self.transcription.fiber_dynamics = FiberDynamics::Explicit;
             }
             if !self.eigenvalue_floor_given {
@@ -1529,6 +1595,47 @@ mod tests {
             Err(StudyError::Field { field, reason, .. }) => (field, reason),
             other => panic!("expected a field error, got {other:?}"),
         }
+    }
+
+    /// A field written at the wrong level is refused with where it belongs:
+    /// the known fields come from the study's own structure.
+    #[test]
+    fn a_misplaced_field_is_told_where_it_belongs() {
+        for (json, field, hint) in [
+            (
+                r#"{"num_mesh_intervals": 10}"#,
+                "num_mesh_intervals",
+                "`num_mesh_intervals` belongs under \"mesh\" (mesh.num_mesh_intervals)",
+            ),
+            (
+                r#"{"max_iterations": 10}"#,
+                "max_iterations",
+                "`max_iterations` belongs under \"tolerances\" (tolerances.max_iterations)",
+            ),
+            (
+                r#"{"mesh": {"guess": "bang-bang"}}"#,
+                "mesh.guess",
+                "`guess` belongs at the top level of the study",
+            ),
+        ] {
+            let (f, r) = field_error(json);
+            assert_eq!(f, field, "{json}");
+            assert!(
+                r.starts_with("unknown field") && r.ends_with(hint),
+                "{json}: {r}"
+            );
+        }
+        // A field read nowhere gets no such hint.
+        let (_, r) = field_error(r#"{"mesh": {"num_nodes": 29}}"#);
+        assert!(!r.contains("belongs"), "{r}");
+        // A simulate study's bang-bang timing.
+        let e = crate::simulate::SimulateStudy::from_json_str(r#"{"on_time": 0.1}"#, "s.json")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with("`on_time` belongs under \"bang_bang\" (bang_bang.on_time)"),
+            "{e}"
+        );
     }
 
     /// The error of command-line overrides `o` applied to `c`.
@@ -2076,6 +2183,34 @@ mod tests {
         assert_eq!(c.settings.max_iterations, 3);
         assert_eq!(c.transcription.scheme, Scheme::Trapezoidal);
         assert_eq!(c.transcription.fiber_dynamics, FiberDynamics::Explicit);
+        // The built-in study names no fibre dynamics: nothing to say.
+        assert!(c.switched.is_empty(), "{:?}", c.switched);
+        // A study that names implicit rows is told they became explicit;
+        // with --fiber-dynamics explicit given, nothing is said.
+        let implicit = r#"{"mesh": {"fiber_dynamics": "implicit"}}"#;
+        let mut named = resolved(implicit);
+        named
+            .apply(&Overrides {
+                scheme: Some("trapezoidal".into()),
+                ..Default::default()
+            })
+            .unwrap();
+        assert_eq!(named.transcription.fiber_dynamics, FiberDynamics::Explicit);
+        assert!(
+            named.switched.len() == 1
+                && named.switched[0].contains("mesh.fiber_dynamics \"implicit\"")
+                && named.switched[0].contains("--scheme trapezoidal"),
+            "{:?}",
+            named.switched
+        );
+        let mut said = resolved(implicit);
+        said.apply(&Overrides {
+            scheme: Some("trapezoidal".into()),
+            fiber_dynamics: Some("explicit".into()),
+            ..Default::default()
+        })
+        .unwrap();
+        assert!(said.switched.is_empty(), "{:?}", said.switched);
         let e = override_error(
             &mut c,
             Overrides {

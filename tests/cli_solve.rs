@@ -821,6 +821,14 @@ fn a_guess_files_unread_columns_are_named_and_shooting_guesses_start_at_zero() {
             text.contains(&format!("warning: {misspelt}: 1 column(s) name no muscle of the model and are not read: /forceset/solues_r")),
             "{method}: {text}"
         );
+        // Said as soon as the guess is read too, before the SQP starts.
+        let err = String::from_utf8_lossy(&o.stderr);
+        let warned = err.find("1 column(s) name no muscle of the model");
+        let sqp = err.find("leap solve: SQP:");
+        assert!(
+            warned.is_some() && sqp.is_some() && warned < sqp,
+            "{method}: {err}"
+        );
         let _ = std::fs::remove_dir_all(&out);
     }
     let dir = fresh_dir("shifted_guess");
