@@ -810,10 +810,23 @@ fn integrate_guess_on_mesh(
 ) -> Result<crate::transcription::MeshIntegration, String> {
     let started = std::time::Instant::now();
     let m = tr.integrate_on_mesh(v).map_err(|e| e.to_string())?;
-    let at_bound = if m.at_bound > 0 {
-        format!(", {} stopped with a state at its bound", m.at_bound)
-    } else {
-        String::new()
+    let name = |i: usize| {
+        tr.ocp
+            .eq
+            .state_names()
+            .get(i)
+            .cloned()
+            .unwrap_or_else(|| "?".into())
+    };
+    let at_bound = match m.first_held {
+        Some(h) if m.at_bound > 0 => format!(
+            ", {} stopped with a state at its bound (the first: interval {}, {} at its {} bound)",
+            m.at_bound,
+            h.interval,
+            name(h.state),
+            if h.lower { "lower" } else { "upper" }
+        ),
+        _ => String::new(),
     };
     progress(&format!(
         "initial guess: {} of {} intervals integrated to {:.0e}{at_bound} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
@@ -823,11 +836,7 @@ fn integrate_guess_on_mesh(
         started.elapsed().as_secs_f64(),
         m.worst_defect,
         m.worst_interval,
-        tr.ocp
-            .eq
-            .state_names()
-            .get(m.worst_state)
-            .map_or("?", |s| s.as_str())
+        name(m.worst_state)
     ));
     Ok(m)
 }

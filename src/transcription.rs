@@ -1185,11 +1185,24 @@ pub struct MeshIntegration {
     /// activation the scheme would take below a_min, a fibre shorter than
     /// its shortest).
     pub at_bound: usize,
+    /// The first such interval (1-based), its state held at a bound (the
+    /// largest component of the last step against one), and whether the
+    /// bound is the lower.
+    pub first_held: Option<HeldState>,
     /// The largest defect left (the problem's units), and its interval
     /// (1-based) and state.
     pub worst_defect: f64,
     pub worst_interval: usize,
     pub worst_state: usize,
+}
+
+/// A state that held an interval of [`Transcription::integrate_on_mesh`] at
+/// its bound.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct HeldState {
+    pub interval: usize,
+    pub state: usize,
+    pub lower: bool,
 }
 
 /// A state of a guess that lay outside its bounds at some nodes and was
@@ -2056,6 +2069,7 @@ impl Transcription {
             intervals: big_n,
             converged: 0,
             at_bound: 0,
+            first_held: None,
             worst_defect: 0.0,
             worst_interval: 0,
             worst_state: 0,
@@ -2068,13 +2082,14 @@ impl Transcription {
                     EvalError::new("guess", format!("node {k} has no state variables"))
                 })?;
             let mut res = self.interval_residual(v, k, &mut rows)?;
-            // Whether the last Newton step pushed a state against its bound.
-            let mut held = false;
+            // The state the last Newton step pushed hardest against its
+            // bound, if any (index, whether the lower bound).
+            let mut held: Option<(usize, bool)> = None;
             for _ in 0..MESH_NEWTON_ITERATIONS {
                 if res <= MESH_NEWTON_TOL {
                     break;
                 }
-                held = false;
+                held = None;
                 self.interval_state_jacobian(v, k, &mut jac)?;
                 let rhs = nalgebra::DVector::from_iterator(nx, rows.iter().map(|r| -r));
                 let Some(step) = jac.clone().lu().solve(&rhs) else {
@@ -2086,10 +2101,16 @@ impl Transcription {
                 // A component of a hundredth of the step or more: the clamp
                 // removes part of the Newton step, not roundoff.
                 let significant = 1e-2 * step.amax();
-                held = cols.iter().zip(step.iter()).any(|(&col, &d)| {
-                    d.abs() >= significant
-                        && ((v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0))
-                });
+                held = cols
+                    .iter()
+                    .zip(step.iter())
+                    .enumerate()
+                    .filter(|&(_, (&col, &d))| {
+                        d.abs() >= significant
+                            && ((v[col] <= lo[col] && d < 0.0) || (v[col] >= hi[col] && d > 0.0))
+                    })
+                    .max_by(|a, b| a.1 .1.abs().total_cmp(&b.1 .1.abs()))
+                    .map(|(i, (_, &d))| (i, d < 0.0));
                 let mut alpha = 1.0;
                 let mut taken = false;
                 for _ in 0..MESH_NEWTON_BACKTRACKS {
@@ -2119,7 +2140,14 @@ impl Transcription {
                 // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
-            report.at_bound += usize::from(res > MESH_NEWTON_TOL && held);
+            if let (true, Some((state, lower))) = (res > MESH_NEWTON_TOL, held) {
+                report.at_bound += 1;
+                report.first_held.get_or_insert(HeldState {
+                    interval: k,
+                    state,
+                    lower,
+                });
+            }
             if res > report.worst_defect {
                 // rows may hold a rejected trial's defects: v's again.
                 self.interval_residual(v, k, &mut rows)?;

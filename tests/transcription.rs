@@ -1083,11 +1083,15 @@ fn bang_bang_guess_integrated_on_the_mesh() {
         tr.variable_bounds(&mut lo, &mut hi);
         let mut converged = 0;
         let mut worst = 0.0f64;
+        let mut first_unsolved = None;
         for k in 1..=n {
             let d = c[(k - 1) * nx..k * nx]
                 .iter()
                 .fold(0.0f64, |a, b| a.max(b.abs()));
             converged += usize::from(d <= MESH_NEWTON_TOL);
+            if d > MESH_NEWTON_TOL && first_unsolved.is_none() {
+                first_unsolved = Some(k);
+            }
             worst = worst.max(d);
             // An interval left unsolved has a state of its node held at a
             // bound (a fibre at its shortest on the jump): the defects have
@@ -1111,6 +1115,17 @@ fn bang_bang_guess_integrated_on_the_mesh() {
             "{n} intervals: {report:?}"
         );
         assert_eq!(worst, report.worst_defect);
+        // The first interval left unsolved is named, with a state of its
+        // node at the bound said.
+        match (report.first_held, first_unsolved) {
+            (None, None) => {}
+            (Some(h), Some(k)) => {
+                assert_eq!(h.interval, k, "{n} intervals: {report:?}");
+                let j = tr.state_index(k, h.state).unwrap();
+                assert_eq!(v[j], if h.lower { lo[j] } else { hi[j] }, "{h:?}");
+            }
+            other => panic!("{n} intervals: {other:?}, {report:?}"),
+        }
         // Only states move.
         for k in 0..=n {
             assert_eq!(tr.node_control(&v, k), tr.node_control(&resampled, k));
