@@ -567,7 +567,19 @@ pub trait StudyKind {
 impl StudyKind for SolveStudy {
     const KIND: &'static str = "solve";
     fn fields() -> serde_json::Value {
-        serde_json::to_value(SolveStudy::default()).unwrap_or_default()
+        let mut v = serde_json::to_value(SolveStudy::default()).unwrap_or_default();
+        // The second names (`#[serde(alias)]`), which serialising omits:
+        // Moco's top-level `transcription_scheme` is read under `mesh`.
+        for (section, alias) in [
+            ("mesh", "transcription_scheme"),
+            ("tolerances", "optim_max_iterations"),
+            ("problem", "final_time_bounds"),
+        ] {
+            if let Some(m) = v.get_mut(section).and_then(|s| s.as_object_mut()) {
+                m.insert(alias.into(), serde_json::Value::Null);
+            }
+        }
+        v
     }
 }
 
@@ -1624,6 +1636,40 @@ mod tests {
                 r.starts_with("unknown field") && r.ends_with(hint),
                 "{json}: {r}"
             );
+        }
+        // Moco's top-level name, read under "mesh".
+        let (_, r) = field_error(r#"{"transcription_scheme": "trapezoidal"}"#);
+        assert!(
+            r.ends_with("belongs under \"mesh\" (mesh.transcription_scheme)"),
+            "{r}"
+        );
+        // Every field the hint may point to is one the study reads.
+        fn leaves(v: &serde_json::Value, at: &str, out: &mut Vec<String>) {
+            match v.as_object() {
+                Some(m) => {
+                    for (k, c) in m {
+                        let here = if at.is_empty() {
+                            k.clone()
+                        } else {
+                            format!("{at}.{k}")
+                        };
+                        leaves(c, &here, out);
+                    }
+                }
+                None => out.push(at.to_string()),
+            }
+        }
+        let mut all = Vec::new();
+        leaves(&SolveStudy::fields(), "", &mut all);
+        assert!(all.len() > 20, "{all:?}");
+        for path in all {
+            let mut json = "null".to_string();
+            for k in path.rsplit('.') {
+                json = format!("{{\"{k}\": {json}}}");
+            }
+            if let Err(e) = SolveStudy::from_json_str(&json, "s.json") {
+                assert!(!e.to_string().contains("unknown field"), "{path}: {e}");
+            }
         }
         // A field read nowhere gets no such hint.
         let (_, r) = field_error(r#"{"mesh": {"num_nodes": 29}}"#);
