@@ -199,6 +199,22 @@ fn remove_stale_results(
     Ok(removed)
 }
 
+/// The reports `leap report` writes by default of a solve's results
+/// ([`crate::report::default_output`] of the solution and of the forward
+/// check's states) that lie in `dir`: drawn of an earlier run, since this
+/// run has just written its results.
+fn earlier_reports(dir: &Path, name: &str) -> Vec<String> {
+    [
+        format!("{name}_solution.sto"),
+        format!("{name}_forward_states.sto"),
+    ]
+    .iter()
+    .map(|f| crate::report::default_output(&dir.join(f)))
+    .filter(|p| p.is_file())
+    .map(|p| p.display().to_string())
+    .collect()
+}
+
 /// An I/O error on `file`, `what` failed, with the OS's reason.
 fn io_error(file: &Path, e: std::io::Error, what: &str) -> SolveError {
     SolveError::Io {
@@ -528,6 +544,10 @@ pub struct SolveReport {
     /// results directory and this run did not write (the forward check's,
     /// with the check off), removed so that none is read as this run's.
     pub removed_stale_files: Vec<String>,
+    /// Reports that `leap report` drew of an earlier run's results in the
+    /// results directory (`<name>_solution_report.svg`, ...): kept (they are
+    /// the user's), said to be of an earlier run.
+    pub earlier_reports: Vec<String>,
     /// Columns of the guess file that look like excitations but name no
     /// muscle of the model (a misspelt muscle): not read.
     pub unread_guess_columns: Vec<String>,
@@ -1101,6 +1121,7 @@ fn write_results(
     let p = dir.join(format!("{name}_summary.json"));
     files.push(p.clone());
     report.removed_stale_files = remove_stale_results(dir, name, &files)?;
+    report.earlier_reports = earlier_reports(dir, name);
     report.output_files = files.iter().map(|f| f.display().to_string()).collect();
     let text = serde_json::to_string_pretty(&report).unwrap_or_default();
     crate::io::write_output(&p, text).map_err(|error| SolveError::Io { file: p, error })?;
@@ -1378,6 +1399,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         model: String::new(),
         output_files: Vec::new(),
         removed_stale_files: Vec::new(),
+        earlier_reports: Vec::new(),
         unread_guess_columns: Vec::new(),
         guess_projected_states: Vec::new(),
     }
@@ -2055,6 +2077,12 @@ impl SolveReport {
             s.push_str(&format!(
                 "  removed result files of an earlier run that this run did not write: {}\n",
                 self.removed_stale_files.join(", ")
+            ));
+        }
+        if !self.earlier_reports.is_empty() {
+            s.push_str(&format!(
+                "  warning: {} drawn of an earlier run, not of these results (`leap report` redraws it)\n",
+                self.earlier_reports.join(", ")
             ));
         }
         s

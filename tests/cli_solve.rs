@@ -733,7 +733,8 @@ fn dump_qps_writes_each_iteration_qp_into_out() {
 /// A solve into a results directory an earlier solve of the same name
 /// wrote removes the earlier result files it does not write itself (the
 /// forward check's, with the check off; the QPs of iterations it did not
-/// reach) and names them: none may be read as this run's.
+/// reach) and names them: none may be read as this run's. A report `leap
+/// report` drew of the earlier run is kept and named as such.
 #[test]
 fn a_reused_results_directory_keeps_no_stale_result_files() {
     let (cwd, out, _) =
@@ -748,6 +749,16 @@ fn a_reused_results_directory_keeps_no_stale_result_files() {
         assert!(before.contains(&f.to_string()), "{f} not in {before:?}");
     }
     assert!(files_in(&out.join("qps")).contains(&"qp_iter1_qp.json".to_string()));
+    // A report drawn of the first run's solution.
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("report")
+        .arg(out.join("jump_solution.sto"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let drawn = out.join("jump_solution_report.svg");
+    assert!(drawn.is_file());
     let (_, v) = small_solve(
         &cwd,
         &out,
@@ -768,6 +779,12 @@ fn a_reused_results_directory_keeps_no_stale_result_files() {
         );
     }
     assert_eq!(removed.len(), forward.len(), "{removed:?}");
+    // The report is the user's: kept, and said to be of an earlier run.
+    assert!(drawn.is_file());
+    assert_eq!(
+        v["earlier_reports"],
+        serde_json::json!([drawn.display().to_string()])
+    );
     for f in [
         "jump_solution.sto",
         "jump_grf.mot",
