@@ -1065,6 +1065,10 @@ pub fn methods(model: &Model, iterations: usize) -> Result<MethodsReport, String
             f_evals: c.f_evals - before.f_evals,
             seconds: c.jacobian_seconds - before.jacobian_seconds,
         });
+        // A fresh problem for the SQP: `sh` holds the derivatives at `v`
+        // just measured, which its first iteration would reuse uncounted.
+        let mut sh =
+            crate::shooting::Shooting::new(ocp.clone(), options).map_err(|e| e.to_string())?;
         let settings = crate::shooting::sqp_settings(&settings);
         let size = (
             sh.num_variables(),

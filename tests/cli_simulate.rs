@@ -872,8 +872,8 @@ fn a_lift_off_while_falling_is_warned_of() {
 /// do (vas_int at 1e-4 m, 0.001 optimal fibre lengths, in one row; its
 /// tendon then takes the muscle's length) warns, naming the column and the
 /// time, where it had reported the row's forces without a word; the file
-/// as simulated does not warn. Times whose span overflows a double are
-/// refused (the analysis had printed NaN and exited 0).
+/// as simulated does not warn. Times beyond a day are refused (a span that
+/// overflows a double had printed NaN and exited 0).
 #[test]
 fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
     let out = tmp("fibre_warning");
@@ -928,11 +928,23 @@ fn analyze_warns_of_fibres_outside_the_optimizers_bounds() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(
-        err.contains(
-            "column 'time': times from -1.7e308 to 1.7e308 s: the span overflows a double"
-        ),
+        err.contains("column 'time': row 1: t = -1.7e308 s lies beyond a day (±86400 s)"),
         "{err}"
     );
+    // A last row at 1e300 s, a typo: refused, where the analysis had
+    // printed a 1e300 s window and its work in 300 digits.
+    let mut t = leap::io::StoTable::read(&states).unwrap();
+    t.time[n - 1] = 1e300;
+    t.write_sto(&file).unwrap();
+    for command in ["analyze", "report"] {
+        let o = leap().arg(command).arg(&file).output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{command}: {err}");
+        assert!(
+            err.contains(&format!("row {n}: t = 1e300 s lies beyond a day")),
+            "{command}: {err}"
+        );
+    }
     std::fs::remove_dir_all(&out).ok();
 }
 
