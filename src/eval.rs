@@ -565,6 +565,9 @@ pub struct SwitchJump {
     pub muscle: String,
     /// Path point number (1-based, as in OpenSim's P1, P2, ...).
     pub point: usize,
+    /// The path point's name in `models/jumper.osim` (`scripts/jumper_osim.py`
+    /// names them as gait2392 does): `iliacus_r-P3` for point 3.
+    pub path_point: String,
     pub coordinate: String,
     /// Coordinate value where the point switches (rad).
     pub at: f64,
@@ -600,6 +603,7 @@ pub fn switch_jumps(eq: &StateEquation, pose: &[f64]) -> Vec<SwitchJump> {
                 out.push(SwitchJump {
                     muscle: m.spec.name.clone(),
                     point: pi + 1,
+                    path_point: format!("{}-P{}", m.spec.name, pi + 1),
                     coordinate: model.coordinates[coord].name.clone(),
                     at: edge,
                     jump_m: on - off,

@@ -226,6 +226,15 @@ fn switch_jumps_match_model_data() {
         let got = find(m, at);
         assert!((got - mm).abs() <= tol, "{m} at {at}: {got} mm vs {mm} mm");
     }
+    // Each switch names its conditional path point as the model's .osim
+    // does (gait2392's names).
+    let osim = std::fs::read_to_string("models/jumper_gait2392.osim").unwrap();
+    for j in &jumps {
+        assert!(
+            osim.contains(&format!("<ConditionalPathPoint name=\"{}\">", j.path_point)),
+            "{j:?}"
+        );
+    }
     // The smooth option has no jump: its length is continuous across a switch.
     let sys = model.system(true).unwrap();
     let mb = Multibody::new(&model, &sys);
