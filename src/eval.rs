@@ -62,6 +62,10 @@ pub struct EvalInputError {
     pub file: String,
     pub place: String,
     pub reason: String,
+    /// The input lacks states or excitations the system carries: a missing
+    /// column or name, or an array with fewer values than names (as a
+    /// symmetric input, `leap squat`'s, given to the full system).
+    pub lacks_values: bool,
 }
 
 /// Evaluation inputs: one (x, u) pair per evaluation.
@@ -74,6 +78,11 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         file: file.clone(),
         place,
         reason,
+        lacks_values: false,
+    };
+    let lacks = |place: String, reason: String| EvalInputError {
+        lacks_values: true,
+        ..err(place, reason)
     };
     let text = crate::io::read_input_text(path).map_err(|e| err("(file)".into(), e.to_string()))?;
     // A byte-order mark (spreadsheet exports write one) is not data.
@@ -181,11 +190,11 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
         let find = |name: &str| cols.iter().position(|c| *c == name);
         let xi: Vec<usize> = states
             .iter()
-            .map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'"))))
+            .map(|n| find(n).ok_or_else(|| lacks("header".into(), format!("missing column '{n}'"))))
             .collect::<Result<_, _>>()?;
         let ui: Vec<usize> = controls
             .iter()
-            .map(|n| find(n).ok_or_else(|| err("header".into(), format!("missing column '{n}'"))))
+            .map(|n| find(n).ok_or_else(|| lacks("header".into(), format!("missing column '{n}'"))))
             .collect::<Result<_, _>>()?;
         // The left leg's columns, read as checks.
         let copy_cols: Vec<usize> = (0..cols.len())
@@ -321,10 +330,12 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                     .as_array()
                     .ok_or_else(|| err(place(key), "must be an array of numbers".into()))?;
                 if arr.len() != names.len() {
-                    return Err(err(
-                        place(key),
-                        format!("{} values, expected {}", arr.len(), names.len()),
-                    ));
+                    let reason = format!("{} values, expected {}", arr.len(), names.len());
+                    return Err(if arr.len() < names.len() {
+                        lacks(place(key), reason)
+                    } else {
+                        err(place(key), reason)
+                    });
                 }
                 return arr
                     .iter()
@@ -362,7 +373,7 @@ pub fn read_inputs(eq: &StateEquation, path: &Path) -> Result<Inputs, EvalInputE
                 .iter()
                 .map(|n| {
                     obj.get(n)
-                        .ok_or_else(|| err(place(named), format!("missing '{n}'")))
+                        .ok_or_else(|| lacks(place(named), format!("missing '{n}'")))
                         .and_then(|v| {
                             v.as_f64().filter(|v| v.is_finite()).ok_or_else(|| {
                                 err(place(&format!("{named}.{n}")), "not a finite number".into())

@@ -624,14 +624,7 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 // A symmetric system's input (`leap squat`'s) given with
                 // --full misses the left leg's names (by name, as CSV
                 // columns) or values (as arrays).
-                let fewer = || {
-                    let (n, m) = e.reason.split_once(" values, expected ")?;
-                    Some(n.parse::<usize>().ok()? < m.parse::<usize>().ok()?)
-                };
-                let short = e.reason.starts_with("missing '")
-                    || e.reason.starts_with("missing column '")
-                    || (!e.place.starts_with("line ") && fewer() == Some(true));
-                if full && short {
+                if full && e.lacks_values {
                     anyhow::anyhow!("{e}; with --full an input holds both legs' states and excitations (`leap squat --full` prints one)")
                 } else {
                     full_hint(e, full)

@@ -1250,7 +1250,7 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
     }
     if !settings.nlp_scaling {
         let mut solver = Solver::new(pb, hessian, settings);
-        solver.run(nlp, x0, &mut result, start);
+        solver.run(nlp, x0, &mut result, start, 0.0);
         return result;
     }
     let x0p: Vec<f64> = x0
@@ -1258,12 +1258,17 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         .enumerate()
         .map(|(j, &v)| v.clamp(pb.xl[j], pb.xu[j]))
         .collect();
+    // The scaling's derivatives at the start are counted in the first
+    // iteration's (a shooting problem's central-difference Jacobian takes
+    // tens of seconds).
+    let t = Instant::now();
     let mut scaled = GradientScaled::new(
         nlp,
         &x0p,
         pb.jac.clone(),
         settings.optim_convergence_tolerance,
     );
+    let scaling_s = t.elapsed().as_secs_f64();
     let pb = match Problem::read(&scaled) {
         Ok(mut pb) => {
             pb.row_unscale = scaled.sc.iter().map(|s| 1.0 / s).collect();
@@ -1276,7 +1281,7 @@ fn solve_unscaled<N: Nlp + ?Sized>(nlp: &mut N, x0: &[f64], settings: &SqpSettin
         }
     };
     let mut solver = Solver::new(pb, hessian, settings);
-    solver.run(&mut scaled, x0, &mut result, start);
+    solver.run(&mut scaled, x0, &mut result, start, scaling_s);
     // Back to the problem's units (the log's objective and inf_pr are in
     // them already, its dual infeasibility scaled, as IPOPT's are).
     let (sf, sc) = (scaled.sf, scaled.sc.clone());
@@ -1677,6 +1682,7 @@ impl<'s> Solver<'s> {
         x0: &[f64],
         result: &mut SqpResult,
         start: Instant,
+        scaling_s: f64,
     ) {
         let (n, m) = (self.pb.n, self.pb.m);
         let st = self.settings;
@@ -1697,7 +1703,10 @@ impl<'s> Solver<'s> {
             g: vec![0.0; n],
             jv: vec![0.0; self.pb.jac.len()],
         };
-        let mut time = TimeSplit::default();
+        let mut time = TimeSplit {
+            derivatives_s: scaling_s,
+            ..Default::default()
+        };
         let t = Instant::now();
         match eval_fc(nlp, &p.x, &mut p.c) {
             Ok(f) => p.f = f,
@@ -1788,8 +1797,10 @@ impl<'s> Solver<'s> {
                 );
                 return;
             }
-            rec.derivatives_s = t.elapsed().as_secs_f64();
-            time.derivatives_s += rec.derivatives_s;
+            let dt = t.elapsed().as_secs_f64();
+            time.derivatives_s += dt;
+            // The first iteration's record holds the scaling's too.
+            rec.derivatives_s = if iter == 0 { dt + scaling_s } else { dt };
             // Optimality at (x, λ, ζ).
             let (viol1, inf_pr) = self.pb.violation(&p.c);
             // The largest violation in the problem's units and its row.
