@@ -4,7 +4,7 @@ sensitivity variant models/jumper_jmp_strength.json without it: both are
 models/jumper_gait2392.json (gait2392's muscles on the paper's skeleton) with
 muscle strengths of the OpenSim Jumper (opensim-org/opensim-models,
 Models/Jumper/DynamicJumperModel.osim), as listed in the last column of
-shared/reference/model-data.md §7.2 (issue 5 point 8: "how the OpenSim
+models/model-data.md §7.2 (issue 5 point 8: "how the OpenSim
 Jumper's stronger values change it").
 
 What changes, per side:
@@ -98,7 +98,7 @@ def main():
         "soleus and tib_post take the OpenSim Jumper's "
         "(opensim-org/opensim-models, Models/Jumper/DynamicJumperModel.osim) max_isometric_force; "
         "the groups that one Jumper muscle stands for (as gait10dof18musc's lumped muscles, "
-        "shared/reference/model-data.md §7.2) take its force in all, in proportion to gait2392's: "
+        "models/model-data.md §7.2) take its force in all, in proportion to gait2392's: "
         "vasti (vas_int) 5000 N, hamstrings bifemlh + semimem + semiten (bifemlh) 2700 N, "
         f"gastrocnemii med_gas + lat_gas (med_gas) 2500 N, dorsiflexors tib_ant + ext_dig (tib_ant) 3000 N; {lengths}."
     ]

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Write models/jumper_gait2392.json: the planar jumper skeleton of
-shared/reference/model-data.md §4-§6 and §8.2 (sole stations).
+models/model-data.md §4-§6 and §8.2 (sole stations).
 
 Data: gait2392 (opensim-org/opensim-models, Models/Gait2392_Simbody/
 gait2392_thelen2003muscle.osim, CC BY 3.0, Delp et al. 1990; Anderson & Pandy
@@ -15,7 +15,7 @@ forces (scripts/make_jumper_jmp_strength.py --forces-only).
 Muscles (24 per side, §7), passive joint torques (§9) and the 8 contact
 spheres per foot (§8.2) are read from the tables of model-data.md, so the
 numbers are the published ones, not a re-typing. Pass another path to
-model-data.md as the first argument if it is not at ../shared/reference/.
+model-data.md as the first argument to read another copy.
 """
 import json
 import pathlib
@@ -27,7 +27,7 @@ CREDITS = [
     "Models/Gait2392_Simbody/gait2392_thelen2003muscle.osim), licensed CC BY 3.0: "
     "Delp et al. 1990, Anderson & Pandy 1999, Yamaguchi & Zajac 1989; planar joints "
     "as in its planar version gait10dof18musc.",
-    "Reconstructed for leap from shared/reference/model-data.md §4-§6 (segments, joints, "
+    "Reconstructed for leap from models/model-data.md §4-§6 (segments, joints, "
     "knee splines, poses) and §8.2 (sole contact sites, from the OpenSim Jumper and "
     "Falisse et al. 3dpredictsim, MIT). Not the Porsa, Lin & Pandy 2016 model files, "
     "which are not available.",
@@ -258,7 +258,7 @@ def main():
         },
     }
     root = pathlib.Path(__file__).resolve().parent.parent
-    model_data = sys.argv[1] if len(sys.argv) > 1 else root.parent / "shared" / "reference" / "model-data.md"
+    model_data = sys.argv[1] if len(sys.argv) > 1 else root / "models" / "model-data.md"
     model["forces"] = {"muscle_model": "Thelen2003Muscle", "muscles": muscles(model_data),
                        "ligaments": ligaments(), "contact": contact()}
     model["credits"].append(

@@ -2,7 +2,7 @@
 //! first-order activation, HuntCrossleyForce and SmoothSphereHalfSpaceForce
 //! for sphere-ground contact, and exponential passive joint torques,
 //! generic over the scalar type. Equations and their sources are in
-//! `shared/reference/model-equations.md` (§1.1, §2.2-§2.7, §4.2-§4.3, §5.3).
+//! `docs/model-equations.md` (§1.1, §2.2-§2.7, §4.2-§4.3, §5.3).
 
 use crate::model::{ContactLaw, ContactSpec, Model, MuscleModel, MuscleSpec};
 use crate::ode::{ForceLaws, MuscleRates};
