@@ -542,10 +542,12 @@ pub fn parse_study<T: serde::de::DeserializeOwned + Serialize + StudyKind>(
     origin: &str,
 ) -> Result<T, StudyError> {
     parse_json_object(text).map_err(|e| {
-        let reason = with_kind_hint(text, T::KIND, e.reason);
-        let reason = match misplaced_field_hint(&T::fields(), &e.path, &reason) {
-            Some(hint) => format!("{reason}; {hint}"),
-            None => reason,
+        // A file of another kind gets that hint alone: its fields are not
+        // misplaced in this one.
+        let hinted = with_kind_hint(text, T::KIND, e.reason.clone());
+        let reason = match misplaced_field_hint(&T::fields(), &e.path, &e.reason) {
+            Some(hint) if hinted == e.reason => format!("{hinted}; {hint}"),
+            _ => hinted,
         };
         StudyError::Field {
             origin: origin.into(),
@@ -2036,11 +2038,15 @@ mod tests {
             .to_string();
         assert!(e.contains("this looks like a model file"), "{e}");
         let sim =
-            r#"{"t_max": 1.0, "integrator": "RungeKuttaMerson", "bang_bang": {"on_time": 0.0}}"#;
+            r#"{"integrator": "RungeKuttaMerson", "t_max": 1.0, "bang_bang": {"on_time": 0.0}}"#;
         let e = SolveStudy::from_json_str(sim, "s.json")
             .unwrap_err()
             .to_string();
-        assert!(e.contains("`leap simulate` study file"), "{e}");
+        // Its fields are not misplaced in a solve study: that hint alone.
+        assert!(
+            e.contains("`leap simulate` study file") && !e.contains("belongs"),
+            "{e}"
+        );
         // A section given as null is a JSON object missing, not a Rust type.
         let e = SolveStudy::from_json_str(r#"{"mesh": null}"#, "s.json")
             .unwrap_err()
