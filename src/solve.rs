@@ -830,33 +830,46 @@ fn integrate_guess_on_mesh(
 ) -> Result<crate::transcription::MeshIntegration, String> {
     let started = std::time::Instant::now();
     let m = tr.integrate_on_mesh(v).map_err(|e| e.to_string())?;
-    let name = |i: usize| {
-        tr.ocp
-            .eq
-            .state_names()
-            .get(i)
-            .cloned()
-            .unwrap_or_else(|| "?".into())
-    };
-    let at_bound = match m.first_held {
-        Some(h) if m.at_bound > 0 => format!(
-            ", {} stopped with a state at its bound (the first: interval {}, {} at its {} bound)",
-            m.at_bound,
-            h.interval,
-            name(h.state),
-            if h.lower { "lower" } else { "upper" }
-        ),
-        _ => String::new(),
+    let mut left = Vec::new();
+    if m.at_bound > 0 {
+        left.push(format!("{} stopped with a state at its bound", m.at_bound));
+    }
+    if m.stopped_short > 0 {
+        left.push(format!(
+            "{} stopped short inside the bounds",
+            m.stopped_short
+        ));
+    }
+    if let Some(u) = &m.first_unsolved {
+        let first = if m.at_bound + m.stopped_short > 1 {
+            "the first: "
+        } else {
+            ""
+        };
+        let why = match &u.held {
+            Some(h) => format!(
+                ", {} held at its {} bound",
+                h.name,
+                if h.lower { "lower" } else { "upper" }
+            ),
+            None => String::new(),
+        };
+        left.push(format!("{first}interval {}{why}", u.interval));
+    }
+    let left = if left.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", left.join("; "))
     };
     progress(&format!(
-        "initial guess: {} of {} intervals integrated to {:.0e}{at_bound} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
+        "initial guess: {} of {} intervals integrated to {:.0e}{left} in {:.2} s; largest defect left {:.2e} (interval {}, {})",
         m.converged,
         m.intervals,
         crate::transcription::MESH_NEWTON_TOL,
         started.elapsed().as_secs_f64(),
         m.worst_defect,
         m.worst_interval,
-        name(m.worst_state)
+        m.worst_state_name
     ));
     Ok(m)
 }

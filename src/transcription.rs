@@ -1174,7 +1174,7 @@ enum Term {
 }
 
 /// What [`Transcription::integrate_on_mesh`] reached.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct MeshIntegration {
     /// Mesh intervals, and those whose defects reached [`MESH_NEWTON_TOL`].
     pub intervals: usize,
@@ -1185,23 +1185,36 @@ pub struct MeshIntegration {
     /// activation the scheme would take below a_min, a fibre shorter than
     /// its shortest).
     pub at_bound: usize,
-    /// The first such interval (1-based), its state held at a bound (the
-    /// largest component of the last step against one), and whether the
-    /// bound is the lower.
-    pub first_held: Option<HeldState>,
+    /// Intervals whose Newton iteration stopped short inside the bounds: no
+    /// backtracked step reduced the defects, the Jacobian was singular, or
+    /// the iterations ran out.
+    pub stopped_short: usize,
+    /// The first interval left unsolved, of either kind.
+    pub first_unsolved: Option<UnsolvedInterval>,
     /// The largest defect left (the problem's units), and its interval
-    /// (1-based) and state.
+    /// (1-based) and state (index and OpenSim path).
     pub worst_defect: f64,
     pub worst_interval: usize,
     pub worst_state: usize,
+    pub worst_state_name: String,
+}
+
+/// An interval of [`Transcription::integrate_on_mesh`] left unsolved:
+/// 1-based, its defect left, and the state held at its bound if one was
+/// (the largest component of the last step against a bound).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UnsolvedInterval {
+    pub interval: usize,
+    pub defect: f64,
+    pub held: Option<HeldState>,
 }
 
 /// A state that held an interval of [`Transcription::integrate_on_mesh`] at
-/// its bound.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+/// its bound: its index, OpenSim path and whether the bound is the lower.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HeldState {
-    pub interval: usize,
     pub state: usize,
+    pub name: String,
     pub lower: bool,
 }
 
@@ -2069,11 +2082,14 @@ impl Transcription {
             intervals: big_n,
             converged: 0,
             at_bound: 0,
-            first_held: None,
+            stopped_short: 0,
+            first_unsolved: None,
             worst_defect: 0.0,
             worst_interval: 0,
             worst_state: 0,
+            worst_state_name: String::new(),
         };
+        let names = self.ocp.eq.state_names();
         for k in 1..=big_n {
             let cols = (0..nx)
                 .map(|i| self.state_index(k, i))
@@ -2140,13 +2156,22 @@ impl Transcription {
                 // rows hold the defects of the step taken: v's now.
             }
             report.converged += usize::from(res <= MESH_NEWTON_TOL);
-            if let (true, Some((state, lower))) = (res > MESH_NEWTON_TOL, held) {
-                report.at_bound += 1;
-                report.first_held.get_or_insert(HeldState {
-                    interval: k,
-                    state,
-                    lower,
-                });
+            if res > MESH_NEWTON_TOL {
+                match held {
+                    Some(_) => report.at_bound += 1,
+                    None => report.stopped_short += 1,
+                }
+                report
+                    .first_unsolved
+                    .get_or_insert_with(|| UnsolvedInterval {
+                        interval: k,
+                        defect: res,
+                        held: held.map(|(state, lower)| HeldState {
+                            state,
+                            name: names.get(state).cloned().unwrap_or_default(),
+                            lower,
+                        }),
+                    });
             }
             if res > report.worst_defect {
                 // rows may hold a rejected trial's defects: v's again.
@@ -2154,6 +2179,8 @@ impl Transcription {
                 report.worst_state = (0..nx)
                     .max_by(|&a, &b| rows[a].abs().total_cmp(&rows[b].abs()))
                     .unwrap_or(0);
+                report.worst_state_name =
+                    names.get(report.worst_state).cloned().unwrap_or_default();
                 report.worst_defect = res;
                 report.worst_interval = k;
             }

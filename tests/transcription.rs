@@ -1061,6 +1061,44 @@ fn bang_bang_guess_follows_the_forward_jump() {
 /// intervals the state at t_f/2 moves about half as much from 28 to 56 as
 /// from 14 to 28.
 #[test]
+fn bang_bang_guess_integrated_on_the_mesh_counts_every_interval_left() {
+    // The trapezoidal rule on 8 intervals leaves intervals unsolved inside
+    // the bounds as well as at them: every interval is counted once, and
+    // the first one left is named.
+    let mut tr = transcription(TranscriptionOptions {
+        num_mesh_intervals: 8,
+        scheme: Scheme::Trapezoidal,
+        fiber_dynamics: FiberDynamics::Explicit,
+        ..Default::default()
+    });
+    let (mut v, _) = tr.bang_bang_guess().unwrap();
+    let report = tr.integrate_on_mesh(&mut v).unwrap();
+    assert_eq!(
+        report.converged + report.at_bound + report.stopped_short,
+        8,
+        "{report:?}"
+    );
+    assert!(report.converged < 8, "{report:?}");
+    let mut c = vec![0.0; tr.num_constraints()];
+    tr.constraints(&v, &mut c).unwrap();
+    let nx = 62;
+    let first = (1..=8).find(|&k| {
+        c[(k - 1) * nx..k * nx]
+            .iter()
+            .any(|d| d.abs() > MESH_NEWTON_TOL)
+    });
+    assert_eq!(
+        report.first_unsolved.as_ref().map(|u| u.interval),
+        first,
+        "{report:?}"
+    );
+    assert_eq!(
+        report.worst_state_name,
+        tr.ocp.eq.state_names()[report.worst_state]
+    );
+}
+
+#[test]
 fn bang_bang_guess_integrated_on_the_mesh() {
     let (_, _, guess28) = setup();
     let mut mid_states = Vec::new();
@@ -1110,19 +1148,21 @@ fn bang_bang_guess_integrated_on_the_mesh() {
         assert_eq!(converged, report.converged, "{n} intervals: {report:?}");
         // Each interval left unsolved is reported as stopped at its bound.
         assert_eq!(
-            report.converged + report.at_bound,
-            n,
+            (report.converged + report.at_bound, report.stopped_short),
+            (n, 0),
             "{n} intervals: {report:?}"
         );
         assert_eq!(worst, report.worst_defect);
-        // The first interval left unsolved is named, with a state of its
-        // node at the bound said.
-        match (report.first_held, first_unsolved) {
+        // The first interval left unsolved is named, with the state of its
+        // node held at the bound.
+        match (&report.first_unsolved, first_unsolved) {
             (None, None) => {}
-            (Some(h), Some(k)) => {
-                assert_eq!(h.interval, k, "{n} intervals: {report:?}");
+            (Some(u), Some(k)) => {
+                assert_eq!(u.interval, k, "{n} intervals: {report:?}");
+                let h = u.held.as_ref().unwrap();
                 let j = tr.state_index(k, h.state).unwrap();
                 assert_eq!(v[j], if h.lower { lo[j] } else { hi[j] }, "{h:?}");
+                assert_eq!(h.name, tr.ocp.eq.state_names()[h.state]);
             }
             other => panic!("{n} intervals: {other:?}, {report:?}"),
         }
