@@ -576,7 +576,7 @@ pub struct SwitchJump {
     pub muscle: String,
     /// Path point number (1-based, as in OpenSim's P1, P2, ...).
     pub point: usize,
-    /// The path point's name in `models/jumper.osim` (`scripts/jumper_osim.py`
+    /// The path point's name in leap's `.osim` files (`scripts/jumper_osim.py`
     /// names them as gait2392 does): `iliacus_r-P3` for point 3.
     pub path_point: String,
     pub coordinate: String,

@@ -1,7 +1,8 @@
 //! OpenSim storage files: `.sto` (STOFileAdapter version 3, as Moco writes
 //! them; version 1 read too) and `.mot`, and controls read from them.
 //!
-//! Formats follow `shared/reference/opensim-conventions.md` §3.1: metadata
+//! Formats follow the team's notes (`shared/reference/opensim-conventions.md`
+//! §3.1, outside the repository): metadata
 //! `key=value` lines sorted by key, `DataType=double`, `version=3`,
 //! `OpenSimVersion`, `endheader`, a tab-separated label line starting with
 //! `time`, then rows printed with 16 significant digits.
@@ -491,7 +492,7 @@ impl StoTable {
             }
             if t.abs() > MAX_FILE_TIME_S {
                 return Err(time_err(format!(
-                    "row {}: t = {} s lies beyond a day (±{MAX_FILE_TIME_S} s): no movement trial lasts so long (a typo in the time column?)",
+                    "row {}: t = {} s lies beyond a day (±{MAX_FILE_TIME_S} s): no movement trial lasts so long (a typo in the time column, or times not measured from the trial's start?)",
                     k + 1,
                     readable(t)
                 )));

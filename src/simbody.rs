@@ -8,7 +8,8 @@
 //! order happens here. Every C++ exception becomes a [`SimbodyError`].
 //!
 //! Simbody's `System` is not safe to share between threads (see
-//! `shared/reference/simbody-bridge-notes.md` §7): a `SimbodyModel` is `Send`
+//! the team's `shared/reference/simbody-bridge-notes.md` §7, outside the
+//! repository): a `SimbodyModel` is `Send`
 //! but not `Sync`; build one per thread.
 
 use crate::model::{Mobilizer, Model, SystemSpec};

@@ -199,20 +199,18 @@ fn remove_stale_results(
     Ok(removed)
 }
 
-/// The reports `leap report` writes by default of a solve's results
-/// ([`crate::report::default_output`] of the solution and of the forward
-/// check's states) that lie in `dir`: drawn of an earlier run, since this
-/// run has just written its results.
+/// The reports `leap report` writes by default
+/// ([`crate::report::default_output`]) of a solve's tables (its `.sto` and
+/// `.mot` [`result_files`]) that lie in `dir`: drawn of an earlier run,
+/// since this run has just written or removed its results.
 fn earlier_reports(dir: &Path, name: &str) -> Vec<String> {
-    [
-        format!("{name}_solution.sto"),
-        format!("{name}_forward_states.sto"),
-    ]
-    .iter()
-    .map(|f| crate::report::default_output(&dir.join(f)))
-    .filter(|p| p.is_file())
-    .map(|p| p.display().to_string())
-    .collect()
+    result_files(name)
+        .iter()
+        .filter(|f| f.ends_with(".sto") || f.ends_with(".mot"))
+        .map(|f| crate::report::default_output(&dir.join(f)))
+        .filter(|p| p.is_file())
+        .map(|p| p.display().to_string())
+        .collect()
 }
 
 /// An I/O error on `file`, `what` failed, with the OS's reason.
@@ -536,6 +534,9 @@ pub struct SolveReport {
     /// Settings of the study that the method does not use (a collocation
     /// study solved with `--method shooting`).
     pub ignored_study_settings: Vec<String>,
+    /// Settings of the study that a command-line option changed with it
+    /// ([`crate::study::SolveConfig::switched`]), in words.
+    pub switched_study_settings: Vec<String>,
     /// Method "shooting": its derivatives and the work they took.
     pub shooting: Option<ShootingSummary>,
     pub model: String,
@@ -749,9 +750,7 @@ pub fn run(
                 p.display()
             ));
             let FileGuess { mut v, unread, .. } = guess_from_file_with(&tr, p, false)?;
-            for w in guess_warnings(&p.display().to_string(), &unread, &[]) {
-                progress(&w);
-            }
+            say_guess_warnings(progress, p, &unread, &[]);
             unread_guess = unread;
             let m = integrate_guess_on_mesh(&mut tr, &mut v, progress).map_err(|e| {
                 SolveError::Guess {
@@ -769,9 +768,7 @@ pub fn run(
                 unread,
                 projected,
             } = guess_from_file_with(&tr, p, true)?;
-            for w in guess_warnings(&p.display().to_string(), &unread, &projected) {
-                progress(&w);
-            }
+            say_guess_warnings(progress, p, &unread, &projected);
             unread_guess = unread;
             guess_projected = projected;
             (v, p.display().to_string(), None)
@@ -802,6 +799,7 @@ pub fn run(
     report.guess_mesh_integration = mesh_integration;
     report.unread_guess_columns = unread_guess;
     report.guess_projected_states = guess_projected;
+    report.switched_study_settings = config.switched.clone();
     report.study = config.study_file.as_ref().map(|p| p.display().to_string());
     report.model = config.model.display().to_string();
     report.hessian_option = crate::study::hessian_option_name(&config.settings);
@@ -926,9 +924,7 @@ fn run_shooting(
                 p.display()
             ));
             let (v, unread) = shooting_guess_from_file(&sh, p)?;
-            for w in guess_warnings(&p.display().to_string(), &unread, &[]) {
-                progress(&w);
-            }
+            say_guess_warnings(progress, p, &unread, &[]);
             unread_guess = unread;
             (v, p.display().to_string(), None)
         }
@@ -1408,6 +1404,7 @@ fn report_at(r: &SqpResult, ocp: &JumpOcp, q: SolutionQuantities) -> SolveReport
         hessian_shift: crate::sqp::HessianShiftSummary::of(&r.history),
         study: None,
         ignored_study_settings: Vec::new(),
+        switched_study_settings: Vec::new(),
         shooting: None,
         model: String::new(),
         output_files: Vec::new(),
@@ -1596,6 +1593,18 @@ fn guess_warnings(guess: &str, unread: &[String], projected: &[GuessProjection])
         w.push(format!("warning: {guess}: {p}; projected into the bounds"));
     }
     w
+}
+
+/// [`guess_warnings`] of guess file `p` as progress lines.
+fn say_guess_warnings(
+    progress: &mut dyn FnMut(&str),
+    p: &Path,
+    unread: &[String],
+    projected: &[GuessProjection],
+) {
+    for w in guess_warnings(&p.display().to_string(), unread, projected) {
+        progress(&w);
+    }
 }
 
 /// The columns of a guess file that look like excitations but name no
@@ -2079,6 +2088,9 @@ impl SolveReport {
                 100.0 * g
             ));
         }
+        for w in &self.switched_study_settings {
+            s.push_str(&format!("  note: {w}\n"));
+        }
         for w in guess_warnings(
             &self.guess,
             &self.unread_guess_columns,
@@ -2094,7 +2106,7 @@ impl SolveReport {
         }
         if !self.earlier_reports.is_empty() {
             s.push_str(&format!(
-                "  warning: {} drawn of an earlier run, not of these results (`leap report` redraws it)\n",
+                "  warning: report(s) drawn of an earlier run, not of these results: {} (`leap report` of this run's table redraws one)\n",
                 self.earlier_reports.join(", ")
             ));
         }

@@ -573,11 +573,18 @@ impl StudyKind for SolveStudy {
         // The second names (`#[serde(alias)]`), which serialising omits:
         // Moco's top-level `transcription_scheme` is read under `mesh`.
         for (section, alias) in [
+            ("", "guess_file"),
+            ("", "results_directory"),
             ("mesh", "transcription_scheme"),
             ("tolerances", "optim_max_iterations"),
             ("problem", "final_time_bounds"),
         ] {
-            if let Some(m) = v.get_mut(section).and_then(|s| s.as_object_mut()) {
+            let m = if section.is_empty() {
+                v.as_object_mut()
+            } else {
+                v.get_mut(section).and_then(|s| s.as_object_mut())
+            };
+            if let Some(m) = m {
                 m.insert(alias.into(), serde_json::Value::Null);
             }
         }
@@ -1185,7 +1192,7 @@ impl SolveConfig {
                     && self.transcription.fiber_dynamics == FiberDynamics::Implicit
                 {
                     self.switched.push(format!(
-                        "the study's mesh.fiber_dynamics \"implicit\" becomes \"explicit\" with --scheme {s} (implicit fibre rows exist with midpoint-euler only; --fiber-dynamics explicit says so)"
+                        "the study's mesh.fiber_dynamics \"implicit\" becomes \"explicit\" with --scheme {s} (implicit fibre rows exist with midpoint-euler only; give --fiber-dynamics explicit to choose it and silence this)"
                     ));
                 }
                 self.transcription.fiber_dynamics = FiberDynamics::Explicit;
@@ -1672,6 +1679,47 @@ mod tests {
             if let Err(e) = SolveStudy::from_json_str(&json, "s.json") {
                 assert!(!e.to_string().contains("unknown field"), "{path}: {e}");
             }
+        }
+        // Every name a section reads (serde's "expected one of" list,
+        // second names included) is in the hint's fields, and no other.
+        let fields = SolveStudy::fields();
+        let mut sections = vec![String::new()];
+        sections.extend(
+            fields
+                .as_object()
+                .unwrap()
+                .iter()
+                .filter(|(_, v)| v.is_object())
+                .map(|(k, _)| k.clone()),
+        );
+        for section in sections {
+            let json = if section.is_empty() {
+                r#"{"zz_unknown": 1}"#.to_string()
+            } else {
+                format!(r#"{{"{section}": {{"zz_unknown": 1}}}}"#)
+            };
+            let e = SolveStudy::from_json_str(&json, "s.json")
+                .unwrap_err()
+                .to_string();
+            let list = e
+                .split_once("expected one of ")
+                .map(|(_, l)| l.split(" at line").next().unwrap_or(l))
+                .unwrap_or_else(|| panic!("{section}: {e}"));
+            let mut read: Vec<&str> = list.split(", ").map(|n| n.trim_matches('`')).collect();
+            let here = if section.is_empty() {
+                &fields
+            } else {
+                &fields[section.as_str()]
+            };
+            let mut known: Vec<&str> = here
+                .as_object()
+                .unwrap()
+                .keys()
+                .map(|k| k.as_str())
+                .collect();
+            read.sort_unstable();
+            known.sort_unstable();
+            assert_eq!(read, known, "section {section:?}");
         }
         // A field read nowhere gets no such hint.
         let (_, r) = field_error(r#"{"mesh": {"num_nodes": 29}}"#);
