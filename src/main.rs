@@ -48,10 +48,10 @@ enum Command {
         #[command(flatten)]
         model: ModelFile,
         /// Number of random states (default 100).
-        #[arg(long)]
+        #[arg(long, allow_negative_numbers = true, value_parser = whole_count)]
         samples: Option<usize>,
         /// Seed of the random states.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = whole_seed)]
         seed: u64,
         /// Instead: the collocation Jacobian of the jump, exact Rust-native
         /// (dual numbers) against Simbody's central differences, at the
@@ -90,10 +90,10 @@ enum Command {
         #[arg(long)]
         integrator: Option<String>,
         /// Integrator accuracy (ExplicitEuler: fixed step in s). Default 1e-5.
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         accuracy: Option<f64>,
         /// Stop time if the apex is not reached (s; default 1).
-        #[arg(long, allow_negative_numbers = true)]
+        #[arg(long, allow_hyphen_values = true)]
         t_max: Option<f64>,
         /// Results directory (default results/).
         #[arg(long)]
@@ -217,7 +217,7 @@ enum Command {
         #[command(flatten)]
         model: ModelFile,
         /// Analyse from START to END (s) instead of the push-off.
-        #[arg(long, num_args = 2, value_names = ["START", "END"], allow_negative_numbers = true)]
+        #[arg(long, num_args = 2, value_names = ["START", "END"], allow_hyphen_values = true)]
         window: Option<Vec<f64>>,
         /// The full 10-coordinate system instead of the symmetric one.
         #[arg(long)]
@@ -304,7 +304,7 @@ enum BenchCommand {
     /// at the published optimum, iterations, median wall time and its split.
     Sqp {
         /// Runs of the whole set per mode (the median is reported).
-        #[arg(long, default_value_t = 5, value_parser = bench_repeats)]
+        #[arg(long, default_value_t = 5, allow_negative_numbers = true, value_parser = bench_repeats)]
         repeats: usize,
         /// Print one JSON object instead of a table.
         #[arg(long)]
@@ -316,7 +316,7 @@ enum BenchCommand {
     SqpJump {
         #[command(flatten)]
         model: ModelFile,
-        #[arg(long, default_value_t = 3, value_parser = bench_iterations)]
+        #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = bench_iterations)]
         iterations: usize,
         /// "exact" (the jump's default) or "bfgs".
         #[arg(long, default_value = "exact")]
@@ -336,7 +336,7 @@ enum BenchCommand {
         model: ModelFile,
         /// SQP iterations per method (a shooting iteration takes about 1 s
         /// with forward sensitivities, 23 s with central differences).
-        #[arg(long, default_value_t = 3, value_parser = bench_iterations)]
+        #[arg(long, default_value_t = 3, allow_negative_numbers = true, value_parser = bench_iterations)]
         iterations: usize,
         /// Print one JSON object instead of a table.
         #[arg(long)]
@@ -353,7 +353,7 @@ enum BenchCommand {
         #[arg(long)]
         model: Option<PathBuf>,
         /// Solves per mesh (the medians over all runs are reported).
-        #[arg(long, default_value_t = 1, value_parser = bench_repeats)]
+        #[arg(long, default_value_t = 1, allow_negative_numbers = true, value_parser = bench_repeats)]
         repeats: usize,
         /// Hessian mode (as `leap solve --hessian`; default: the study's).
         #[arg(long)]
@@ -950,8 +950,21 @@ fn at_least_one(s: &str) -> Result<usize, String> {
     match s.parse::<usize>() {
         Ok(n) if n >= 1 => Ok(n),
         Ok(_) => Err("must be at least 1".into()),
-        Err(e) => Err(e.to_string()),
+        Err(_) => Err(format!("expected a whole number ≥ 1, got '{s}'")),
     }
+}
+
+/// A count given on the command line (`--samples`): a whole number ≥ 0,
+/// its range checked where it is used.
+fn whole_count(s: &str) -> Result<usize, String> {
+    s.parse::<usize>()
+        .map_err(|_| format!("expected a whole number ≥ 0, got '{s}'"))
+}
+
+/// `--seed`: a whole number in [0, 2⁶⁴).
+fn whole_seed(s: &str) -> Result<u64, String> {
+    s.parse::<u64>()
+        .map_err(|_| format!("expected a whole number in [0, 2^64), got '{s}'"))
 }
 
 /// The most runs a benchmark repeats (`--repeats`): a median needs a few;

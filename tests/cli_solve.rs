@@ -131,6 +131,28 @@ fn bad_command_line_values_name_the_option() {
             vec!["bench", "sqp-jump", "--iterations", "0"],
             "--iterations <ITERATIONS>': must be at least 1",
         ),
+        // Negative values reach the option's own check, not clap's
+        // "unexpected argument '-1'".
+        (
+            vec!["bench", "sqp", "--repeats", "-1"],
+            "--repeats <REPEATS>': expected a whole number ≥ 1, got '-1'",
+        ),
+        (
+            vec!["crosscheck", "--samples", "-1"],
+            "--samples <SAMPLES>': expected a whole number ≥ 0, got '-1'",
+        ),
+        (
+            vec!["crosscheck", "--seed", "-1"],
+            "--seed <SEED>': expected a whole number in [0, 2^64), got '-1'",
+        ),
+        (
+            vec!["simulate", "--accuracy", "-1e-5"],
+            "--accuracy: must be positive, got -1e-5",
+        ),
+        (
+            vec!["simulate", "--t-max", "-1e-3"],
+            "--t-max: must be a time in (0, 10] s",
+        ),
     ] {
         let err = refused(&args);
         assert!(err.contains(what), "{args:?}: {err}");
