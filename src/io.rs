@@ -968,17 +968,7 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
             }
         }
     }
-    // Each angle column's coordinate range in the model.
-    let nq = eq.nq();
-    let ranges: HashMap<&str, [f64; 2]> = columns
-        .iter()
-        .filter(|(l, _)| l.ends_with("/value") && angular.contains(l))
-        .map(|(l, i)| {
-            let c = eq.system.coordinates[i % nq];
-            (l.as_str(), eq.model.coordinates[c].range)
-        })
-        .collect();
-    check_angle_units(&t, path, &ranges, degrees)?;
+    check_angle_units(&t, path, &angle_ranges(eq), degrees)?;
     // The left leg's columns against their right partners', before the
     // conversion, to name the file's values.
     let names = eq.state_names();
@@ -1004,10 +994,10 @@ pub fn read_states(eq: &StateEquation, path: &Path) -> Result<StoTable, StoError
 ///   and outside its coordinate's range (`ranges`, by column): a file in
 ///   degrees (a guess from one had ended in a numerical error after its
 ///   projection into the bounds).
-fn check_angle_units(
+pub fn check_angle_units(
     t: &StoTable,
     path: &Path,
-    ranges: &HashMap<&str, [f64; 2]>,
+    ranges: &HashMap<String, [f64; 2]>,
     degrees: bool,
 ) -> Result<(), StoError> {
     use std::f64::consts::PI;
@@ -1058,6 +1048,21 @@ fn check_angle_units(
         }),
         _ => Ok(()),
     }
+}
+
+/// Each rotational coordinate's value column (both legs) with its range in
+/// the model, for [`check_angle_units`].
+pub fn angle_ranges(eq: &StateEquation) -> HashMap<String, [f64; 2]> {
+    let nq = eq.nq();
+    let angular = angular_columns(eq);
+    eq.model_state_columns()
+        .into_iter()
+        .filter(|(l, _)| l.ends_with("/value") && angular.contains(l))
+        .map(|(l, i)| {
+            let c = eq.system.coordinates[i % nq];
+            (l, eq.model.coordinates[c].range)
+        })
+        .collect()
 }
 
 /// The value and speed columns of the rotational coordinates of `eq`'s
@@ -1129,6 +1134,9 @@ pub fn use_absolute_state_names(
 pub struct ModelColumns {
     pub angular: std::collections::HashSet<String>,
     pub pre_4_names: std::collections::HashMap<String, String>,
+    /// The angle columns' coordinate ranges ([`angle_ranges`]): a file's
+    /// angles checked against its `inDegrees` ([`check_angle_units`]).
+    pub angle_ranges: HashMap<String, [f64; 2]>,
 }
 
 impl ModelColumns {
@@ -1137,6 +1145,7 @@ impl ModelColumns {
         ModelColumns {
             angular: angular_columns(eq),
             pre_4_names: pre_4_state_names(eq),
+            angle_ranges: angle_ranges(eq),
         }
     }
 }

@@ -101,6 +101,9 @@ impl ReportFile {
         table.check_finite(path)?;
         let degrees = table.in_degrees(path)?;
         crate::io::use_absolute_state_names(&mut table, &columns.pre_4_names);
+        // A file in radians headed in degrees (or the reverse) would be
+        // drawn 57 times too small (or large), without a word.
+        crate::io::check_angle_units(&table, path, &columns.angle_ranges, degrees)?;
         crate::io::to_radians(&mut table, &columns.angular, degrees);
         let name = path
             .file_name()
@@ -620,10 +623,25 @@ pub fn report(
     let span = |t: &StoTable| (t.time[0], t.time[t.time.len() - 1]);
     let (t0, t1) = span(&files[0].table);
     let mut warnings = Vec::new();
+    // A trajectory of another model: nothing of it is read as the model's
+    // (no angle converted from degrees, no panel of its coordinates).
+    let of_model =
+        |l: &String| columns.angular.contains(l) || columns.pre_4_names.values().any(|p| p == l);
+    if !columns.pre_4_names.is_empty() && !files[0].table.labels.iter().any(of_model) {
+        warnings.push(format!(
+            "{}: no column names a coordinate, muscle or excitation of the model (--model): a trajectory of another model? Its columns are drawn as written",
+            path.display()
+        ));
+    }
     for r in refs {
         let f = ReportFile::read(r, columns)?;
         let (r0, r1) = span(&f.table);
-        if !f
+        if crate::io::same_file(r, path) {
+            warnings.push(format!(
+                "{}: the reference is the trajectory itself: its lines lie under the trajectory's",
+                r.display()
+            ));
+        } else if !f
             .table
             .labels
             .iter()
@@ -700,6 +718,14 @@ pub fn check_output(output: &Path, trajectory: &Path, refs: &[PathBuf]) -> Resul
         return Err(refuse(format!(
             "--output is the input file {}: the report would overwrite it; name another file",
             input.display()
+        )));
+    }
+    if output.is_dir() {
+        return Err(refuse(format!(
+            "--output is a directory; name the .svg file to write (such as {})",
+            output
+                .join(default_output(trajectory).file_name().unwrap_or_default())
+                .display()
         )));
     }
     let svg = output

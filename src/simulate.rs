@@ -976,6 +976,12 @@ impl SimulateStudy {
                     ),
                 ));
             }
+            if bb.on.as_ref().is_some_and(|on| on.is_empty()) {
+                return Err(err(
+                    "bang_bang.on",
+                    "is empty: no muscle would switch on (name the muscles to switch on, or leave 'on' out for the extensors at the squat)".into(),
+                ));
+            }
             if bb.off_time.is_nan() || bb.off_time <= bb.on_time {
                 return Err(err(
                     "bang_bang.off_time",

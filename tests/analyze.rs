@@ -266,6 +266,17 @@ fn broken_states_files_name_file_column_and_row_once() {
         )) && e.ends_with("Write inDegrees=no"),
         "{e}"
     );
+    // `leap report` refuses it too (it had drawn every angle 57 times too
+    // small).
+    let columns = leap::io::ModelColumns::of(&eq);
+    let e = leap::report::ReportFile::read(&p, &columns)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("header 'inDegrees': the header says yes, but every joint angle lies within ±π"),
+        "{e}"
+    );
     // Its angles and angular speeds in degrees, as the header says: read
     // back in radians.
     let angular = leap::io::angular_columns(&eq);
@@ -280,6 +291,7 @@ fn broken_states_files_name_file_column_and_row_once() {
     let p = dir.join("degrees.sto");
     degrees.write_sto(&p).unwrap();
     let (_, xs) = leap::analyze::read_states(&eq, &p).unwrap();
+    assert!(leap::report::ReportFile::read(&p, &columns).is_ok());
     for (row, want) in xs.iter().zip(&good.rows) {
         for (a, b) in row.iter().zip(want) {
             assert!((a - b).abs() <= 1e-12 * b.abs().max(1.0), "{a} against {b}");

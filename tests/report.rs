@@ -266,6 +266,37 @@ fn leap_report_writes_beside_the_trajectory_and_refuses_bad_input() {
     assert!(std::fs::read_to_string(&svg).unwrap().starts_with("<svg"));
     assert_eq!(v["sections"][0]["section"], "coordinate values");
     assert_eq!(v["sections"].as_array().unwrap().len(), 5);
+    // The trajectory as its own reference, and a trajectory of no column of
+    // the model (the double pendulum's): drawn, with a warning.
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("report")
+        .arg(&traj)
+        .arg("--ref-files")
+        .arg(&traj)
+        .arg("--output")
+        .arg(dir.join("self.svg"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && err.contains("the reference is the trajectory itself"),
+        "{err}"
+    );
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("report")
+        .arg(&traj)
+        .args(["--model", "models/double_pendulum.json", "--output"])
+        .arg(dir.join("other_model.svg"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success()
+            && err.contains("no column names a coordinate, muscle or excitation of the model"),
+        "{err}"
+    );
     // Bad input: a missing file, a file with only time, a row of NaN.
     let only_time = dir.join("time.sto");
     std::fs::write(&only_time, "endheader\ntime\n0\n1\n").unwrap();
@@ -437,6 +468,10 @@ fn the_output_may_not_be_an_input_nor_in_a_missing_directory() {
         (traj.clone(), "the report would overwrite it"),
         (dir.join("no_dir/r.svg"), "does not exist"),
         (dir.join("r.png"), "name the file .svg"),
+        (
+            dir.clone(),
+            "--output is a directory; name the .svg file to write (such as",
+        ),
     ] {
         let err = refused(
             Command::cargo_bin("leap")

@@ -121,6 +121,7 @@ fn simulate_study_values_are_checked() {
         (r#"{"bang_bang": {"on_time": 0.3, "off_time": 0.1}}"#, "sim.json: bang_bang.off_time: must be after on_time (0.3 s), got 0.1"),
         (r#"{"bang_bang": {"on_time": 0.2, "off_time": 0.2}}"#, "sim.json: bang_bang.off_time: must be after on_time"),
         (r#"{"bang_bang": {"on_time": -0.1, "off_time": 0.3}}"#, "sim.json: bang_bang.on_time: must be a time ≥ 0 s"),
+        (r#"{"bang_bang": {"on": []}}"#, "sim.json: bang_bang.on: is empty: no muscle would switch on"),
         // Empty paths: "out" had written into the study's own directory,
         // "model" and "controls" had named that directory, not the field.
         (r#"{"out": ""}"#, "sim.json: out: empty: name a directory"),
