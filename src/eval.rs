@@ -471,17 +471,30 @@ pub fn evaluate(
     let (n, nm) = (eq.nq(), eq.nm());
     let mut ws = eq.workspace::<f64>();
     let mut xdot = vec![0.0; eq.nx()];
-    eq.rhs(laws, &mut ws, x, u, &mut xdot)?;
+    const DEGREES: &str = "the input in degrees? leap eval reads coordinates in radians";
+    eq.rhs(laws, &mut ws, x, u, &mut xdot)
+        .map_err(|e| match e {
+            // A coordinate far outside its range (a knee at 1e10 rad) breaks
+            // the mass matrix before any force: named, not the masses.
+            crate::ode::OdeError::Singular(source) => {
+                let why = outside_range_hint(eq, x, DEGREES);
+                if why.is_empty() {
+                    crate::ode::OdeError::Singular(source)
+                } else {
+                    crate::ode::OdeError::SingularAt {
+                        mass_matrix: source,
+                        why,
+                    }
+                }
+            }
+            e => e,
+        })?;
     let names = eq.state_names();
     if let Some(k) = xdot.iter().position(|v| !v.is_finite()) {
         return Err(crate::ode::OdeError::NotFinite {
             state: names[k].clone(),
             value: xdot[k],
-            why: outside_range_hint(
-                eq,
-                x,
-                "the input in degrees? leap eval reads coordinates in radians",
-            ),
+            why: outside_range_hint(eq, x, DEGREES),
         });
     }
     let model = &eq.model;

@@ -57,6 +57,14 @@ pub enum OdeError {
     Muscle { muscle: String, reason: String },
     #[error(transparent)]
     Singular(#[from] SingularMassMatrix),
+    /// [`OdeError::Singular`] at a state with coordinates outside their
+    /// ranges, which `why` names ([`crate::eval::outside_range_hint`]): the
+    /// likelier cause than the model's masses.
+    #[error("no motion at this state{why}; {mass_matrix}")]
+    SingularAt {
+        mass_matrix: SingularMassMatrix,
+        why: String,
+    },
     #[error(transparent)]
     Law(#[from] crate::laws::UnsupportedLaw),
     #[error("wrong length of {what}: {got} (expected {want})")]

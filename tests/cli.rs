@@ -412,6 +412,25 @@ fn eval_warns_of_coordinates_outside_their_range_and_clamped_fibres() {
         "{w:?}"
     );
     assert!(err.contains("mm deep in the ground"), "{err}");
+    // A knee at 1e10 rad breaks the mass matrix before any force: the
+    // refusal names the coordinate, not the model's masses alone.
+    let mut s = squat.clone();
+    s["state"]["/jointset/knee_r/knee_angle_r/value"] = 1e10.into();
+    let file = dir.join("far_knee.json");
+    std::fs::write(&file, serde_json::to_vec(&s).unwrap()).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args(["eval", "--input"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no motion at this state: /jointset/knee_r/knee_angle_r/value = 1e10 rad")
+            && err.contains(&knee),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
