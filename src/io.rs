@@ -1302,6 +1302,21 @@ fn unread_columns_note(t: &StoTable, muscles: &[&str]) -> String {
     format!("; columns naming no muscle: {}{more}", shown.join(", "))
 }
 
+/// Where a controls file lacks muscle `m`'s excitation but holds its
+/// activation: a states file given for controls, said so.
+fn states_file_note(t: &StoTable, m: &str) -> String {
+    let activation = [
+        format!("/forceset/{m}/activation"),
+        format!("{m}.activation"),
+    ];
+    match activation.iter().find(|a| t.labels.contains(a)) {
+        Some(a) => format!(
+            "; the file holds '{a}': a states file? Excitations are read from a controls file (a simulation's forward_controls.sto) or a solution (_solution.sto)"
+        ),
+        None => String::new(),
+    }
+}
+
 /// Excitations over time read from a controls file, one column per muscle,
 /// linearly interpolated (held constant outside the time range).
 #[derive(Debug, Clone)]
@@ -1340,11 +1355,12 @@ impl Controls {
                     file: path.into(),
                     column: format!("/forceset/{m}"),
                     reason: format!(
-                        "missing: no excitation column for muscle '{m}' (read as '{}', '{}' or '{}'){}",
+                        "missing: no excitation column for muscle '{m}' (read as '{}', '{}' or '{}'){}{}",
                         names[0],
                         names[1],
                         names[2],
-                        unread_columns_note(t, muscles)
+                        unread_columns_note(t, muscles),
+                        states_file_note(t, m)
                     ),
                 })?;
             // Two spellings of one muscle's column: one would be lost.
@@ -1516,6 +1532,27 @@ mod tests {
         assert_eq!(
             e,
             "c.sto: column '/forceset/soleus_r': missing: no excitation column for muscle 'soleus_r' (read as '/forceset/soleus_r', 'soleus_r' or 'soleus_r.excitation'); columns naming no muscle: '/forceset/solues_r'"
+        );
+    }
+
+    /// A states file given for controls: its activation column named.
+    #[test]
+    fn a_states_file_given_for_controls_is_named() {
+        let t = StoTable {
+            labels: vec![
+                "/forceset/soleus_r/activation".into(),
+                "/forceset/soleus_r/fiber_length".into(),
+            ],
+            time: vec![0.0],
+            rows: vec![vec![0.5, 0.05]],
+            ..Default::default()
+        };
+        let e = Controls::from_table(&t, Path::new("s.sto"), &["soleus_r"])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.ends_with("the file holds '/forceset/soleus_r/activation': a states file? Excitations are read from a controls file (a simulation's forward_controls.sto) or a solution (_solution.sto)"),
+            "{e}"
         );
     }
 

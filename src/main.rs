@@ -496,7 +496,14 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 let options = jacobian_options(num_mesh_intervals, scheme, fiber_dynamics)?;
                 let report =
                     leap::crosscheck::jacobian(&m, options, samples, seed).map_err(|e| {
-                        anyhow::anyhow!("Jacobian cross-check of {}: {e}", model.display())
+                        // The model is named once: by the error where it
+                        // names it (a model's field), else here.
+                        let (text, file) = (e.to_string(), model.display().to_string());
+                        if text.starts_with(&format!("{file}: ")) {
+                            anyhow::anyhow!("Jacobian cross-check: {text}")
+                        } else {
+                            anyhow::anyhow!("Jacobian cross-check of {file}: {text}")
+                        }
                     })?;
                 if json {
                     outln!("{}", serde_json::to_string_pretty(&report)?);
@@ -712,6 +719,13 @@ fn run(cli: Cli) -> Result<ExitCode> {
                 anyhow::anyhow!("{}: poses: no pose '{pose}' ({have})", model.display())
             })?;
             let jumps = leap::eval::switch_jumps(&eq, &q);
+            if jumps.is_empty() && !json {
+                outln!(
+                    "{}: no muscle path has a conditional point that switches within its coordinate's range: no length jump to smooth",
+                    model.display()
+                );
+                return Ok(ExitCode::SUCCESS);
+            }
             let largest = jumps.iter().map(|j| j.jump_m.abs()).fold(0.0, f64::max);
             if json {
                 outln!(
