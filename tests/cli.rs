@@ -1015,3 +1015,61 @@ fn an_osim_model_is_refused_pointing_to_the_json_models() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `leap paths` of a model whose paths switch nowhere (the jumper with its
+/// conditional points made fixed) says so, where it had printed an empty
+/// table; the Jacobian cross-check of a model without the squat names the
+/// model once, where it had named it twice.
+#[test]
+fn paths_without_switches_and_crosscheck_name_the_model_once() {
+    let dir = std::env::temp_dir().join(format!("leap_cli_nocond_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut m: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string("models/jumper.json").unwrap()).unwrap();
+    let mut made_fixed = 0;
+    for mu in m["forces"]["muscles"].as_array_mut().unwrap() {
+        for p in mu["path"].as_array_mut().unwrap() {
+            if p["type"] == "conditional" {
+                let o = p.as_object_mut().unwrap();
+                o.remove("coordinate");
+                o.remove("range");
+                o.insert("type".into(), "fixed".into());
+                made_fixed += 1;
+            }
+        }
+    }
+    assert!(made_fixed > 0);
+    let model = dir.join("no_conditional.json");
+    std::fs::write(&model, serde_json::to_vec(&m).unwrap()).unwrap();
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .arg("paths")
+        .arg("--model")
+        .arg(&model)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        text.contains("no muscle path has a conditional point that switches"),
+        "{text}"
+    );
+    let o = Command::cargo_bin("leap")
+        .unwrap()
+        .args([
+            "crosscheck",
+            "--jacobian",
+            "--model",
+            "models/double_pendulum.json",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert_eq!(
+        err.matches("models/double_pendulum.json").count(),
+        1,
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
