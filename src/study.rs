@@ -624,14 +624,12 @@ pub(crate) fn misplaced_field_hint(
         Some((parent, _)) => format!("under \"{parent}\" ({f})"),
         None => "at the top level of the study".to_string(),
     };
-    match found.as_slice() {
-        [] => None,
-        [one] => Some(format!("`{key}` belongs {}", place(one))),
-        many => Some(format!(
+    (!found.is_empty()).then(|| {
+        format!(
             "`{key}` belongs {}",
-            many.iter().map(place).collect::<Vec<_>>().join(" or ")
-        )),
-    }
+            found.iter().map(place).collect::<Vec<_>>().join(" or ")
+        )
+    })
 }
 
 /// `reason`, the refusal of `text` read as a file of kind `expected`

@@ -252,13 +252,18 @@ fn broken_states_files_name_file_column_and_row_once() {
     let raw = leap::io::StoTable::read(&p).unwrap();
     assert_eq!(time, good.time);
     assert_eq!(xs, raw.rows);
+    // `t` written as `name`, and read_states' refusal of it.
+    let refusal = |t: &leap::io::StoTable, name: &str| {
+        let p = dir.join(name);
+        t.write_sto(&p).unwrap();
+        let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+        (p, e)
+    };
     // The same file headed inDegrees=yes: its angles, the squat's in
     // radians, would be divided by 57; refused, naming the header.
     let mut wrong = good.clone();
     wrong.metadata.insert("inDegrees".into(), "yes".into());
-    let p = dir.join("wrong.sto");
-    wrong.write_sto(&p).unwrap();
-    let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+    let (p, e) = refusal(&wrong, "wrong.sto");
     assert!(
         e.starts_with(&format!(
             "{}: header 'inDegrees': the header says yes, but every joint angle lies within ±π",
@@ -305,9 +310,7 @@ fn broken_states_files_name_file_column_and_row_once() {
             Some(h) => wrong.metadata.insert("inDegrees".into(), h.into()),
             None => wrong.metadata.remove("inDegrees"),
         };
-        let p = dir.join("degrees_headed_radians.sto");
-        wrong.write_sto(&p).unwrap();
-        let e = leap::analyze::read_states(&eq, &p).unwrap_err().to_string();
+        let (p, e) = refusal(&wrong, "degrees_headed_radians.sto");
         assert!(
             e.starts_with(&format!(
                 "{}: header 'inDegrees': the header says no (or has no inDegrees, which means radians), but '",
